@@ -1,0 +1,30 @@
+# Included by every generated variant's CMakeLists.txt (see templates/CMakeLists.txt.j2).
+# flexsym_add_model(NAME sources...) builds, from the generated sources plus this runtime:
+#   flexsym_NAME      the command-line driver (src/driver.c)
+#   libflexsym_NAME   a shared library exposing the kernels and fsr_simulate (tests, Python)
+set(FLEXSYM_RUNTIME_DIR "${CMAKE_CURRENT_LIST_DIR}")
+
+if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
+  set(CMAKE_BUILD_TYPE Release)
+endif()
+
+function(flexsym_add_model name)
+  set(objs flexsym_${name}_objects)
+  add_library(${objs} OBJECT ${ARGN}
+              "${FLEXSYM_RUNTIME_DIR}/src/simulate.c"
+              "${FLEXSYM_RUNTIME_DIR}/src/linalg.c")
+  set_target_properties(${objs} PROPERTIES POSITION_INDEPENDENT_CODE ON C_STANDARD 99
+                        C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
+  target_include_directories(${objs} PUBLIC "${FLEXSYM_RUNTIME_DIR}/include"
+                             "${CMAKE_CURRENT_SOURCE_DIR}")
+  target_compile_options(${objs} PUBLIC -Wall -Wextra -Werror -pedantic)
+
+  add_executable(flexsym_${name} "${FLEXSYM_RUNTIME_DIR}/src/driver.c")
+  set_target_properties(flexsym_${name} PROPERTIES C_STANDARD 99 C_STANDARD_REQUIRED ON
+                        C_EXTENSIONS OFF)
+  target_link_libraries(flexsym_${name} PRIVATE ${objs} m)
+
+  add_library(flexsym_${name}_shared SHARED $<TARGET_OBJECTS:${objs}>)
+  set_target_properties(flexsym_${name}_shared PROPERTIES OUTPUT_NAME flexsym_${name})
+  target_link_libraries(flexsym_${name}_shared PRIVATE m)
+endfunction()

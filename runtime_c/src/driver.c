@@ -1,0 +1,229 @@
+/* Command-line driver: integrate a generated model, write CSV, report a JSON summary.
+ *
+ *   flexsym_<variant> [--t-end T] [--dt H] [--integrator rk4|genalpha|newmark]
+ *                     [--rho-inf R] [--newmark-gamma G] [--newmark-beta B]
+ *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
+ *                     [--repeat N] [--blowup F] [--newton-tol TOL] [--info]
+ *
+ * stdout: one JSON line (status, steps, CPU time of the integration alone).
+ * stderr: one line naming what went wrong. Exit: 0 ok, 2 usage, 3 simulation stopped, 4 I/O.
+ * The CSV is written to a temporary file and renamed, so an existing file is replaced
+ * only by a complete one; after a divergence it holds the rows computed up to then.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "flexsym/model.h"
+#include "flexsym/runtime.h"
+
+#define MAX_REPEAT 1000
+
+static int usage(const char* msg, const char* arg)
+{
+    fprintf(stderr, "flexsym runtime: %s%s%s\n", msg, arg ? ": " : "", arg ? arg : "");
+    return 2;
+}
+
+static int parse_double(const char* s, double* out)
+{
+    char* end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || end == s || *end != '\0' || !isfinite(v)) return 0;
+    *out = v;
+    return 1;
+}
+
+static int parse_int(const char* s, long* out)
+{
+    char* end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end != '\0') return 0;
+    *out = v;
+    return 1;
+}
+
+static double cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void json_string(FILE* f, const char* s)
+{
+    fputc('"', f);
+    for (; *s; ++s) {
+        if (*s == '"' || *s == '\\') fputc('\\', f);
+        if ((unsigned char)*s < 0x20) { fputc(' ', f); continue; }
+        fputc(*s, f);
+    }
+    fputc('"', f);
+}
+
+static void json_names(FILE* f, const char* key, const char* const* names, int n)
+{
+    fprintf(f, "\"%s\": [", key);
+    for (int i = 0; i < n; ++i) {
+        if (i) fputs(", ", f);
+        json_string(f, names[i]);
+    }
+    fputs("]", f);
+}
+
+static void print_info(const fsm_model_info* m)
+{
+    printf("{\"variant\": ");
+    json_string(stdout, m->variant);
+    printf(", \"fingerprint\": ");
+    json_string(stdout, m->fingerprint);
+    printf(", \"generator\": ");
+    json_string(stdout, m->generator);
+    printf(", \"nq\": %d, \"ny\": %d, \"mass_constant\": %d, ", m->nq, m->ny, m->mass_constant);
+    json_names(stdout, "coordinates", m->coord_names, m->nq);
+    printf(", ");
+    json_names(stdout, "outputs", m->output_names, m->ny);
+    printf(", ");
+    json_names(stdout, "params", m->param_names, m->np);
+    printf(", ");
+    json_names(stdout, "maneuver_params", m->maneuver_param_names, m->nmp);
+    printf("}\n");
+}
+
+static int set_param(const fsm_model_info* m, double* p, double* mp, const char* arg)
+{
+    const char* eq = strchr(arg, '=');
+    if (!eq) return 0;
+    size_t len = (size_t)(eq - arg);
+    double v;
+    if (!parse_double(eq + 1, &v)) return 0;
+    for (int i = 0; i < m->np; ++i)
+        if (strlen(m->param_names[i]) == len && !strncmp(arg, m->param_names[i], len)) { p[i] = v; return 1; }
+    for (int i = 0; i < m->nmp; ++i)
+        if (strlen(m->maneuver_param_names[i]) == len && !strncmp(arg, m->maneuver_param_names[i], len)) {
+            mp[i] = v;
+            return 1;
+        }
+    return 0;
+}
+
+static int write_csv(const char* path, const fsm_model_info* m, const fsr_result* r)
+{
+    char tmp[4096];
+    if (snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid()) >= (int)sizeof tmp) {
+        fprintf(stderr, "flexsym runtime: output path too long: %s\n", path);
+        return 0;
+    }
+    FILE* f = fopen(tmp, "w");
+    if (!f) {
+        fprintf(stderr, "flexsym runtime: cannot write %s: %s\n", tmp, strerror(errno));
+        return 0;
+    }
+    fputs("t", f);
+    for (int i = 0; i < m->ny; ++i) fprintf(f, ",%s", m->output_names[i]);
+    for (int i = 0; i < m->nq; ++i) fprintf(f, ",%s", m->coord_names[i]);
+    fputc('\n', f);
+    for (int k = 0; k < r->nrows; ++k) {
+        const double* row = r->rows + (size_t)k * (size_t)r->ncols;
+        for (int j = 0; j < r->ncols; ++j) fprintf(f, j ? ",%.17g" : "%.17g", row[j]);
+        fputc('\n', f);
+    }
+    int ok = !ferror(f);
+    ok = (fclose(f) == 0) && ok;
+    if (!ok || rename(tmp, path) != 0) {
+        fprintf(stderr, "flexsym runtime: cannot write %s: %s\n", path, strerror(errno));
+        remove(tmp);
+        return 0;
+    }
+    return 1;
+}
+
+static int cmp_double(const void* a, const void* b)
+{
+    double x = *(const double*)a, y = *(const double*)b;
+    return (x > y) - (x < y);
+}
+
+int main(int argc, char** argv)
+{
+    const fsm_model_info* m = fsm_model();
+    fsr_options o;
+    fsr_default_options(&o);
+    double p[64], mp[64];
+    if (m->np > 64 || m->nmp > 64) return usage("model has too many parameters", NULL);
+    memcpy(p, m->param_defaults, sizeof(double) * (size_t)m->np);
+    memcpy(mp, m->maneuver_param_defaults, sizeof(double) * (size_t)m->nmp);
+    o.p = p;
+    o.mp = mp;
+    const char* out = NULL;
+    long repeat = 1, lv;
+
+    for (int i = 1; i < argc; ++i) {
+        const char* a = argv[i];
+        const char* val = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--info")) { print_info(m); return 0; }
+        if (!val) return usage("missing value after", a);
+        ++i;
+        if (!strcmp(a, "--t-end")) { if (!parse_double(val, &o.t_end)) return usage("bad --t-end", val); }
+        else if (!strcmp(a, "--dt")) { if (!parse_double(val, &o.dt)) return usage("bad --dt", val); }
+        else if (!strcmp(a, "--rho-inf")) { if (!parse_double(val, &o.rho_inf)) return usage("bad --rho-inf", val); }
+        else if (!strcmp(a, "--newmark-gamma")) { if (!parse_double(val, &o.nm_gamma)) return usage("bad --newmark-gamma", val); }
+        else if (!strcmp(a, "--newmark-beta")) { if (!parse_double(val, &o.nm_beta)) return usage("bad --newmark-beta", val); }
+        else if (!strcmp(a, "--blowup")) { if (!parse_double(val, &o.blowup)) return usage("bad --blowup", val); }
+        else if (!strcmp(a, "--newton-tol")) { if (!parse_double(val, &o.newton_tol)) return usage("bad --newton-tol", val); }
+        else if (!strcmp(a, "--out")) out = val;
+        else if (!strcmp(a, "--out-every")) {
+            if (!parse_int(val, &lv) || lv < 1 || lv > 1000000000L) return usage("bad --out-every", val);
+            o.out_every = (int)lv;
+        } else if (!strcmp(a, "--repeat")) {
+            if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (1..1000)", val);
+        } else if (!strcmp(a, "--integrator")) {
+            if (!strcmp(val, "rk4")) o.method = FSR_RK4;
+            else if (!strcmp(val, "genalpha")) o.method = FSR_GENALPHA;
+            else if (!strcmp(val, "newmark")) o.method = FSR_NEWMARK;
+            else return usage("unknown --integrator (rk4, genalpha, newmark)", val);
+        } else if (!strcmp(a, "--param")) {
+            if (!set_param(m, p, mp, val)) return usage("bad --param (NAME=VALUE with a known name)", val);
+        } else return usage("unknown option", a);
+    }
+
+    fsr_result r;
+    double times[MAX_REPEAT];
+    /* Repeated runs time the integration alone; the first is a warm-up when repeating. */
+    long runs = repeat > 1 ? repeat + 1 : 1;
+    for (long k = 0; k < runs; ++k) {
+        if (k) fsr_free(&r);
+        double t0 = cpu_seconds();
+        fsr_simulate(&o, &r);
+        double t1 = cpu_seconds();
+        if (repeat == 1 || k > 0) times[repeat == 1 ? 0 : k - 1] = t1 - t0;
+        if (r.status != FSR_OK) { repeat = 1; times[0] = t1 - t0; break; }
+    }
+    if (r.status == FSR_BAD_OPTIONS) {
+        fsr_free(&r);
+        return usage(r.message, NULL);
+    }
+    qsort(times, (size_t)repeat, sizeof(double), cmp_double);
+    int io_ok = out ? write_csv(out, m, &r) : 1;
+
+    printf("{\"status\": \"%s\", \"message\": ", r.status == FSR_OK ? "ok" : r.status == FSR_DIVERGED ? "diverged" : "failed");
+    json_string(stdout, r.message);
+    printf(", \"integrator\": \"%s\", \"dt\": %.17g, \"t_end\": %.17g, \"t_stop\": %.17g, \"steps\": %ld, "
+           "\"newton_iterations\": %ld, \"force_evaluations\": %ld, \"rows\": %d, \"repeat\": %ld, "
+           "\"cpu_median\": %.9g, \"cpu_min\": %.9g, \"cpu_max\": %.9g}\n",
+           fsr_method_name(o.method), o.dt, o.t_end, r.t_stop, r.steps, r.newton_iterations,
+           r.force_evaluations, r.nrows, repeat, times[repeat / 2], times[0], times[repeat - 1]);
+    if (r.status != FSR_OK)
+        fprintf(stderr, "flexsym: %s; %d rows up to t = %.6g s %s\n", r.message, r.nrows, r.t_stop,
+                out ? "kept in the output file" : "computed");
+    fsr_free(&r);
+    if (!io_ok) return 4;
+    return r.status == FSR_OK ? 0 : 3;
+}

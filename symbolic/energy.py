@@ -1,0 +1,147 @@
+"""Kinematics of the beam in the moving frame, energy densities and strain models.
+
+Densities are written per unit s = x/L (so an energy is int_0^1 density ds), in terms of
+factor placeholders from the IntegralTable; derivatives along the beam are d/dx = (1/L) d/ds.
+
+A strain model says *which energy term is differentiated with respect to which coordinate
+group*. That choice is the difference between the paper's variants #1/#2 (eq. 18-19: the
+cubic coupling term acts on the bending equations only) and the blind gradient of the
+truncated energy (eq. 5), which pulls the axial coordinate into compression and collapses
+(benchmark.md section 3). Keeping it as data makes it impossible to change silently and
+lets `flexsym inspect` print it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from .integrals import IntegralTable
+from .modes import Mode, s
+
+
+@dataclass(frozen=True)
+class BeamParam:
+    name: str
+    default: float
+    unit: str
+    description: str
+
+    @property
+    def symbol(self) -> sp.Symbol:
+        return sp.Symbol(self.name, positive=True)
+
+
+# Order fixes the layout of the parameter vector p in every generated kernel.
+BEAM_PARAMS: tuple[BeamParam, ...] = (
+    BeamParam("rho", 3000.0, "kg/m^3", "density"),
+    BeamParam("E", 7.0e10, "N/m^2", "Young's modulus"),
+    BeamParam("A", 4.0e-4, "m^2", "cross-section area"),
+    BeamParam("I", 2.0e-7, "m^4", "second moment of area"),
+    BeamParam("L", 10.0, "m", "length"),
+)
+rho, E, A, I, L = (p.symbol for p in BEAM_PARAMS)
+w, alpha = sp.symbols("w alpha", real=True)  # theta' and theta'' (known inputs)
+
+
+@dataclass
+class Fields:
+    """Displacement fields along the beam as polynomials in placeholders and coordinates."""
+
+    u: sp.Expr  # axial displacement u_o(s)
+    u_dot: sp.Expr
+    u_stretch_s: sp.Expr  # d/ds of the axial-mode part (the stretch: the strain-energy field)
+    v: sp.Expr  # transverse displacement v_o(s)
+    v_dot: sp.Expr
+    v_s: sp.Expr
+    v_ss: sp.Expr
+
+
+def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
+                 table: IntegralTable, foreshortening: bool) -> Fields:
+    mv = table.mode_value
+    u = sum((mv(m.name) * q[m.name] for m in axial), sp.Integer(0))
+    u_dot = sum((mv(m.name) * qd[m.name] for m in axial), sp.Integer(0))
+    u_s = sum((mv(m.name, 1) * q[m.name] for m in axial), sp.Integer(0))
+    v = sum((mv(m.name) * q[m.name] for m in bending), sp.Integer(0))
+    v_dot = sum((mv(m.name) * qd[m.name] for m in bending), sp.Integer(0))
+    v_s = sum((mv(m.name, 1) * q[m.name] for m in bending), sp.Integer(0))
+    v_ss = sum((mv(m.name, 2) * q[m.name] for m in bending), sp.Integer(0))
+    if foreshortening:
+        # eq. (30): u_fs(x) = -1/2 int_0^x (v_x)^2 dx = -1/(2L) sum_ij H_ij(s) q_i q_j
+        for mi in bending:
+            for mj in bending:
+                h = table.fs_value(mi.name, mj.name)
+                u += -h * q[mi.name] * q[mj.name] / (2 * L)
+                u_dot += -h * q[mi.name] * qd[mj.name] / L
+    return Fields(u, u_dot, u_s, v, v_dot, v_s, v_ss)
+
+
+def kinetic_density(f: Fields) -> sp.Expr:
+    """T per unit s: 1/2 rho A L [(u' - w v)^2 + (v' + w (x + u))^2], velocities in the moving frame."""
+    return rho * A * L / 2 * ((f.u_dot - w * f.v)**2 + (f.v_dot + w * (L * s + f.u))**2)
+
+
+@dataclass(frozen=True)
+class EnergyTerm:
+    name: str
+    formula: str  # the term as written in the paper / benchmark note
+    density: object  # Fields -> sp.Expr, per unit s
+
+
+ENERGY_TERMS: dict[str, EnergyTerm] = {t.name: t for t in (
+    EnergyTerm("axial", "EA/2 int (u_x)^2 dx",
+               lambda f: E * A / (2 * L) * f.u_stretch_s**2),
+    EnergyTerm("bending", "EI/2 int (v_xx)^2 dx",
+               lambda f: E * I / (2 * L**3) * f.v_ss**2),
+    EnergyTerm("cubic", "EA/2 int u_x (v_x)^2 dx",
+               lambda f: E * A / (2 * L**2) * f.u_stretch_s * f.v_s**2),
+    EnergyTerm("quartic", "EA/8 int (v_x)^4 dx",
+               lambda f: E * A / (8 * L**3) * f.v_s**4),
+    EnergyTerm("prestress", "1/2 int N(x) (v_x)^2 dx, N = rho A w^2 (L^2 - x^2)/2",
+               lambda f: rho * A * w**2 * L / 4 * (1 - s**2) * f.v_s**2),
+)}
+
+GROUPS = ("axial", "bending")
+
+
+@dataclass(frozen=True)
+class StrainModel:
+    name: str
+    foreshortening: bool  # kinematic u_fs in the axial field
+    terms: tuple[tuple[str, tuple[str, ...]], ...]  # (energy term, coordinate groups differentiated)
+    needs_axial: bool
+    description: str
+
+    def conservative(self, axial_present: bool) -> bool:
+        """True when every term is differentiated w.r.t. every coordinate group it depends on."""
+        for term, wrt in self.terms:
+            depends = {"axial": term in ("axial", "cubic") and axial_present,
+                       "bending": term in ("bending", "cubic", "quartic", "prestress")}
+            if any(dep and g not in wrt for g, dep in depends.items()):
+                return False
+        return True
+
+
+_BASE = (("axial", ("axial",)), ("bending", ("bending",)))
+
+STRAIN_MODELS: dict[str, StrainModel] = {m.name: m for m in (
+    StrainModel("linear", False, _BASE, False,
+                "linear strain: no geometric stiffening (variant #0)"),
+    StrainModel("geometric_stiffness", False, _BASE + (("cubic", ("bending",)),), True,
+                "eq. (18)-(19): K_G(eta) y acts on the bending coordinates only; the axial "
+                "equations see K_L alone (variants #1, #2)"),
+    StrainModel("cubic_energy", False, _BASE + (("cubic", ("axial", "bending")),), True,
+                "full gradient of the truncated energy (5): the trap of benchmark.md section 3, "
+                "unbounded below; offered only to show that it collapses"),
+    StrainModel("von_karman", False,
+                _BASE + (("cubic", ("axial", "bending")), ("quartic", ("axial", "bending"))),
+                True, "consistent energy (4) with the quartic term: bounded, but linear axial "
+                "modes lock (far too stiff)"),
+    StrainModel("foreshortening", True, _BASE, False,
+                "eq. (30)-(31): axial field carries u_fs = -1/2 int v_x^2; linear strain energy "
+                "(variant #3)"),
+    StrainModel("prestress", False, _BASE + (("prestress", ("bending",)),), False,
+                "bending modes with the centrifugal-prestress geometric stiffness "
+                "w^2 int N(x) v_x^2, N = rho A (L^2 - x^2)/2"),
+)}

@@ -1,0 +1,27 @@
+"""Errors with one clear line for the user; the CLI prints them without a traceback."""
+
+
+class FlexsymError(Exception):
+    exit_code = 1
+
+
+class SpecError(FlexsymError):
+    """A malformed variant, mode set, scene or parameter."""
+
+    exit_code = 2
+
+
+class ToolchainError(FlexsymError):
+    """Missing compiler/cmake, or a failed build."""
+
+    exit_code = 2
+
+
+class SimulationError(FlexsymError):
+    """The integrator stopped: divergence, Newton failure, instability."""
+
+    exit_code = 3
+
+    def __init__(self, message: str, result=None):
+        super().__init__(message)
+        self.result = result

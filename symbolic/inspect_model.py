@@ -1,0 +1,127 @@
+"""Human-readable report of a derivation: modes, integrals, energies, M, K_L, K_G, equations, op counts."""
+from __future__ import annotations
+
+import mpmath
+import sympy as sp
+
+from .cemit import emit
+from .derive import Derivation, derive
+from .energy import STRAIN_MODELS
+from .generate import C_PREFIX, fingerprint
+from .kernels import build_kernels
+from .spec import VariantSpec
+
+SECTIONS = ("modes", "energy", "integrals", "mass", "stiffness", "equations", "ops")
+
+
+def _latex_names(der: Derivation) -> dict:
+    names = {}
+    for m in der.modes.values():
+        tex = m.name.replace("_", r"\_")
+        names[sp.Symbol(m.name, real=True)] = r"q_{\mathrm{" + tex + "}}"
+    for sym in der.table.symbols:
+        s_pow, factors = der.table.monomial(sym)
+        parts = ([f"s^{{{s_pow}}}"] if s_pow > 1 else ["s"] if s_pow == 1 else [])
+        for f in factors:
+            if f.kind == "fs":
+                parts.append(rf"H_{{{der.modes[f.a].latex}{der.modes[f.b].latex}}}")
+            else:
+                parts.append(der.modes[f.a].latex + "'" * f.order)
+        names[sym] = r"\int_0^1 " + r"\, ".join(parts) + r"\,ds"
+    return names
+
+
+class Report:
+    def __init__(self, spec: VariantSpec, latex: bool = False):
+        self.spec = spec
+        self.der = derive(spec)
+        self.latex = latex
+        self._names = _latex_names(self.der) if latex else {}
+        self.lines: list[str] = []
+
+    def fmt(self, expr) -> str:
+        if self.latex:
+            return sp.latex(expr, symbol_names=self._names)
+        return sp.pretty(expr, use_unicode=True, wrap_line=False)
+
+    def title(self, text: str) -> None:
+        self.lines += ["", text, "-" * len(text)]
+
+    def add(self, text: str = "") -> None:
+        self.lines.append(text)
+
+    def render(self, sections=SECTIONS) -> str:
+        d, s = self.der, self.spec
+        strain = STRAIN_MODELS[s.strain]
+        self.add(f"variant {s.name}" + (f" ({', '.join(s.aliases)})" if s.aliases else ""))
+        self.add(f"  {s.description}")
+        self.add(f"  strain model '{s.strain}': {strain.description}")
+        self.add(f"  manoeuvre '{d.maneuver.name}': theta(t) = {d.maneuver.theta}")
+        self.add(f"  fingerprint {fingerprint(s)}")
+        for section in sections:
+            getattr(self, f"_{section}")()
+        return "\n".join(self.lines) + "\n"
+
+    def _modes(self) -> None:
+        self.title("Coordinates and mode shapes (s = x/L)")
+        for name, m in self.der.modes.items():
+            self.add(f"{name} [{self.der.groups[name]}]: {m.description}")
+            self.add("  shape = " + (sp.latex(m.expr) if self.latex else str(m.expr)))
+            self.add("  boundary conditions: " + ", ".join(bc.describe("phi") for bc in m.bcs))
+
+    def _energy(self) -> None:
+        d = self.der
+        self.title("Energy terms and the coordinates they are differentiated with respect to")
+        for t in d.terms:
+            coords = [c for c in d.coords if d.groups[c] in t.wrt]
+            self.add(f"{t.name:10s} {t.formula:52s} d/d({', '.join(coords) or '-'})")
+        self.add("")
+        if d.conservative:
+            self.add("every term is differentiated w.r.t. every coordinate it depends on: the "
+                     "elastic forces derive from a potential")
+        else:
+            self.add("NOT a potential force: some term is not differentiated w.r.t. all the "
+                     "coordinates it depends on (paper eq. 18-19; see benchmark.md section 3)")
+        self.add("")
+        self.add("kinetic energy T =")
+        self.add(self.fmt(d.T))
+        for t in d.terms:
+            self.add(f"V_{t.name} =")
+            self.add(self.fmt(t.V))
+
+    def _integrals(self) -> None:
+        self.title("Modal integrals (int_0^1 ... ds)")
+        for sym in self.der.table.symbols:
+            v = self.der.table.value(sym)
+            how = f"exact = {v.exact}" if v.method == "exact" else \
+                f"Gauss-Legendre n={v.nodes}, est. error {v.error:.1e}"
+            self.add(f"{str(sym):48s} {mpmath.nstr(v.value, 17):>26s}  {how}")
+
+    def _mass(self) -> None:
+        d = self.der
+        self.title("Mass matrix M" + (" (constant)" if d.mass_constant else " (depends on q)"))
+        self.add(self.fmt(d.M))
+
+    def _stiffness(self) -> None:
+        K_L, K_G = self.der.stiffness_split()
+        self.title("Linear stiffness K_L = -dQ/dq at q = 0")
+        self.add(self.fmt(K_L))
+        self.title("Geometric stiffness K_G(q) = -dQ/dq - K_L")
+        self.add(self.fmt(K_G) if any(e != 0 for e in K_G) else
+                 "zero (any stiffening of this variant comes from the kinetic energy)")
+
+    def _equations(self) -> None:
+        d = self.der
+        self.title("Equations of motion  M(q) q'' = f(q, q', w, alpha),  w = theta', alpha = theta''")
+        for i, c in enumerate(d.coords):
+            self.add(f"[{c}]  sum_j M[{i},j] q_j'' = ")
+            self.add(self.fmt(d.f[i]))
+        for item in d.dropped:
+            self.add(f"left out: {item['what']} ({item['why']})")
+
+    def _ops(self) -> None:
+        self.title("Generated kernels: operation counts after CSE (add/mul/div/fun/other)")
+        for k in build_kernels(self.der):
+            e = emit(k, C_PREFIX)
+            o = e.ops
+            self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")

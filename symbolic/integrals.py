@@ -1,0 +1,257 @@
+"""Modal integrals: integrals over s in [0, 1] of products of mode-shape functions.
+
+Energy densities are polynomials in *factor* placeholders (a mode shape or one of its
+s-derivatives, or the foreshortening kernel H_ij(s) = int_0^s b_i' b_j' ds) and in s.
+Each distinct monomial of factors becomes one integral symbol J[...]; its value is
+
+* exact (sympy closed form) when every factor is built from exact modes
+  (polynomials and sin(k pi s)), or
+* Gauss-Legendre quadrature in mpmath at QUAD_DPS digits, with the node count doubled
+  until two successive rules agree to QUAD_TOL of the integrand's scale; the estimate is
+  recorded and a value whose estimate exceeds REL_TOL is refused.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import mpmath
+import sympy as sp
+from sympy.simplify.fu import TR8
+
+from .errors import FlexsymError
+from .modes import Mode, s
+
+QUAD_DPS = 34
+QUAD_TOL = mpmath.mpf("1e-20")  # target agreement of successive rules (relative to scale)
+ZERO_TOL = mpmath.mpf("1e-25")  # |value| below this (relative to scale) is an exact zero
+REL_TOL = 1e-13  # refuse any integral whose error estimate is larger than this
+N_START = 24
+N_MAX = 384
+
+
+@dataclass(frozen=True, order=True)
+class Factor:
+    """A function of s: d^order/ds^order of mode `a`, or (kind 'fs') H_ab(s)."""
+
+    kind: str  # 'mode' | 'fs'
+    a: str
+    b: str = ""
+    order: int = 0
+
+    @property
+    def label(self) -> str:
+        if self.kind == "fs":
+            return f"H[{self.a},{self.b}]"
+        return "phi_" + self.a + "'" * self.order
+
+
+@dataclass(frozen=True)
+class IntegralValue:
+    value: mpmath.mpf
+    method: str  # 'exact' | 'gauss'
+    error: float  # estimated absolute error (0 for exact)
+    scale: float  # int |integrand| ds, for relative statements
+    exact: sp.Expr | None = None
+    nodes: int = 0
+
+    @property
+    def rel_error(self) -> float:
+        return self.error / self.scale if self.scale else 0.0
+
+
+@lru_cache(maxsize=None)
+def gauss_legendre(n: int) -> tuple[tuple[mpmath.mpf, ...], tuple[mpmath.mpf, ...]]:
+    """Nodes and weights on [0, 1] at QUAD_DPS digits (Newton on P_n from Chebyshev guesses)."""
+    with mpmath.workdps(QUAD_DPS + 10):
+        xs, ws = [], []
+        for i in range(1, n + 1):
+            x = mpmath.cos(mpmath.pi * (i - mpmath.mpf(1) / 4) / (n + mpmath.mpf(1) / 2))
+            for _ in range(100):
+                p0, p1 = mpmath.mpf(1), x
+                for k in range(2, n + 1):
+                    p0, p1 = p1, ((2 * k - 1) * x * p1 - (k - 1) * p0) / k
+                dp = n * (x * p1 - p0) / (x * x - 1)
+                dx = p1 / dp
+                x -= dx
+                if abs(dx) < mpmath.mpf(10) ** (-(QUAD_DPS + 8)):
+                    break
+            p0, p1 = mpmath.mpf(1), x
+            for k in range(2, n + 1):
+                p0, p1 = p1, ((2 * k - 1) * x * p1 - (k - 1) * p0) / k
+            dp = n * (x * p1 - p0) / (x * x - 1)
+            xs.append((1 - x) / 2)
+            ws.append(1 / ((1 - x * x) * dp * dp))
+        return tuple(xs), tuple(ws)
+
+
+class IntegralTable:
+    """Creates integral symbols for factor monomials and evaluates them on demand."""
+
+    def __init__(self, modes: dict[str, Mode]):
+        self.modes = modes
+        self._placeholders: dict[Factor, sp.Symbol] = {}
+        self._factor_of: dict[sp.Symbol, Factor] = {}
+        self._symbols: dict[tuple, sp.Symbol] = {}
+        self._monomial_of: dict[sp.Symbol, tuple] = {}
+        self._values: dict[sp.Symbol, IntegralValue] = {}
+        self._numeric_cache: dict[tuple, list] = {}
+
+    # ----- placeholders used while building energy densities ---------------------------
+    def factor(self, f: Factor) -> sp.Symbol:
+        if f.kind == "fs" and f.b < f.a:  # H is symmetric: one placeholder per pair
+            f = Factor("fs", f.b, f.a)
+        sym = self._placeholders.get(f)
+        if sym is None:
+            sym = sp.Symbol(f.label, real=True)
+            self._placeholders[f] = sym
+            self._factor_of[sym] = f
+        return sym
+
+    def mode_value(self, name: str, order: int = 0) -> sp.Symbol:
+        return self.factor(Factor("mode", name, "", order))
+
+    def fs_value(self, a: str, b: str) -> sp.Symbol:
+        return self.factor(Factor("fs", a, b))
+
+    @property
+    def placeholders(self) -> list[sp.Symbol]:
+        return list(self._placeholders.values())
+
+    # ----- integration of a density ---------------------------------------------------
+    def integrate(self, density: sp.Expr) -> sp.Expr:
+        """int_0^1 density ds, with each factor monomial replaced by its integral symbol."""
+        groups: dict[sp.Expr, list[sp.Expr]] = {}
+        for term in sp.Add.make_args(sp.expand(density)):
+            key_parts, rest = [], []
+            for base, exp in term.as_powers_dict().items():
+                if base == s or base in self._factor_of:
+                    key_parts.append((base, exp))
+                else:
+                    rest.append(base**exp)
+            key = self.monomial_symbol(key_parts)
+            groups.setdefault(key, []).append(sp.Mul(*rest))
+        return sp.Add(*[k * sp.Add(*v) for k, v in groups.items()])
+
+    def monomial_symbol(self, parts) -> sp.Expr:
+        s_pow = 0
+        factors: list[Factor] = []
+        for base, exp in parts:
+            if base == s:
+                s_pow += int(exp)
+            else:
+                factors.extend([self._factor_of[base]] * int(exp))
+        if not factors and s_pow == 0:
+            return sp.Integer(1)
+        if not factors:
+            return sp.Rational(1, s_pow + 1)
+        key = (s_pow, tuple(sorted(factors)))
+        sym = self._symbols.get(key)
+        if sym is None:
+            label = "*".join(([f"s^{s_pow}"] if s_pow > 1 else ["s"] if s_pow == 1 else [])
+                             + [f.label for f in key[1]])
+            sym = sp.Symbol(f"J[{label}]", real=True)
+            self._symbols[key] = sym
+            self._monomial_of[sym] = key
+        return sym
+
+    @property
+    def symbols(self) -> list[sp.Symbol]:
+        return list(self._symbols.values())
+
+    def monomial(self, sym: sp.Symbol) -> tuple:
+        return self._monomial_of[sym]
+
+    # ----- values ---------------------------------------------------------------------
+    def value(self, sym: sp.Symbol) -> IntegralValue:
+        v = self._values.get(sym)
+        if v is None:
+            v = self._evaluate(*self._monomial_of[sym])
+            if v.rel_error > REL_TOL:
+                raise FlexsymError(f"modal integral {sym} did not converge: estimated relative "
+                                   f"error {v.rel_error:.1e} > {REL_TOL:.0e}")
+            self._values[sym] = v
+        return v
+
+    def substitutions(self) -> dict[sp.Symbol, sp.Float]:
+        return {sym: sp.Float(self.value(sym).value, QUAD_DPS) for sym in self.symbols}
+
+    def _exact_factor(self, f: Factor) -> sp.Expr | None:
+        if f.kind == "mode":
+            m = self.modes[f.a]
+            return m.derivative(f.order) if m.exact else None
+        ma, mb = self.modes[f.a], self.modes[f.b]
+        if not (ma.exact and mb.exact):
+            return None
+        sig = sp.Symbol("sigma", real=True)
+        integrand = (sp.diff(ma.expr, s) * sp.diff(mb.expr, s)).subs(s, sig)
+        return _integrate_exact(integrand, sig, 0, s)
+
+    def _evaluate(self, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
+        exact = [self._exact_factor(f) for f in factors]
+        if all(e is not None for e in exact):
+            expr = _integrate_exact(s**s_pow * sp.Mul(*exact), s, 0, 1)
+            with mpmath.workdps(QUAD_DPS):
+                val = mpmath.mpf(sp.N(expr, QUAD_DPS + 5))
+                xs, ws = gauss_legendre(N_START)
+                fn = sp.lambdify(s, s**s_pow * sp.Mul(*exact), "mpmath")
+                scale = float(mpmath.fsum(w * abs(fn(x)) for x, w in zip(xs, ws)))
+            return IntegralValue(val, "exact", 0.0, scale or float(abs(val)), expr)
+        return self._gauss(s_pow, factors)
+
+    def _samples(self, f: Factor, n: int) -> list:
+        """The factor at the n Gauss nodes (H_ab by an inner rule on [0, s_k])."""
+        key = (f, n)
+        cached = self._numeric_cache.get(key)
+        if cached is not None:
+            return cached
+        xs, _ = gauss_legendre(n)
+        with mpmath.workdps(QUAD_DPS):
+            if f.kind == "mode":
+                fn = sp.lambdify(s, self.modes[f.a].derivative(f.order), "mpmath")
+                vals = [fn(x) for x in xs]
+            else:
+                da = sp.lambdify(s, sp.diff(self.modes[f.a].expr, s), "mpmath")
+                db = sp.lambdify(s, sp.diff(self.modes[f.b].expr, s), "mpmath")
+                ixs, iws = gauss_legendre(n)
+                vals = [x * mpmath.fsum(w * da(x * y) * db(x * y) for y, w in zip(ixs, iws))
+                        for x in xs]
+        self._numeric_cache[key] = vals
+        return vals
+
+    def _gauss(self, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
+        prev = None
+        n = N_START
+        while n <= N_MAX:
+            xs, ws = gauss_legendre(n)
+            cols = [self._samples(f, n) for f in factors]
+            with mpmath.workdps(QUAD_DPS):
+                terms = []
+                for k, (x, w) in enumerate(zip(xs, ws)):
+                    p = w * x**s_pow
+                    for c in cols:
+                        p *= c[k]
+                    terms.append(p)
+                val = mpmath.fsum(terms)
+                scale = mpmath.fsum(abs(t) for t in terms)
+            if prev is not None:
+                err = abs(val - prev)
+                if err <= QUAD_TOL * scale:
+                    if abs(val) <= ZERO_TOL * scale:  # orthogonal modes: zero to ~25 digits
+                        val = mpmath.mpf(0)
+                    return IntegralValue(val, "gauss", float(err), float(scale), None, n)
+            prev = val
+            n *= 2
+        return IntegralValue(val, "gauss", float(abs(val - prev)), float(scale), None, n // 2)
+
+
+def _integrate_exact(expr: sp.Expr, var: sp.Symbol, a, b) -> sp.Expr:
+    """Term-by-term closed-form integral of a product of polynomials and sin/cos(k pi s)."""
+    total = sp.Integer(0)
+    expr = sp.expand(TR8(sp.expand(expr))) if expr.has(sp.sin, sp.cos) else sp.expand(expr)
+    for term in sp.Add.make_args(expr):
+        anti = sp.integrate(term, var)
+        if anti.has(sp.Integral):
+            raise FlexsymError(f"sympy could not integrate {term} exactly")
+        total += anti.subs(var, b) - anti.subs(var, a)
+    return sp.expand(total)

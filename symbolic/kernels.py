@@ -1,0 +1,219 @@
+"""Derived sympy expressions -> casadi SX functions (the kernels), with CSE and AD Jacobians.
+
+Kernels (row-major dense outputs, p = beam parameters, drive = [w, alpha]):
+  mass(q, p) -> M                               mass matrix, symmetric positive definite
+  force(q, qd, drive, p) -> f                   M q'' = f
+  residual_jac(q, qd, qdd, drive, p) -> (dr_dq, dr_dqd) of r = M(q) q'' - f (Newton iterations)
+  outputs(q, qd, p) -> y                         v_tip, u_tip, ...
+  energy(q, qd, drive, p) -> [T, V, h]           kinetic, potential, Jacobi integral
+  maneuver(t, mp) -> [theta, w, alpha]           guided root rotation
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import sympy as sp
+
+from .derive import Derivation
+from .energy import alpha, w
+from .maneuver import t as t_sym
+
+
+@dataclass(frozen=True)
+class Port:
+    name: str
+    rows: int
+    cols: int = 1
+
+    @property
+    def size(self) -> int:
+        return self.rows * self.cols
+
+
+@dataclass
+class Kernel:
+    name: str
+    doc: str
+    inputs: tuple[Port, ...]
+    outputs: tuple[Port, ...]
+    function: ca.Function
+
+
+class SympyToCasadi:
+    """Translate sympy expressions to casadi SX, sharing every repeated sub-expression.
+
+    Products are built with parameters first, then drive inputs, then coordinates, and the
+    numeric coefficient last, so that prefixes like rho*A*L*w^2 are computed once.
+    """
+
+    def __init__(self, symbols: dict[sp.Symbol, ca.SX], priority: dict[sp.Symbol, int]):
+        self.symbols = symbols
+        self.priority = priority
+        self.memo: dict = {}
+
+    def __call__(self, expr) -> ca.SX:
+        key = expr if isinstance(expr, tuple) else (expr,)
+        hit = self.memo.get(key)
+        if hit is None:
+            hit = self._tr(expr)
+            self.memo[key] = hit
+        return hit
+
+    def _product(self, factors: tuple) -> ca.SX:
+        if len(factors) == 1:
+            return self(factors[0])
+        return self(factors[:-1]) * self(factors[-1])
+
+    def _tr(self, e):
+        if isinstance(e, tuple):  # a product prefix
+            return self._product(e)
+        if e.is_Number or e in (sp.pi, sp.E):
+            val = float(e)
+            if not math.isfinite(val):
+                raise ValueError(f"non-finite constant {e} in a kernel")
+            return ca.SX(val)
+        if e.is_Symbol:
+            if e not in self.symbols:
+                raise ValueError(f"unexpected symbol {e} in a kernel expression")
+            return self.symbols[e]
+        if e.is_Add:
+            terms = [self(a) for a in e.args]
+            acc = terms[0]
+            for x in terms[1:]:
+                acc = acc + x
+            return acc
+        if e.is_Mul:
+            coeff, rest = e.as_coeff_mul()
+            rest = tuple(sorted(rest, key=lambda f: (self._rank(f), sp.default_sort_key(f))))
+            body = self._product(rest) if rest else ca.SX(1.0)
+            if coeff == 1:
+                return body
+            if coeff == -1:
+                return -body
+            return body * float(coeff)
+        if e.is_Pow:
+            base, ex = e.args
+            b = self(base)
+            if ex.is_Integer:
+                n = int(ex)
+                if n == 2:
+                    return b * b
+                if n == -1:
+                    return 1 / b
+                return b**n if n > 0 else 1 / (b**(-n))
+            if ex == sp.Rational(1, 2):
+                return ca.sqrt(b)
+            if ex == -sp.Rational(1, 2):
+                return 1 / ca.sqrt(b)
+            return b**self(ex)
+        if isinstance(e, sp.Piecewise):
+            out = None
+            for val, cond in reversed(e.args):
+                v = self(val)
+                out = v if (out is None and cond == sp.true) else ca.if_else(self(cond), v, out)
+            return out
+        if e.is_Relational:
+            a, b = self(e.lhs), self(e.rhs)
+            return {"<": a < b, "<=": a <= b, ">": a > b, ">=": a >= b, "==": a == b,
+                    "!=": a != b}[e.rel_op]
+        fn = _FUNCS.get(type(e))
+        if fn is not None:
+            return fn(*[self(a) for a in e.args])
+        raise ValueError(f"cannot translate {type(e).__name__} ({e}) to casadi")
+
+    def _rank(self, f) -> int:
+        base = f.base if f.is_Pow else f
+        return self.priority.get(base, 9)
+
+
+_FUNCS = {sp.sin: ca.sin, sp.cos: ca.cos, sp.tan: ca.tan, sp.exp: ca.exp, sp.log: ca.log,
+          sp.sinh: ca.sinh, sp.cosh: ca.cosh, sp.tanh: ca.tanh, sp.Abs: ca.fabs,
+          sp.sign: ca.sign, sp.atan: ca.atan, sp.asin: ca.asin, sp.acos: ca.acos,
+          sp.atan2: ca.atan2}
+
+
+def group_by_parameters(expr: sp.Expr, params: list[sp.Symbol]) -> sp.Expr:
+    """sum_k g_k(params) * poly_k(state): multiply by each parameter group once."""
+    groups: dict[sp.Expr, list[sp.Expr]] = {}
+    pset = set(params)
+    for term in sp.Add.make_args(sp.expand(expr)):
+        pp, rest = [], []
+        for fac in sp.Mul.make_args(term):
+            base = fac.base if fac.is_Pow else fac
+            (pp if base in pset else rest).append(fac)
+        groups.setdefault(sp.Mul(*pp), []).append(sp.Mul(*rest))
+    return sp.Add(*[g * sp.Add(*v) for g, v in groups.items()], evaluate=False)
+
+
+def _matrix_sx(tr: SympyToCasadi, mat: sp.Matrix, params) -> ca.SX:
+    rows = [[tr(group_by_parameters(mat[i, j], params)) for j in range(mat.cols)]
+            for i in range(mat.rows)]
+    return ca.vertcat(*[ca.horzcat(*r) for r in rows])
+
+
+def build_kernels(der: Derivation) -> list[Kernel]:
+    n = len(der.coords)
+    mparams = der.maneuver.params
+    q = ca.SX.sym("q", n)
+    qd = ca.SX.sym("qd", n)
+    qdd = ca.SX.sym("qdd", n)
+    drive = ca.SX.sym("drive", 2)
+    p = ca.SX.sym("p", len(der.params))
+    t = ca.SX.sym("t")
+    mp = ca.SX.sym("mp", len(mparams))
+
+    symbols = {w: drive[0], alpha: drive[1], t_sym: t}
+    priority = {w: 1, alpha: 1}
+    for i, ps in enumerate(der.params):
+        symbols[ps] = p[i]
+        priority[ps] = 0
+    for i, mpar in enumerate(mparams):
+        symbols[mpar.symbol] = mp[i]
+    for i in range(n):
+        symbols[der.q[i]], symbols[der.qd[i]], symbols[der.qdd[i]] = q[i], qd[i], qdd[i]
+        priority[der.q[i]] = priority[der.qd[i]] = priority[der.qdd[i]] = 2
+    tr = SympyToCasadi(symbols, priority)
+    params = der.params
+
+    M = _matrix_sx(tr, der.numeric(der.M), params)
+    f = _matrix_sx(tr, der.numeric(der.f), params)
+    y = _matrix_sx(tr, der.numeric(sp.Matrix(list(der.outputs.values()))), params)
+    T, V, h = der.energies()
+    en = _matrix_sx(tr, der.numeric(sp.Matrix([T, V, h])), params)
+    man = der.maneuver
+    drive3 = _matrix_sx(tr, sp.Matrix([man.theta, man.rate, man.acceleration]), [])
+
+    r = ca.mtimes(M, qdd) - f
+    dr_dq, dr_dqd = ca.jacobian(r, q), ca.jacobian(r, qd)
+
+    P = lambda name, rows, cols=1: Port(name, rows, cols)
+    ny = len(der.outputs)
+    specs = [
+        ("mass", "mass matrix M(q)", [("q", q), ("p", p)], [("M", M)]),
+        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("drive", drive), ("p", p)],
+         [("f", f)]),
+        ("residual_jac", "Jacobians of r = M(q) q'' - f", [("q", q), ("qd", qd), ("qdd", qdd),
+                                                          ("drive", drive), ("p", p)],
+         [("dr_dq", dr_dq), ("dr_dqd", dr_dqd)]),
+        ("outputs", "output quantities " + ", ".join(der.outputs), [("q", q), ("qd", qd), ("p", p)],
+         [("y", y)]),
+        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
+         [("q", q), ("qd", qd), ("drive", drive), ("p", p)], [("e", en)]),
+        ("maneuver", f"[theta, w, alpha] of manoeuvre '{man.name}'", [("t", t), ("mp", mp)],
+         [("drive3", drive3)]),
+    ]
+    kernels = []
+    for name, doc, ins, outs in specs:
+        out_exprs = [ca.densify(e) for _, e in outs]
+        shared = ca.cse(ca.vertcat(*[ca.vec(e) for e in out_exprs]))
+        offs, pieces = 0, []
+        for e in out_exprs:
+            pieces.append(ca.reshape(shared[offs:offs + e.numel()], e.shape))
+            offs += e.numel()
+        fn = ca.Function(name, [x for _, x in ins], pieces, [a for a, _ in ins], [a for a, _ in outs])
+        kernels.append(Kernel(name, doc, tuple(P(a, x.shape[0], x.shape[1]) for a, x in ins),
+                              tuple(P(a, e.shape[0], e.shape[1]) for (a, _), e in zip(outs, out_exprs)),
+                              fn))
+    return kernels

@@ -1,0 +1,40 @@
+"""Where flexsym finds its templates, runtime and checked-in generated code, and its cache."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from .errors import FlexsymError
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+def _resource(name: str) -> Path:
+    # A wheel carries the folders inside the package (flexsym/_data/NAME); a source
+    # checkout or editable install has them next to symbolic/.
+    for candidate in (PACKAGE_DIR / "_data" / name, PACKAGE_DIR.parent / name):
+        if candidate.is_dir():
+            return candidate
+    raise FlexsymError(f"flexsym installation is incomplete: folder '{name}' not found next to "
+                       f"{PACKAGE_DIR}")
+
+
+def templates_dir() -> Path:
+    return _resource("templates")
+
+
+def runtime_dir() -> Path:
+    return _resource("runtime_c")
+
+
+def generated_dir() -> Path:
+    return _resource("generated")
+
+
+def cache_dir() -> Path:
+    """FLEXSYM_CACHE, else $XDG_CACHE_HOME/flexsym, else ~/.cache/flexsym."""
+    env = os.environ.get("FLEXSYM_CACHE")
+    if env:
+        return Path(env).expanduser().resolve()
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "flexsym"

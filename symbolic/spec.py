@@ -1,0 +1,138 @@
+"""Frozen variant specifications: the data that defines a model, and its fingerprint.
+
+A variant is data (strain model + axial modes + bending modes + manoeuvre + outputs) run
+through one derivation mechanism; nothing here is specific to one variant.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from dataclasses import dataclass, field, replace
+
+from .errors import SpecError
+from .modes import ModeRef, mode, parse_mode_token
+
+NAME_RE = re.compile(r"^[a-z][a-z0-9_]{0,47}$")
+
+
+@dataclass(frozen=True)
+class VariantSpec:
+    name: str
+    strain: str
+    axial: tuple[ModeRef, ...]
+    bending: tuple[ModeRef, ...]
+    maneuver: str = "spin_up"
+    outputs: tuple[str, ...] = ("v_tip", "u_tip")
+    description: str = ""
+    aliases: tuple[str, ...] = field(default=(), compare=False)
+
+    @property
+    def modes(self) -> tuple[ModeRef, ...]:
+        return self.axial + self.bending
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        return tuple(m.coordinate for m in self.modes)
+
+    def to_dict(self) -> dict:
+        """Canonical content (no aliases, no description): what the generated code depends on."""
+        return {
+            "name": self.name,
+            "strain": self.strain,
+            "axial": [m.token for m in self.axial],
+            "bending": [m.token for m in self.bending],
+            "maneuver": self.maneuver,
+            "outputs": list(self.outputs),
+        }
+
+    def validate(self) -> "VariantSpec":
+        from .energy import STRAIN_MODELS  # the physics owns the list of strain models
+        from .maneuver import MANEUVERS
+
+        if not NAME_RE.match(self.name):
+            raise SpecError(f"variant name '{self.name}': use lower-case letters, digits and _ "
+                            "(it becomes a C identifier), starting with a letter")
+        model = STRAIN_MODELS.get(self.strain)
+        if model is None:
+            raise SpecError(f"variant '{self.name}': unknown strain model '{self.strain}' "
+                            f"(known: {', '.join(STRAIN_MODELS)})")
+        for axis, refs in (("axial", self.axial), ("bending", self.bending)):
+            seen = set()
+            for r in refs:
+                if r.axis != axis:
+                    raise SpecError(f"variant '{self.name}': mode {r.token} is not a {axis} mode")
+                mode(r)  # validates family and index
+                if r in seen:
+                    raise SpecError(f"variant '{self.name}': duplicate {axis} mode '{r.token}'")
+                seen.add(r)
+        if not self.bending:
+            raise SpecError(f"variant '{self.name}': at least one bending mode is required")
+        if model.needs_axial and not self.axial:
+            raise SpecError(f"variant '{self.name}': strain model '{self.strain}' needs at least "
+                            "one axial mode (its stiffening term is linear in the axial amplitudes)")
+        if "v_tip" in self.outputs and all(mode(r).value_at(0, 1) == 0 for r in self.bending):
+            raise SpecError(f"variant '{self.name}': no bending mode moves the tip, so v_tip would "
+                            "be identically zero (add the static mode or a clamped-free mode)")
+        if self.maneuver not in MANEUVERS:
+            raise SpecError(f"variant '{self.name}': unknown manoeuvre '{self.maneuver}' "
+                            f"(known: {', '.join(MANEUVERS)})")
+        from .outputs import check_output_names
+        check_output_names(self)
+        return self
+
+
+def _refs(axis: str, tokens) -> tuple[ModeRef, ...]:
+    if isinstance(tokens, str):
+        tokens = [t for t in tokens.split(",") if t.strip()]
+    return tuple(parse_mode_token(axis, t) for t in tokens)
+
+
+PAPER_BENDING = ("static", "cp1", "cp2")
+
+BUILTIN: tuple[VariantSpec, ...] = (
+    VariantSpec("linear", "linear", _refs("axial", ["static"]), _refs("bending", PAPER_BENDING),
+                description="#0: linear strain, no geometric stiffening (fails above the first "
+                            "bending frequency)", aliases=("m0",)),
+    VariantSpec("geometric", "geometric_stiffness", _refs("axial", ["static"]),
+                _refs("bending", PAPER_BENDING),
+                description="#1: geometric stiffness K_G(eta) on the bending equations (eq. 18-19), "
+                            "linear axial mode", aliases=("m1",)),
+    VariantSpec("geometric_sine", "geometric_stiffness", _refs("axial", ["static", "sin1"]),
+                _refs("bending", PAPER_BENDING),
+                description="#2: as #1 with the axial sine mode sin(pi s) added (eq. 27-29)",
+                aliases=("m2",)),
+    VariantSpec("foreshortening", "foreshortening", (), _refs("bending", PAPER_BENDING),
+                description="#3: foreshortening u_fs = -1/2 int v'^2 (eq. 30-31), no axial "
+                            "coordinate", aliases=("m3",)),
+)
+
+
+def builtin(name: str) -> VariantSpec:
+    for v in BUILTIN:
+        if name == v.name or name in v.aliases:
+            return v
+    known = ", ".join(f"{v.name} ({'/'.join(v.aliases)})" for v in BUILTIN)
+    raise SpecError(f"unknown variant '{name}' (built-in: {known})")
+
+
+def customize(base: VariantSpec, *, name=None, strain=None, axial=None, bending=None,
+              outputs=None, maneuver=None) -> VariantSpec:
+    """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...')."""
+    changes = {}
+    if strain is not None:
+        changes["strain"] = strain
+    if axial is not None:
+        changes["axial"] = _refs("axial", axial)
+    if bending is not None:
+        changes["bending"] = _refs("bending", bending)
+    if outputs is not None:
+        changes["outputs"] = tuple(outputs)
+    if maneuver is not None:
+        changes["maneuver"] = maneuver
+    spec = replace(base, **changes, aliases=(), description=f"custom variant derived from {base.name}")
+    if name is None:
+        digest = hashlib.sha256(json.dumps(replace(spec, name="x").to_dict(),
+                                           sort_keys=True).encode()).hexdigest()[:8]
+        name = f"{base.name}_custom_{digest}"
+    return replace(spec, name=name).validate()

@@ -1,0 +1,93 @@
+"""The main job: the paper's spin-up beam for variants #0-#3, a summary table and a plot."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .pipeline import prepare
+from .run import RunResult, run_built
+from .spec import VariantSpec
+
+
+@dataclass
+class Summary:
+    spec: VariantSpec
+    result: RunResult
+    prepare_s: float  # generation check + build (cached builds cost almost nothing)
+
+    def value_at(self, t: float) -> float | None:
+        r = self.result
+        if r.t[-1] < t - 1e-9:
+            return None
+        return float(np.interp(t, r.t, r["v_tip"]))
+
+    @property
+    def minimum(self) -> tuple[float, float]:
+        r = self.result
+        i = int(np.argmin(r["v_tip"]))
+        return float(r["v_tip"][i]), float(r.t[i])
+
+
+def run_variants(specs: list[VariantSpec], *, ws: float, ts: float, t_end: float, dt: float,
+                 integrator: str, out_dir: Path | None, log=print) -> list[Summary]:
+    out = []
+    for spec in specs:
+        t0 = time.perf_counter()
+        built = prepare(spec)
+        t1 = time.perf_counter()
+        csv = out_dir / f"{spec.name}.csv" if out_dir else None
+        res = run_built(built, t_end=t_end, dt=dt, integrator=integrator,
+                        params={"ws": ws, "ts": ts}, out=csv)
+        out.append(Summary(spec, res, t1 - t0))
+        log(f"  {spec.name}: {res.status} ({res.summary['cpu_median'] * 1e3:.1f} ms CPU)"
+            + (f" -- {res.message}" if not res.ok else ""))
+    return out
+
+
+def _fmt(x: float | None, spec: str = "+.4f") -> str:
+    return "-" if x is None else format(x, spec)
+
+
+def table(summaries: list[Summary], ts: float, t_end: float) -> str:
+    head = (f"| variant | alias | min v_tip [m] | at t [s] | v_tip({ts:g}) [m] | v_tip({t_end:g}) [m] "
+            f"| integration CPU [ms] | status |")
+    rows = [head, "|" + "---|" * 8]
+    for s in summaries:
+        vmin, tmin = s.minimum if s.result.ok else (None, None)  # a diverging minimum means nothing
+        status = "ok" if s.result.ok else s.result.message
+        rows.append(f"| {s.spec.name} | {'/'.join(s.spec.aliases) or '-'} | {_fmt(vmin)} | {_fmt(tmin, '.2f')} "
+                    f"| {_fmt(s.value_at(ts))} | {_fmt(s.value_at(t_end))} "
+                    f"| {s.result.summary['cpu_median'] * 1e3:.2f} | {status} |")
+    return "\n".join(rows)
+
+
+def plot(summaries: list[Summary], path: Path, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    finite = [s for s in summaries if s.result.ok]
+    for s in summaries:
+        label = f"{s.spec.name} ({'/'.join(s.spec.aliases)})" if s.spec.aliases else s.spec.name
+        if not s.result.ok:
+            label += f", diverged at {s.result.summary['t_stop']:.2f} s"
+        ax.plot(s.result.t, s.result["v_tip"], label=label, lw=1.2)
+    if finite:  # keep a diverged curve from flattening the others
+        lo = min(float(np.min(s.result["v_tip"])) for s in finite)
+        hi = max(float(np.max(s.result["v_tip"])) for s in finite)
+        pad = 0.15 * (hi - lo or 1.0)
+        ax.set_ylim(lo - pad, hi + pad)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("v_tip [m] (moving frame)")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -1,0 +1,33 @@
+"""Tool versions and the generator fingerprint recorded in every manifest."""
+from __future__ import annotations
+
+import hashlib
+from functools import lru_cache
+
+import casadi
+import jinja2
+import sympy
+
+from . import __version__
+from .paths import PACKAGE_DIR, templates_dir
+
+# Modules whose code decides what is generated: a change in any of them changes the
+# fingerprint of every variant, so checked-in generated code is detected as stale.
+GENERATOR_MODULES = ("modes", "integrals", "energy", "maneuver", "outputs", "spec", "derive",
+                     "kernels", "cemit", "generate")
+
+
+def tool_versions() -> dict[str, str]:
+    return {"flexsym": __version__, "sympy": sympy.__version__, "casadi": casadi.__version__,
+            "jinja2": jinja2.__version__}
+
+
+@lru_cache(maxsize=None)
+def generator_hash() -> str:
+    h = hashlib.sha256()
+    files = [PACKAGE_DIR / f"{m}.py" for m in GENERATOR_MODULES]
+    files += sorted(templates_dir().glob("*.j2"))
+    for f in files:
+        h.update(f.name.encode() + b"\0")
+        h.update(f.read_bytes().replace(b"\r\n", b"\n"))
+    return h.hexdigest()
