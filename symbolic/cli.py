@@ -16,6 +16,12 @@ def _variant_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--axial", help="axial modes, e.g. static,sin1,sin2 (empty string for none)")
     g.add_argument("--bending", help="bending modes, e.g. static,cp1,cp2,cp3,cp4")
     g.add_argument("--maneuver", help="manoeuvre kind (spin_up, constant)")
+    g.add_argument("--outputs", help="output quantities, e.g. v_tip,u_tip,N_A,M_A,M@0.25 "
+                   "(positions as fractions of L; default: all the variant can give)")
+    g.add_argument("--stress", help="stress recovery: continuum (default) or element:N "
+                   "(the paper's element method on N elements)")
+    g.add_argument("--axial-force", dest="axial_force", choices=("constitutive", "equilibrium"),
+                   help="axial force from the axial strain (default) or from the axial inertial forces")
     g.add_argument("--name", help="name of the custom variant (default: derived from the base)")
 
 
@@ -23,7 +29,8 @@ def resolve_spec(args):
     from .spec import builtin, customize
 
     base = builtin(args.variant)
-    overrides = {k: getattr(args, k, None) for k in ("strain", "axial", "bending", "maneuver")}
+    overrides = {k: getattr(args, k, None) for k in ("strain", "axial", "bending", "maneuver",
+                                                     "outputs", "stress", "axial_force")}
     if all(v is None for v in overrides.values()) and not getattr(args, "name", None):
         return base.validate()
     return customize(base, name=getattr(args, "name", None), **overrides)
@@ -40,7 +47,13 @@ def _run_args(p: argparse.ArgumentParser) -> None:
 def cmd_generate(args) -> int:
     from .generate import generate
     from .pipeline import cache_folder, checked_in_folder, is_builtin
+    from .spec import BUILTIN
 
+    if args.variant == "all":  # every built-in variant into generated/
+        for spec in BUILTIN:
+            generate(spec, checked_in_folder(spec))
+            print(f"generated '{spec.name}' in {checked_in_folder(spec)}")
+        return 0
     spec = resolve_spec(args)
     dest = Path(args.out) if args.out else (checked_in_folder(spec) if is_builtin(spec) else cache_folder(spec))
     g = generate(spec, dest)
@@ -143,7 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="flexsym", description=__doc__)
     sub = ap.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("generate", help="derive and generate C for a variant")
+    p = sub.add_parser("generate", help="derive and generate C for a variant ('all': every built-in)")
     _variant_args(p)
     p.add_argument("--out", help="target folder (default: generated/NAME for built-ins, the cache otherwise)")
     p.set_defaults(func=cmd_generate)

@@ -19,7 +19,7 @@ from .energy import BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, StrainModel, alpha
 from .integrals import IntegralTable
 from .maneuver import MANEUVERS, Maneuver
 from .modes import Mode, mode
-from .outputs import OUTPUTS
+from .outputs import output_expression
 from .spec import VariantSpec
 
 
@@ -65,6 +65,11 @@ class Derivation:
         return not (self.M.free_symbols & set(self.q))
 
     @property
+    def outputs_use_acceleration(self) -> bool:
+        """The outputs read q'' (axial force from equilibrium): the runtime then computes it."""
+        return any(e.has(*self.qdd) for e in self.outputs.values())
+
+    @property
     def conservative(self) -> bool:
         return self.strain.conservative(bool(self.spec.axial))
 
@@ -99,12 +104,12 @@ def derive(spec: VariantSpec) -> Derivation:
     q = sp.Matrix([sp.Symbol(n, real=True) for n in names])
     qd = sp.Matrix([sp.Symbol(n + "_d", real=True) for n in names])
     qdd = sp.Matrix([sp.Symbol(n + "_dd", real=True) for n in names])
-    qmap, qdmap = dict(zip(names, q)), dict(zip(names, qd))
+    qmap, qdmap, qddmap = dict(zip(names, q)), dict(zip(names, qd)), dict(zip(names, qdd))
 
     table = IntegralTable(modes)
     axial = [modes[r.coordinate] for r in spec.axial]
     bending = [modes[r.coordinate] for r in spec.bending]
-    fields = build_fields(axial, bending, qmap, qdmap, table, strain.foreshortening)
+    fields = build_fields(axial, bending, qmap, qdmap, table, strain.foreshortening, qddmap)
     der = Derivation(spec, strain, maneuver, modes, groups, q, qd, qdd, table, fields)
 
     der.T = table.integrate(kinetic_density(fields))
@@ -130,5 +135,7 @@ def derive(spec: VariantSpec) -> Derivation:
         der.dropped.append({"what": "axial coordinates",
                             "why": "foreshortening carries the axial field kinematically"})
 
-    der.outputs = {name: OUTPUTS[name].build(der) for name in spec.outputs}
+    der.outputs = {name: output_expression(der, name) for name in spec.outputs}
+    if not maneuver.accelerates:
+        der.outputs = {k: v.xreplace({alpha: 0}) for k, v in der.outputs.items()}
     return der

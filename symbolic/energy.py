@@ -50,7 +50,9 @@ class Fields:
 
     u: sp.Expr  # axial displacement u_o(s)
     u_dot: sp.Expr
-    u_stretch_s: sp.Expr  # d/ds of the axial-mode part (the stretch: the strain-energy field)
+    u_ddot: sp.Expr
+    u_stretch: sp.Expr  # the axial-mode part of u (the stretch: the strain-energy field)
+    u_stretch_s: sp.Expr  # its d/ds
     v: sp.Expr  # transverse displacement v_o(s)
     v_dot: sp.Expr
     v_s: sp.Expr
@@ -58,10 +60,13 @@ class Fields:
 
 
 def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
-                 table: IntegralTable, foreshortening: bool) -> Fields:
+                 table: IntegralTable, foreshortening: bool, qdd: dict | None = None) -> Fields:
     mv = table.mode_value
+    qdd = qdd or {k: 0 for k in q}
     u = sum((mv(m.name) * q[m.name] for m in axial), sp.Integer(0))
+    u_stretch = u
     u_dot = sum((mv(m.name) * qd[m.name] for m in axial), sp.Integer(0))
+    u_ddot = sum((mv(m.name) * qdd[m.name] for m in axial), sp.Integer(0))
     u_s = sum((mv(m.name, 1) * q[m.name] for m in axial), sp.Integer(0))
     v = sum((mv(m.name) * q[m.name] for m in bending), sp.Integer(0))
     v_dot = sum((mv(m.name) * qd[m.name] for m in bending), sp.Integer(0))
@@ -74,7 +79,8 @@ def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
                 h = table.fs_value(mi.name, mj.name)
                 u += -h * q[mi.name] * q[mj.name] / (2 * L)
                 u_dot += -h * q[mi.name] * qd[mj.name] / L
-    return Fields(u, u_dot, u_s, v, v_dot, v_s, v_ss)
+                u_ddot += -h * (qd[mi.name] * qd[mj.name] + q[mi.name] * qdd[mj.name]) / L
+    return Fields(u, u_dot, u_ddot, u_stretch, u_s, v, v_dot, v_s, v_ss)
 
 
 def kinetic_density(f: Fields) -> sp.Expr:

@@ -18,10 +18,11 @@ import jinja2
 import mpmath
 
 from .cemit import EmittedKernel, c_double, emit
-from .derive import Derivation, derive
+from .derive import derive
 from .energy import BEAM_PARAMS
 from .kernels import build_kernels
-from .outputs import OUTPUTS
+from .maneuver import MANEUVERS
+from .outputs import info as output_info
 from .paths import templates_dir
 from .spec import VariantSpec
 from .versions import generator_hash, tool_versions
@@ -30,7 +31,7 @@ MANIFEST = "manifest.json"
 C_PREFIX = "fsm_"
 
 
-def fingerprint(spec: VariantSpec) -> str:
+def fingerprint(spec) -> str:
     """What the generated code depends on: the spec, the generator code and the tool versions."""
     payload = {"spec": spec.to_dict(), "generator": generator_hash(), "versions": tool_versions()}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
@@ -49,88 +50,128 @@ def _environment() -> jinja2.Environment:
                               autoescape=False)
 
 
-def _mode_description(der: Derivation, name: str) -> str:
-    return der.modes[name].description
-
-
-def render(spec: VariantSpec, der: Derivation, emitted: list[EmittedKernel], fp: str) -> dict[str, str]:
+def _common_context(spec, fp: str, maneuver, emitted: list[EmittedKernel]) -> dict:
     versions = tool_versions()
-    ctx = {
-        "spec": {"name": spec.name, "strain": spec.strain,
-                 "axial": [m.token for m in spec.axial], "bending": [m.token for m in spec.bending]},
+    return {
         "name": spec.name,
         "NAME": spec.name.upper(),
         "generator": f"flexsym {versions['flexsym']}",
         "versions": versions,
         "fingerprint": fp,
         "header": f"fsm_{spec.name}.h",
-        "coords": [{"name": c, "description": _mode_description(der, c)} for c in der.coords],
-        "outputs": [{"name": o, "unit": OUTPUTS[o].unit, "description": OUTPUTS[o].description}
-                    for o in spec.outputs],
         "params": [{"name": p.name, "unit": p.unit, "description": p.description,
                     "c_default": c_double(p.default)} for p in BEAM_PARAMS],
-        "maneuver": {"name": der.maneuver.name},
+        "maneuver": {"name": maneuver.name},
         "maneuver_params": [{"name": p.name, "unit": p.unit, "description": p.description,
-                             "c_default": c_double(p.default)} for p in der.maneuver.params],
-        "mass_constant": der.mass_constant,
+                             "c_default": c_double(p.default)} for p in maneuver.params],
         "length_param": [p.name for p in BEAM_PARAMS].index("L"),
         "v_tip_output": list(spec.outputs).index("v_tip") if "v_tip" in spec.outputs else -1,
         "kernels": emitted,
-    }
-    env = _environment()
-    return {
-        f"fsm_{spec.name}.h": env.get_template("model.h.j2").render(ctx),
-        "kernels.c": env.get_template("kernels.c.j2").render(ctx),
-        "model.c": env.get_template("model.c.j2").render(ctx),
-        "CMakeLists.txt": env.get_template("CMakeLists.txt.j2").render(ctx),
+        "element_kernels": [],
+        "bandwidth": -1,
     }
 
 
-def build_manifest(spec: VariantSpec, der: Derivation, emitted: list[EmittedKernel], fp: str,
-                   files: dict[str, str]) -> dict:
+def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
+    der = derive(spec)
+    emitted = [emit(k, C_PREFIX) for k in build_kernels(der)]
+    ctx = _common_context(spec, fp, der.maneuver, emitted) | {
+        "summary": f"Strain model: {spec.strain}; axial modes: "
+                   f"{', '.join(m.token for m in spec.axial) or 'none'}; bending modes: "
+                   f"{', '.join(m.token for m in spec.bending)}.",
+        "coords": [{"name": c, "description": der.modes[c].description} for c in der.coords],
+        "outputs": [vars(output_info(o)) for o in spec.outputs],
+        "mass_constant": der.mass_constant,
+        "outputs_use_acceleration": der.outputs_use_acceleration,
+    }
     integrals = []
     for sym in der.table.symbols:
         v = der.table.value(sym)
         integrals.append({"symbol": str(sym), "value": mpmath.nstr(v.value, 20),
                           "method": v.method, "error_estimate": float(f"{v.error:.3e}"),
                           "exact": str(v.exact) if v.exact is not None else None})
-    return {
-        "generator": f"flexsym {tool_versions()['flexsym']}",
-        "versions": tool_versions(),
+    manifest = {
+        "coordinates": [{"name": c, "group": der.groups[c], "mode": der.modes[c].description}
+                        for c in der.coords],
+        "energy_terms": [{"term": t.name, "formula": t.formula, "differentiated_wrt": list(t.wrt)}
+                         for t in der.terms],
+        "conservative": der.conservative,
+        "left_out": der.dropped,
+        "modal_integrals": integrals,
+    }
+    return ctx, manifest, "model.c.j2"
+
+
+def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
+    from .fe import CLAMP_OUTPUTS, QUAD_POINTS, build_element_kernels, derive_element, output_plan
+
+    der = derive_element(spec)
+    emitted = [emit(k, C_PREFIX if k.name == "maneuver" else "fse_") for k in build_element_kernels(der)]
+    needs_clamp = any(o in CLAMP_OUTPUTS for o in spec.outputs)
+    outputs = [{"name": o, "unit": "N" if o.startswith("N") else "N m",
+                "description": f"{'axial force' if o.startswith('N') else 'bending moment'} at the "
+                               "root from the clamp reaction"} if o in CLAMP_OUTPUTS
+               else vars(output_info(o)) for o in spec.outputs]
+    names = {"ux": "x displacement", "uy": "y displacement", "dx": "change of x_x", "dy": "change of y_x"}
+    ctx = _common_context(spec, fp, der.maneuver, emitted) | {
+        "summary": f"Finite elements: {spec.elements} geometrically exact ANCF cable elements.",
+        "coords": [{"name": c, "description": f"{names[c[:2]]} of node {c[2:]}"} for c in spec.coordinates],
+        "outputs": outputs,
+        "mass_constant": True,
+        "outputs_use_acceleration": needs_clamp,
+        "bandwidth": 7,  # a node couples to its neighbours only: 4 + 3 coordinates
+        "element_kernels": [k for k in emitted if k.kernel.name != "maneuver"],
+        "elements": spec.elements,
+        "plan": output_plan(spec),
+        "needs_clamp": needs_clamp,
+    }
+    manifest = {
+        "coordinates": [{"name": c["name"], "group": "node", "mode": c["description"]} for c in ctx["coords"]],
+        "element": {"formulation": "ANCF cable (cubic Hermite positions and slopes)",
+                    "strain": str(der.strain), "curvature": str(der.curvature),
+                    "kinetic_energy": str(der.T), "quadrature_points": QUAD_POINTS},
+        "conservative": True,
+        "left_out": [],
+    }
+    return ctx, manifest, "fe_model.c.j2"
+
+
+def generate_files(spec) -> dict[str, str]:
+    """Everything a generated folder holds, as text, without touching the disk."""
+    spec.validate()
+    fp = fingerprint(spec)
+    ctx, extra, model_template = (_finite_elements if spec.kind == "fe" else _modal)(spec, fp)
+    env = _environment()
+    files = {
+        f"fsm_{spec.name}.h": env.get_template("model.h.j2").render(ctx),
+        "kernels.c": env.get_template("kernels.c.j2").render(ctx),
+        "model.c": env.get_template(model_template).render(ctx),
+        "CMakeLists.txt": env.get_template("CMakeLists.txt.j2").render(ctx),
+    }
+    emitted = ctx["kernels"]
+    manifest = {
+        "generator": ctx["generator"],
+        "versions": ctx["versions"],
         "fingerprint": fp,
         "spec": spec.to_dict(),
         "description": spec.description,
-        "coordinates": [{"name": c, "group": der.groups[c], "mode": der.modes[c].description}
-                        for c in der.coords],
         "outputs": list(spec.outputs),
         "params": [{"name": p.name, "default": p.default, "unit": p.unit} for p in BEAM_PARAMS],
-        "maneuver": {"name": der.maneuver.name, "theta": str(der.maneuver.theta),
+        "maneuver": {"name": spec.maneuver, "theta": str(MANEUVERS[spec.maneuver].theta),
                      "params": [{"name": p.name, "default": p.default, "unit": p.unit}
-                                for p in der.maneuver.params]},
-        "energy_terms": [{"term": t.name, "formula": t.formula, "differentiated_wrt": list(t.wrt)}
-                         for t in der.terms],
-        "mass_constant": der.mass_constant,
-        "conservative": der.conservative,
-        "left_out": der.dropped,
+                                for p in MANEUVERS[spec.maneuver].params]},
+        "mass_constant": ctx["mass_constant"],
+        "outputs_use_acceleration": ctx["outputs_use_acceleration"],
+        "bandwidth": ctx["bandwidth"],
+        **extra,
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops,
                                     "inputs": {p.name: p.size for p in k.kernel.inputs},
                                     "outputs": {p.name: [p.rows, p.cols] for p in k.kernel.outputs}}
                     for k in emitted},
-        "modal_integrals": integrals,
         "files": {name: hashlib.sha256(text.encode()).hexdigest() for name, text in sorted(files.items())},
     }
-
-
-def generate_files(spec: VariantSpec) -> tuple[dict[str, str], Derivation, list[EmittedKernel]]:
-    """Everything a generated folder holds, as text, without touching the disk."""
-    spec.validate()
-    fp = fingerprint(spec)
-    der = derive(spec)
-    emitted = [emit(k, C_PREFIX) for k in build_kernels(der)]
-    files = render(spec, der, emitted, fp)
-    manifest = build_manifest(spec, der, emitted, fp, files)
-    files[MANIFEST] = json.dumps(manifest, indent=2, sort_keys=False) + "\n"
-    return files, der, emitted
+    files[MANIFEST] = json.dumps(manifest, indent=2) + "\n"
+    return files
 
 
 def write_folder(files: dict[str, str], dest: Path) -> None:
@@ -153,8 +194,8 @@ def write_folder(files: dict[str, str], dest: Path) -> None:
         raise
 
 
-def generate(spec: VariantSpec, dest: Path) -> Generated:
-    files, _, _ = generate_files(spec)
+def generate(spec, dest: Path) -> Generated:
+    files = generate_files(spec)
     write_folder(files, dest)
     return Generated(spec, Path(dest), json.loads(files[MANIFEST]))
 

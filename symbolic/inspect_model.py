@@ -20,14 +20,14 @@ def _latex_names(der: Derivation) -> dict:
         tex = m.name.replace("_", r"\_")
         names[sp.Symbol(m.name, real=True)] = r"q_{\mathrm{" + tex + "}}"
     for sym in der.table.symbols:
-        s_pow, factors = der.table.monomial(sym)
+        a, b, s_pow, factors = der.table.monomial(sym)
         parts = ([f"s^{{{s_pow}}}"] if s_pow > 1 else ["s"] if s_pow == 1 else [])
         for f in factors:
             if f.kind == "fs":
                 parts.append(rf"H_{{{der.modes[f.a].latex}{der.modes[f.b].latex}}}")
             else:
                 parts.append(der.modes[f.a].latex + "'" * f.order)
-        names[sym] = r"\int_0^1 " + r"\, ".join(parts) + r"\,ds"
+        names[sym] = rf"\int_{{{a}}}^{{{b}}} " + r"\, ".join(parts) + r"\,ds"
     return names
 
 

@@ -119,8 +119,9 @@ class IntegralTable:
         return list(self._placeholders.values())
 
     # ----- integration of a density ---------------------------------------------------
-    def integrate(self, density: sp.Expr) -> sp.Expr:
-        """int_0^1 density ds, with each factor monomial replaced by its integral symbol."""
+    def integrate(self, density: sp.Expr, a=0, b=1) -> sp.Expr:
+        """int_a^b density ds, with each factor monomial replaced by its integral symbol."""
+        a, b = sp.nsimplify(a), sp.nsimplify(b)
         groups: dict[sp.Expr, list[sp.Expr]] = {}
         for term in sp.Add.make_args(sp.expand(density)):
             key_parts, rest = [], []
@@ -129,11 +130,13 @@ class IntegralTable:
                     key_parts.append((base, exp))
                 else:
                     rest.append(base**exp)
-            key = self.monomial_symbol(key_parts)
+            key = self.monomial_symbol(key_parts, a, b)
             groups.setdefault(key, []).append(sp.Mul(*rest))
         return sp.Add(*[k * sp.Add(*v) for k, v in groups.items()])
 
-    def monomial_symbol(self, parts) -> sp.Expr:
+    def monomial_symbol(self, parts, a=0, b=1) -> sp.Expr:
+        """The symbol of int_a^b s^k * prod(factors) ds (a, b exact fractions of the length)."""
+        a, b = sp.nsimplify(a), sp.nsimplify(b)
         s_pow = 0
         factors: list[Factor] = []
         for base, exp in parts:
@@ -141,16 +144,15 @@ class IntegralTable:
                 s_pow += int(exp)
             else:
                 factors.extend([self._factor_of[base]] * int(exp))
-        if not factors and s_pow == 0:
-            return sp.Integer(1)
         if not factors:
-            return sp.Rational(1, s_pow + 1)
-        key = (s_pow, tuple(sorted(factors)))
+            return (b**(s_pow + 1) - a**(s_pow + 1)) / (s_pow + 1)
+        key = (a, b, s_pow, tuple(sorted(factors)))
         sym = self._symbols.get(key)
         if sym is None:
             label = "*".join(([f"s^{s_pow}"] if s_pow > 1 else ["s"] if s_pow == 1 else [])
-                             + [f.label for f in key[1]])
-            sym = sp.Symbol(f"J[{label}]", real=True)
+                             + [f.label for f in key[3]])
+            interval = "" if (a, b) == (0, 1) else f"({a},{b})"
+            sym = sp.Symbol(f"J{interval}[{label}]", real=True)
             self._symbols[key] = sym
             self._monomial_of[sym] = key
         return sym
@@ -187,25 +189,25 @@ class IntegralTable:
         integrand = (sp.diff(ma.expr, s) * sp.diff(mb.expr, s)).subs(s, sig)
         return _integrate_exact(integrand, sig, 0, s)
 
-    def _evaluate(self, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
+    def _evaluate(self, a, b, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
         exact = [self._exact_factor(f) for f in factors]
         if all(e is not None for e in exact):
-            expr = _integrate_exact(s**s_pow * sp.Mul(*exact), s, 0, 1)
+            expr = _integrate_exact(s**s_pow * sp.Mul(*exact), s, a, b)
             with mpmath.workdps(QUAD_DPS):
                 val = mpmath.mpf(sp.N(expr, QUAD_DPS + 5))
-                xs, ws = gauss_legendre(N_START)
+                xs, ws = _nodes(N_START, a, b)
                 fn = sp.lambdify(s, s**s_pow * sp.Mul(*exact), "mpmath")
                 scale = float(mpmath.fsum(w * abs(fn(x)) for x, w in zip(xs, ws)))
             return IntegralValue(val, "exact", 0.0, scale or float(abs(val)), expr)
-        return self._gauss(s_pow, factors)
+        return self._gauss(a, b, s_pow, factors)
 
-    def _samples(self, f: Factor, n: int) -> list:
-        """The factor at the n Gauss nodes (H_ab by an inner rule on [0, s_k])."""
-        key = (f, n)
+    def _samples(self, f: Factor, n: int, a, b) -> list:
+        """The factor at the n Gauss nodes of [a, b] (H_ab by an inner rule on [0, x])."""
+        key = (f, n, a, b)
         cached = self._numeric_cache.get(key)
         if cached is not None:
             return cached
-        xs, _ = gauss_legendre(n)
+        xs, _ = _nodes(n, a, b)
         with mpmath.workdps(QUAD_DPS):
             if f.kind == "mode":
                 fn = sp.lambdify(s, self.modes[f.a].derivative(f.order), "mpmath")
@@ -219,12 +221,12 @@ class IntegralTable:
         self._numeric_cache[key] = vals
         return vals
 
-    def _gauss(self, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
+    def _gauss(self, a, b, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
         prev = None
         n = N_START
         while n <= N_MAX:
-            xs, ws = gauss_legendre(n)
-            cols = [self._samples(f, n) for f in factors]
+            xs, ws = _nodes(n, a, b)
+            cols = [self._samples(f, n, a, b) for f in factors]
             with mpmath.workdps(QUAD_DPS):
                 terms = []
                 for k, (x, w) in enumerate(zip(xs, ws)):
@@ -243,6 +245,16 @@ class IntegralTable:
             prev = val
             n *= 2
         return IntegralValue(val, "gauss", float(abs(val - prev)), float(scale), None, n // 2)
+
+
+def _nodes(n: int, a, b):
+    """Gauss-Legendre nodes and weights mapped from [0, 1] to [a, b]."""
+    xs, ws = gauss_legendre(n)
+    if (a, b) == (0, 1):
+        return xs, ws
+    with mpmath.workdps(QUAD_DPS + 10):
+        A, B = mpmath.mpf(sp.Rational(a).p) / sp.Rational(a).q, mpmath.mpf(sp.Rational(b).p) / sp.Rational(b).q
+        return tuple(A + (B - A) * x for x in xs), tuple((B - A) * w for w in ws)
 
 
 def _integrate_exact(expr: sp.Expr, var: sp.Symbol, a, b) -> sp.Expr:

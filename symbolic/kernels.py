@@ -4,7 +4,7 @@ Kernels (row-major dense outputs, p = beam parameters, drive = [w, alpha]):
   mass(q, p) -> M                               mass matrix, symmetric positive definite
   force(q, qd, drive, p) -> f                   M q'' = f
   residual_jac(q, qd, qdd, drive, p) -> (dr_dq, dr_dqd) of r = M(q) q'' - f (Newton iterations)
-  outputs(q, qd, p) -> y                         v_tip, u_tip, ...
+  outputs(q, qd, qdd, drive, p) -> y             v_tip, u_tip, N and M at points
   energy(q, qd, drive, p) -> [T, V, h]           kinetic, potential, Jacobi integral
   maneuver(t, mp) -> [theta, w, alpha]           guided root rotation
 """
@@ -16,7 +16,10 @@ from dataclasses import dataclass
 import casadi as ca
 import sympy as sp
 
-from .derive import Derivation
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .derive import Derivation
 from .energy import alpha, w
 from .maneuver import t as t_sym
 
@@ -103,10 +106,13 @@ class SympyToCasadi:
                 if n == -1:
                     return 1 / b
                 return b**n if n > 0 else 1 / (b**(-n))
-            if ex == sp.Rational(1, 2):
-                return ca.sqrt(b)
-            if ex == -sp.Rational(1, 2):
-                return 1 / ca.sqrt(b)
+            if ex.is_Rational and ex.q == 2:  # b^(k/2) = sqrt(b)^k: no pow() call
+                r = ca.sqrt(b)
+                k = abs(int(ex.p))
+                acc = r
+                for _ in range(k - 1):
+                    acc = acc * r
+                return acc if ex > 0 else 1 / acc
             return b**self(ex)
         if isinstance(e, sp.Piecewise):
             out = None
@@ -153,57 +159,32 @@ def _matrix_sx(tr: SympyToCasadi, mat: sp.Matrix, params) -> ca.SX:
     return ca.vertcat(*[ca.horzcat(*r) for r in rows])
 
 
-def build_kernels(der: Derivation) -> list[Kernel]:
-    n = len(der.coords)
-    mparams = der.maneuver.params
-    q = ca.SX.sym("q", n)
-    qd = ca.SX.sym("qd", n)
-    qdd = ca.SX.sym("qdd", n)
-    drive = ca.SX.sym("drive", 2)
-    p = ca.SX.sym("p", len(der.params))
-    t = ca.SX.sym("t")
-    mp = ca.SX.sym("mp", len(mparams))
-
-    symbols = {w: drive[0], alpha: drive[1], t_sym: t}
+def translator(q_syms, qd_syms, qdd_syms, params, maneuver) -> tuple[SympyToCasadi, dict]:
+    """casadi inputs {q, qd, qdd, drive, p, t, mp} and a translator from the sympy symbols."""
+    n = len(q_syms)
+    sx = {"q": ca.SX.sym("q", n), "qd": ca.SX.sym("qd", n), "qdd": ca.SX.sym("qdd", n),
+          "drive": ca.SX.sym("drive", 2), "p": ca.SX.sym("p", len(params)), "t": ca.SX.sym("t"),
+          "mp": ca.SX.sym("mp", len(maneuver.params))}
+    symbols = {w: sx["drive"][0], alpha: sx["drive"][1], t_sym: sx["t"]}
     priority = {w: 1, alpha: 1}
-    for i, ps in enumerate(der.params):
-        symbols[ps] = p[i]
+    for i, ps in enumerate(params):
+        symbols[ps] = sx["p"][i]
         priority[ps] = 0
-    for i, mpar in enumerate(mparams):
-        symbols[mpar.symbol] = mp[i]
+    for i, mpar in enumerate(maneuver.params):
+        symbols[mpar.symbol] = sx["mp"][i]
     for i in range(n):
-        symbols[der.q[i]], symbols[der.qd[i]], symbols[der.qdd[i]] = q[i], qd[i], qdd[i]
-        priority[der.q[i]] = priority[der.qd[i]] = priority[der.qdd[i]] = 2
-    tr = SympyToCasadi(symbols, priority)
-    params = der.params
+        for key, syms in (("q", q_syms), ("qd", qd_syms), ("qdd", qdd_syms)):
+            symbols[syms[i]] = sx[key][i]
+            priority[syms[i]] = 2
+    return SympyToCasadi(symbols, priority), sx
 
-    M = _matrix_sx(tr, der.numeric(der.M), params)
-    f = _matrix_sx(tr, der.numeric(der.f), params)
-    y = _matrix_sx(tr, der.numeric(sp.Matrix(list(der.outputs.values()))), params)
-    T, V, h = der.energies()
-    en = _matrix_sx(tr, der.numeric(sp.Matrix([T, V, h])), params)
-    man = der.maneuver
-    drive3 = _matrix_sx(tr, sp.Matrix([man.theta, man.rate, man.acceleration]), [])
 
-    r = ca.mtimes(M, qdd) - f
-    dr_dq, dr_dqd = ca.jacobian(r, q), ca.jacobian(r, qd)
+def maneuver_sx(tr: SympyToCasadi, man) -> ca.SX:
+    return _matrix_sx(tr, sp.Matrix([man.theta, man.rate, man.acceleration]), [])
 
-    P = lambda name, rows, cols=1: Port(name, rows, cols)
-    ny = len(der.outputs)
-    specs = [
-        ("mass", "mass matrix M(q)", [("q", q), ("p", p)], [("M", M)]),
-        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("drive", drive), ("p", p)],
-         [("f", f)]),
-        ("residual_jac", "Jacobians of r = M(q) q'' - f", [("q", q), ("qd", qd), ("qdd", qdd),
-                                                          ("drive", drive), ("p", p)],
-         [("dr_dq", dr_dq), ("dr_dqd", dr_dqd)]),
-        ("outputs", "output quantities " + ", ".join(der.outputs), [("q", q), ("qd", qd), ("p", p)],
-         [("y", y)]),
-        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
-         [("q", q), ("qd", qd), ("drive", drive), ("p", p)], [("e", en)]),
-        ("maneuver", f"[theta, w, alpha] of manoeuvre '{man.name}'", [("t", t), ("mp", mp)],
-         [("drive3", drive3)]),
-    ]
+
+def make_kernels(specs) -> list[Kernel]:
+    """specs: (name, doc, [(input name, SX)], [(output name, SX)]); CSE over all outputs."""
     kernels = []
     for name, doc, ins, outs in specs:
         out_exprs = [ca.densify(e) for _, e in outs]
@@ -213,7 +194,33 @@ def build_kernels(der: Derivation) -> list[Kernel]:
             pieces.append(ca.reshape(shared[offs:offs + e.numel()], e.shape))
             offs += e.numel()
         fn = ca.Function(name, [x for _, x in ins], pieces, [a for a, _ in ins], [a for a, _ in outs])
-        kernels.append(Kernel(name, doc, tuple(P(a, x.shape[0], x.shape[1]) for a, x in ins),
-                              tuple(P(a, e.shape[0], e.shape[1]) for (a, _), e in zip(outs, out_exprs)),
+        kernels.append(Kernel(name, doc, tuple(Port(a, x.shape[0], x.shape[1]) for a, x in ins),
+                              tuple(Port(a, e.shape[0], e.shape[1]) for (a, _), e in zip(outs, out_exprs)),
                               fn))
     return kernels
+
+
+def build_kernels(der: "Derivation") -> list[Kernel]:
+    params = der.params
+    tr, x = translator(der.q, der.qd, der.qdd, params, der.maneuver)
+    M = _matrix_sx(tr, der.numeric(der.M), params)
+    f = _matrix_sx(tr, der.numeric(der.f), params)
+    y = _matrix_sx(tr, der.numeric(sp.Matrix(list(der.outputs.values()))), params)
+    T, V, h = der.energies()
+    en = _matrix_sx(tr, der.numeric(sp.Matrix([T, V, h])), params)
+    r = ca.mtimes(M, x["qdd"]) - f
+    q, qd, qdd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
+    return make_kernels([
+        ("mass", "mass matrix M(q)", [("q", q), ("p", p)], [("M", M)]),
+        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("drive", drive), ("p", p)],
+         [("f", f)]),
+        ("residual_jac", "Jacobians of r = M(q) q'' - f", [("q", q), ("qd", qd), ("qdd", qdd),
+                                                          ("drive", drive), ("p", p)],
+         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
+        ("outputs", "output quantities " + ", ".join(der.outputs),
+         [("q", q), ("qd", qd), ("qdd", qdd), ("drive", drive), ("p", p)], [("y", y)]),
+        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
+         [("q", q), ("qd", qd), ("drive", drive), ("p", p)], [("e", en)]),
+        ("maneuver", f"[theta, w, alpha] of manoeuvre '{der.maneuver.name}'",
+         [("t", x["t"]), ("mp", x["mp"])], [("drive3", maneuver_sx(tr, der.maneuver))]),
+    ])

@@ -1,51 +1,233 @@
-"""Output quantities: fields evaluated at points of the beam, as expressions of the coordinates."""
+"""Output quantities: tip displacements and stress resultants, as expressions of the state.
+
+Sign convention: N > 0 in tension; M = EI * curvature, positive when the beam curves toward
++y of the moving frame (v'' > 0).
+
+Names: v_tip, u_tip, and N_P / M_P at a point P: A (root, x = 0), B (x = L/2), C (tip,
+x = L) or s<fraction> for x = fraction * L, written with 'p' for the decimal point
+(N_s0p25 is N at x = L/4; on the command line N@0.25).
+
+Methods (spec.stress):
+  continuum   N = EA u_o', M = EI v_o''                                  (paper eq. 26)
+  element:n   the paper's element method (22)-(25) on n beam elements: nodal u, v, theta
+              from the modes, S^e = (K_L^e + P K_GL^e) u_e with P = EA (u2 - u1)/l
+Axial force source (spec.axial_force):
+  constitutive  from the axial strain of the model's axial modes (prestress: N(x) assumed by
+                the model); unavailable without axial modes (foreshortening)
+  equilibrium   N(x) = -rho A int_x^L a_x dx, the axial inertial forces of the part beyond x
+"""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import sympy as sp
 
+from .energy import A, E, I, L, alpha, rho, w
 from .errors import SpecError
 from .integrals import Factor
+from .modes import s
+
+POINTS = {"A": sp.Integer(0), "B": sp.Rational(1, 2), "C": sp.Integer(1)}
+STRESS_OUTPUTS = tuple(f"{q}_{p}" for q in "NM" for p in "ABC")
+_POINT_RE = re.compile(r"^([NM])_(A|B|C|s(\d+)(?:p(\d+))?)$")
+_AT_RE = re.compile(r"^([NM])@([0-9]*\.?[0-9]+)$")
 
 
 @dataclass(frozen=True)
-class OutputDef:
+class OutputInfo:
     name: str
     unit: str
     description: str
-    build: object  # (Derivation) -> sp.Expr
 
+
+def canonical_output(token: str) -> str:
+    """'N@0.25' -> 'N_s0p25'; names already canonical are returned unchanged."""
+    token = token.strip()
+    m = _AT_RE.match(token)
+    if m:
+        frac = sp.nsimplify(m.group(2))
+        if not 0 <= frac <= 1:
+            raise SpecError(f"output '{token}': position {m.group(2)} is outside [0, 1] "
+                            "(positions are fractions of the beam length)")
+        text = m.group(2).rstrip("0").rstrip(".") if "." in m.group(2) else m.group(2)
+        text = text if not text.startswith(".") else "0" + text
+        return f"{m.group(1)}_s{text.replace('.', 'p')}"
+    return token
+
+
+def point_of(name: str):
+    """(quantity 'N'|'M', exact position s) of a stress output name, or None."""
+    m = _POINT_RE.match(name)
+    if not m:
+        return None
+    where = m.group(2)
+    if where in POINTS:
+        return m.group(1), POINTS[where]
+    frac = sp.nsimplify(f"{m.group(3)}.{m.group(4) or 0}")
+    return m.group(1), frac
+
+
+def info(name: str) -> OutputInfo:
+    if name == "v_tip":
+        return OutputInfo(name, "m", "transverse tip deflection v_o(L) in the moving frame")
+    if name == "u_tip":
+        return OutputInfo(name, "m", "axial tip displacement u_o(L) in the moving frame")
+    q, at = point_of(name)
+    what = "axial force (tension > 0)" if q == "N" else "bending moment (EI v'')"
+    return OutputInfo(name, "N" if q == "N" else "N m", f"{what} at x = {at} L")
+
+
+def check_output_names(spec) -> None:
+    seen = set()
+    for name in spec.outputs:
+        if name not in ("v_tip", "u_tip"):
+            p = point_of(name)
+            if p is None:
+                raise SpecError(f"variant '{spec.name}': unknown output '{name}' (known: v_tip, "
+                                "u_tip, N_A, N_B, N_C, M_A, M_B, M_C, N@<x/L>, M@<x/L>)")
+            if not 0 <= p[1] <= 1:
+                raise SpecError(f"variant '{spec.name}': output '{name}' is outside the beam")
+            if p[0] == "N" and not axial_force_available(spec):
+                raise SpecError(
+                    f"variant '{spec.name}': {name} is not available: strain model "
+                    f"'{spec.strain}' has no axial coordinate to carry an axial force; use "
+                    "--axial-force equilibrium to recover N from the inertial forces")
+        if name in seen:
+            raise SpecError(f"variant '{spec.name}': duplicate output '{name}'")
+        seen.add(name)
+
+
+def axial_force_available(spec) -> bool:
+    return bool(spec.axial) or spec.strain == "prestress" or spec.axial_force == "equilibrium"
+
+
+def default_outputs(spec) -> tuple[str, ...]:
+    """v_tip, u_tip and every stress at A, B, C that the variant can give."""
+    outs = ["v_tip", "u_tip"]
+    outs += [n for n in STRESS_OUTPUTS if n[0] == "M" or axial_force_available(spec)]
+    return tuple(outs)
+
+
+# ----- expressions ---------------------------------------------------------------------
 
 def field_at(der, expr: sp.Expr, at) -> sp.Expr:
     """Replace every factor placeholder in a field expression by its value at s = at."""
     subs = {}
-    for ph in der.table.placeholders:
-        f: Factor = der.table._factor_of[ph]
+    table = der.table
+    for ph in table.placeholders:
+        f: Factor = table._factor_of[ph]
         if f.kind == "mode":
             subs[ph] = der.modes[f.a].value_at(f.order, at)
-        elif at == 1:  # H_ab(1) = int_0^1 a' b' ds: an ordinary modal integral
-            subs[ph] = der.table.monomial_symbol(
-                [(der.table.mode_value(f.a, 1), 1), (der.table.mode_value(f.b, 1), 1)])
         elif at == 0:
             subs[ph] = sp.Integer(0)
-        else:
-            raise SpecError(f"the foreshortening field is only available at the root and tip, not s = {at}")
+        else:  # H_ab(at) = int_0^at a' b' ds: an ordinary modal integral on [0, at]
+            subs[ph] = table.monomial_symbol(
+                [(table.mode_value(f.a, 1), 1), (table.mode_value(f.b, 1), 1)], 0, at)
     return sp.expand(expr.xreplace(subs))
 
 
-OUTPUTS: dict[str, OutputDef] = {o.name: o for o in (
-    OutputDef("v_tip", "m", "transverse tip deflection v_o(L) in the moving frame",
-              lambda d: field_at(d, d.fields.v, 1)),
-    OutputDef("u_tip", "m", "axial tip displacement u_o(L) in the moving frame",
-              lambda d: field_at(d, d.fields.u, 1)),
-)}
+def _continuum_N(der, at) -> sp.Expr:
+    return E * A / L * field_at(der, der.fields.u_stretch_s, at)
 
 
-def check_output_names(spec) -> None:
-    for name in spec.outputs:
-        if name not in OUTPUTS:
-            raise SpecError(f"variant '{spec.name}': unknown output '{name}' "
-                            f"(known: {', '.join(OUTPUTS)})")
-    if len(set(spec.outputs)) != len(spec.outputs):
-        raise SpecError(f"variant '{spec.name}': duplicate output in {list(spec.outputs)}")
+def _continuum_M(der, at) -> sp.Expr:
+    return E * I / L**2 * field_at(der, der.fields.v_ss, at)
+
+
+def _prestress_N(at) -> sp.Expr:
+    return rho * A * w**2 * L**2 * (1 - at**2) / 2
+
+
+def _equilibrium_N(der, at) -> sp.Expr:
+    """N(x) = -rho A int_x^L a_x dx with a_x the axial (moving x) inertial acceleration."""
+    f = der.fields
+    a_x = f.u_ddot - 2 * w * f.v_dot - alpha * f.v - w**2 * (L * s + f.u)
+    return -rho * A * L * der.table.integrate(a_x, at, 1)
+
+
+def element_matrices(le):
+    """The paper's K_L^e (7) and K_GL^e (8) for dofs (u1, v1, th1, u2, v2, th2).
+
+    K_GL^e[th1, th2] is -le/30: the paper prints +le/30, a sign misprint (the integral of the
+    cubic energy term for Hermite shapes gives -le/30; tests/test_integrals.py).
+    """
+    a, b = E * A / le, E * I
+    KL = sp.Matrix([
+        [a, 0, 0, -a, 0, 0],
+        [0, 12 * b / le**3, 6 * b / le**2, 0, -12 * b / le**3, 6 * b / le**2],
+        [0, 6 * b / le**2, 4 * b / le, 0, -6 * b / le**2, 2 * b / le],
+        [-a, 0, 0, a, 0, 0],
+        [0, -12 * b / le**3, -6 * b / le**2, 0, 12 * b / le**3, -6 * b / le**2],
+        [0, 6 * b / le**2, 2 * b / le, 0, -6 * b / le**2, 4 * b / le]])
+    r = sp.Rational
+    KG = sp.Matrix([
+        [0, 0, 0, 0, 0, 0],
+        [0, r(6, 5) / le, r(1, 10), 0, -r(6, 5) / le, r(1, 10)],
+        [0, r(1, 10), 2 * le / 15, 0, -r(1, 10), -le / 30],
+        [0, 0, 0, 0, 0, 0],
+        [0, -r(6, 5) / le, -r(1, 10), 0, r(6, 5) / le, -r(1, 10)],
+        [0, r(1, 10), -le / 30, 0, -r(1, 10), 2 * le / 15]])
+    return KL, KG
+
+
+def _element_end_values(der, n: int, e: int, want_N: bool):
+    """(N or M at the left end, at the right end) of element e of n, from (23)-(25)."""
+    le = L / n
+    f = der.fields
+    nodes = (sp.Rational(e, n), sp.Rational(e + 1, n))
+    u_hat = []
+    for at in nodes:
+        u_hat += [field_at(der, f.u_stretch, at), field_at(der, f.v, at), field_at(der, f.v_s, at) / L]
+    u_hat = sp.Matrix(u_hat)
+    KL, KG = element_matrices(le)
+    P = E * A / le * (u_hat[3] - u_hat[0])
+    S = (KL + P * KG) * u_hat
+    if want_N:
+        return -S[0], S[3]
+    return -S[2], S[5]
+
+
+def _element_method(der, n: int, at, want_N: bool) -> sp.Expr:
+    t = at * n
+    e = int(sp.floor(t))
+    if t == e:  # a node: the average of the adjacent element ends
+        ends = []
+        if e > 0:
+            ends.append(_element_end_values(der, n, e - 1, want_N)[1])
+        if e < n:
+            ends.append(_element_end_values(der, n, e, want_N)[0])
+        return sp.expand(sp.Add(*ends) / len(ends))
+    left, right = _element_end_values(der, n, e, want_N)
+    xi = t - e  # end forces vary linearly along an element loaded only at its nodes
+    return sp.expand((1 - xi) * left + xi * right)
+
+
+def stress_method(spec) -> tuple[str, int]:
+    if spec.stress == "continuum":
+        return "continuum", 0
+    m = re.match(r"^element:(\d+)$", spec.stress)
+    if not m or not 1 <= int(m.group(1)) <= 1000:
+        raise SpecError(f"variant '{spec.name}': stress method '{spec.stress}' must be "
+                        "'continuum' or 'element:N' with 1 <= N <= 1000 elements")
+    return "element", int(m.group(1))
+
+
+def output_expression(der, name: str) -> sp.Expr:
+    spec = der.spec
+    if name == "v_tip":
+        return field_at(der, der.fields.v, 1)
+    if name == "u_tip":
+        return field_at(der, der.fields.u, 1)
+    quantity, at = point_of(name)
+    method, n = stress_method(spec)
+    if quantity == "M":
+        return _element_method(der, n, at, False) if method == "element" else _continuum_M(der, at)
+    if spec.axial_force == "equilibrium":
+        return _equilibrium_N(der, at)
+    N = sp.Integer(0)
+    if spec.axial:
+        N = _element_method(der, n, at, True) if method == "element" else _continuum_N(der, at)
+    if spec.strain == "prestress":
+        N += _prestress_N(at)
+    return N

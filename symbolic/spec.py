@@ -11,6 +11,7 @@ import re
 from dataclasses import dataclass, field, replace
 
 from .errors import SpecError
+from .fe import FESpec
 from .modes import ModeRef, mode, parse_mode_token
 
 NAME_RE = re.compile(r"^[a-z][a-z0-9_]{0,47}$")
@@ -18,12 +19,17 @@ NAME_RE = re.compile(r"^[a-z][a-z0-9_]{0,47}$")
 
 @dataclass(frozen=True)
 class VariantSpec:
+    """A modal (floating frame of reference) variant."""
+
+    kind = "modal"
     name: str
     strain: str
     axial: tuple[ModeRef, ...]
     bending: tuple[ModeRef, ...]
     maneuver: str = "spin_up"
     outputs: tuple[str, ...] = ("v_tip", "u_tip")
+    stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements)
+    axial_force: str = "constitutive"  # or "equilibrium" (from the axial inertial forces)
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
 
@@ -44,6 +50,8 @@ class VariantSpec:
             "bending": [m.token for m in self.bending],
             "maneuver": self.maneuver,
             "outputs": list(self.outputs),
+            "stress": self.stress,
+            "axial_force": self.axial_force,
         }
 
     def validate(self) -> "VariantSpec":
@@ -77,7 +85,12 @@ class VariantSpec:
         if self.maneuver not in MANEUVERS:
             raise SpecError(f"variant '{self.name}': unknown manoeuvre '{self.maneuver}' "
                             f"(known: {', '.join(MANEUVERS)})")
-        from .outputs import check_output_names
+        if self.axial_force not in ("constitutive", "equilibrium"):
+            raise SpecError(f"variant '{self.name}': axial force '{self.axial_force}' must be "
+                            "'constitutive' or 'equilibrium'")
+        from .outputs import check_output_names, stress_method
+
+        stress_method(self)
         check_output_names(self)
         return self
 
@@ -90,7 +103,13 @@ def _refs(axis: str, tokens) -> tuple[ModeRef, ...]:
 
 PAPER_BENDING = ("static", "cp1", "cp2")
 
-BUILTIN: tuple[VariantSpec, ...] = (
+def with_default_outputs(spec: VariantSpec) -> VariantSpec:
+    from .outputs import default_outputs
+
+    return replace(spec, outputs=default_outputs(spec))
+
+
+BUILTIN: tuple[VariantSpec, ...] = tuple(with_default_outputs(v) for v in (
     VariantSpec("linear", "linear", _refs("axial", ["static"]), _refs("bending", PAPER_BENDING),
                 description="#0: linear strain, no geometric stiffening (fails above the first "
                             "bending frequency)", aliases=("m0",)),
@@ -105,7 +124,11 @@ BUILTIN: tuple[VariantSpec, ...] = (
     VariantSpec("foreshortening", "foreshortening", (), _refs("bending", PAPER_BENDING),
                 description="#3: foreshortening u_fs = -1/2 int v'^2 (eq. 30-31), no axial "
                             "coordinate", aliases=("m3",)),
-)
+    VariantSpec("prestress", "prestress", (), _refs("bending", PAPER_BENDING),
+                description="bending modes with the centrifugal-prestress geometric stiffness "
+                            "w^2 int N(x) v'^2 dx, N(x) = rho A (L^2 - x^2)/2 (not in the paper)"),
+)) + (FESpec("ef", 16, description="geometrically exact finite elements (planar ANCF cable "
+                                  "elements, 16 by default): the reference"),)
 
 
 def builtin(name: str) -> VariantSpec:
@@ -117,8 +140,11 @@ def builtin(name: str) -> VariantSpec:
 
 
 def customize(base: VariantSpec, *, name=None, strain=None, axial=None, bending=None,
-              outputs=None, maneuver=None) -> VariantSpec:
-    """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...')."""
+              outputs=None, maneuver=None, stress=None, axial_force=None) -> VariantSpec:
+    """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...').
+    Outputs not given explicitly are the defaults of the new variant."""
+    from .outputs import canonical_output
+
     changes = {}
     if strain is not None:
         changes["strain"] = strain
@@ -126,11 +152,16 @@ def customize(base: VariantSpec, *, name=None, strain=None, axial=None, bending=
         changes["axial"] = _refs("axial", axial)
     if bending is not None:
         changes["bending"] = _refs("bending", bending)
+    if isinstance(outputs, str):
+        outputs = [o for o in outputs.split(",") if o.strip()]
     if outputs is not None:
-        changes["outputs"] = tuple(outputs)
-    if maneuver is not None:
-        changes["maneuver"] = maneuver
+        changes["outputs"] = tuple(canonical_output(o) for o in outputs)
+    for key, val in (("maneuver", maneuver), ("stress", stress), ("axial_force", axial_force)):
+        if val is not None:
+            changes[key] = val
     spec = replace(base, **changes, aliases=(), description=f"custom variant derived from {base.name}")
+    if outputs is None:
+        spec = with_default_outputs(spec)
     if name is None:
         digest = hashlib.sha256(json.dumps(replace(spec, name="x").to_dict(),
                                            sort_keys=True).encode()).hexdigest()[:8]

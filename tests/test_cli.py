@@ -30,7 +30,7 @@ def test_inspect_shows_which_terms_are_differentiated_wrt_what(capsys):
 def test_inspect_latex_and_ops(capsys):
     code, out, _ = run_cli(capsys, "inspect", "m2", "--latex", "--section", "mass,integrals,ops")
     assert code == 0
-    assert r"\int_0^1" in out and r"\rho" in out
+    assert r"\int_{0}^{1}" in out and r"\rho" in out
     assert "fsm_force" in out and "fsm_residual_jac" in out
 
 
@@ -41,8 +41,8 @@ def test_custom_mode_set_runs_in_its_own_folder(capsys, isolated_cache, tmp_path
                              "--out", str(out_csv), "--plot", str(tmp_path / "rich.png"))
     assert code == 0, err
     header = out_csv.read_text().splitlines()[0].split(",")
-    assert header == ["t", "v_tip", "u_tip", "u_static", "u_sin1", "u_sin2", "v_static", "v_cp1",
-                      "v_cp2", "v_cp3", "v_cp4"]
+    assert header == ["t", "v_tip", "u_tip", "N_A", "N_B", "N_C", "M_A", "M_B", "M_C", "u_static",
+                      "u_sin1", "u_sin2", "v_static", "v_cp1", "v_cp2", "v_cp3", "v_cp4"]
     assert (tmp_path / "rich.png").stat().st_size > 1000
     folders = list((isolated_cache / "variants").glob("rich-*"))
     assert len(folders) == 1 and (folders[0] / "manifest.json").exists()

@@ -85,15 +85,15 @@ def test_c_matches_casadi_and_sympy(derivation, model, name):
 
 def test_generation_is_deterministic_within_a_process():
     spec = builtin("m3")
-    a, _, _ = generate_files(spec)
-    b, _, _ = generate_files(spec)
+    a = generate_files(spec)
+    b = generate_files(spec)
     assert a == b
 
 
 def _hash_in_subprocess(seed: str) -> str:
     code = ("import hashlib, json; from flexsym.generate import generate_files; "
             "from flexsym.spec import builtin; "
-            "f, _, _ = generate_files(builtin('m2')); "
+            "f = generate_files(builtin('m2')); "
             "print(hashlib.sha256(json.dumps(f, sort_keys=True).encode()).hexdigest())")
     env = dict(os.environ, PYTHONHASHSEED=seed)
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
@@ -111,7 +111,7 @@ def test_checked_in_code_is_current(spec):
     folder = generated_dir() / spec.name
     why = check_folder(spec, folder)
     assert why is None, why
-    files, _, _ = generate_files(spec)
+    files = generate_files(spec)
     on_disk = {p.name: p.read_text(encoding="utf-8") for p in folder.iterdir() if p.is_file()}
     stale = sorted(n for n in files if on_disk.get(n) != files[n])
     extra = sorted(set(on_disk) - set(files))

@@ -37,11 +37,11 @@ def test_modal_integrals_match_scipy_quad(derivation, name):
     for sym in table.symbols:
         v = table.value(sym)
         assert v.rel_error <= REL_TOL
-        s_pow, factors = table.monomial(sym)
+        a, b, s_pow, factors = table.monomial(sym)
         fns = [_numpy_factor(table, f) for f in factors]
         integrand = lambda x: x**s_pow * np.prod([f(x) for f in fns])
-        ref = integrate.quad(integrand, 0.0, 1.0, epsabs=1e-14, epsrel=1e-13, limit=200)[0]
-        scale = integrate.quad(lambda x: abs(integrand(x)), 0.0, 1.0, epsabs=1e-14, limit=200)[0]
+        ref = integrate.quad(integrand, float(a), float(b), epsabs=1e-14, epsrel=1e-13, limit=200)[0]
+        scale = integrate.quad(lambda x: abs(integrand(x)), float(a), float(b), epsabs=1e-14, limit=200)[0]
         # scipy works in double precision on modes whose sinh/cosh terms cancel to ~1e-13.
         assert abs(float(v.value) - ref) <= 1e-11 * max(scale, 1e-300), (sym, float(v.value), ref)
 

@@ -8,5 +8,8 @@ void fsr_chol_solve(const double* A, int n, double* b);
 /* LU with partial pivoting; returns 0, or k+1 if column k has no usable pivot. */
 int fsr_lu_factor(double* A, int n, int* piv);
 void fsr_lu_solve(const double* A, int n, const int* piv, double* b);
+/* The same for a matrix with kl sub- and ku super-diagonals (zero elsewhere). */
+int fsr_band_lu_factor(double* A, int n, int kl, int ku, int* piv);
+void fsr_band_lu_solve(const double* A, int n, int kl, int ku, const int* piv, double* b);
 
 #endif

@@ -27,6 +27,7 @@ typedef struct {
     double* Jq;
     double* Jv;
     double* y;
+    double* qdd;   /* accelerations for outputs that need them */
     int* piv;
     int mass_ready;
     long capacity; /* rows */
@@ -116,16 +117,24 @@ static fsr_status check_state(sim* s, double t, const double* q, const double* v
     return FSR_OK;
 }
 
-static void store(sim* s, double t, const double* q, const double* v)
+/* Append a row: t, outputs, q. Outputs that read q'' get it from M(q) q'' = f. */
+static fsr_status store(sim* s, double t, const double* q, const double* v)
 {
     fsr_result* r = s->r;
-    if (r->nrows >= s->capacity) return;
+    if (r->nrows >= s->capacity) return FSR_OK;
     double* row = r->rows + (size_t)r->nrows * (size_t)r->ncols;
+    double drive[2];
+    drive_at(s, t, drive);
+    if (s->m->outputs_use_acceleration) {
+        fsr_status st = accel(s, t, q, v, s->qdd);
+        if (st) return st;
+    }
     row[0] = t;
-    fsm_outputs(q, v, s->o->p, s->y);
+    fsm_outputs(q, v, s->qdd, drive, s->o->p, s->y);
     memcpy(row + 1, s->y, sizeof(double) * (size_t)s->m->ny);
     memcpy(row + 1 + s->m->ny, q, sizeof(double) * (size_t)s->n);
     r->nrows++;
+    return FSR_OK;
 }
 
 static double time_of(const fsr_options* o, long k, long nsteps)
@@ -155,7 +164,7 @@ static fsr_status run_rk4(sim* s, double* q, double* v, long nsteps, double* w)
         if ((st = check_state(s, t + h, q, v))) return st;
         s->r->steps++;
         s->r->t_stop = t + h;
-        if ((k + 1) % s->o->out_every == 0 || k + 1 == nsteps) store(s, t + h, q, v);
+        if (((k + 1) % s->o->out_every == 0 || k + 1 == nsteps) && (st = store(s, t + h, q, v))) return st;
     }
     return FSR_OK;
 }
@@ -217,9 +226,11 @@ static fsr_status run_alpha(sim* s, double* q, double* v, long nsteps, double* w
             }
             fsm_residual_jac(q1, v1, an, drive, o->p, s->Jq, s->Jv);
             for (int i = 0; i < n * n; ++i) s->S[i] = s->Mraw[i] + cb * s->Jq[i] + cg * s->Jv[i];
-            int bad = fsr_lu_factor(s->S, n, s->piv);
+            int bw = s->m->bandwidth, banded = bw >= 0 && 2 * bw + 1 < n;
+            int bad = banded ? fsr_band_lu_factor(s->S, n, bw, bw, s->piv) : fsr_lu_factor(s->S, n, s->piv);
             if (bad) return fail(s, FSR_SINGULAR, "Newton matrix singular at t = %.6g s", t1);
-            fsr_lu_solve(s->S, n, s->piv, res);
+            if (banded) fsr_band_lu_solve(s->S, n, bw, bw, s->piv, res);
+            else fsr_lu_solve(s->S, n, s->piv, res);
             dq = 0.0;
             for (int i = 0; i < n; ++i) {
                 an[i] += res[i];
@@ -241,7 +252,7 @@ static fsr_status run_alpha(sim* s, double* q, double* v, long nsteps, double* w
         if ((st = check_state(s, t1, q, v))) return st;
         s->r->steps++;
         s->r->t_stop = t1;
-        if ((k + 1) % o->out_every == 0 || k + 1 == nsteps) store(s, t1, q, v);
+        if (((k + 1) % o->out_every == 0 || k + 1 == nsteps) && (st = store(s, t1, q, v))) return st;
     }
     return FSR_OK;
 }
@@ -292,7 +303,7 @@ fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
     int n = s.n;
     s.capacity = nsteps / o->out_every + 2;
     r->rows = malloc(sizeof(double) * (size_t)s.capacity * (size_t)r->ncols);
-    double* mem = malloc(sizeof(double) * (size_t)(5 * n * n + 12 * n + m->ny));
+    double* mem = malloc(sizeof(double) * (size_t)(5 * n * n + 13 * n + m->ny));
     s.piv = malloc(sizeof(int) * (size_t)n);
     if (!r->rows || !mem || !s.piv) {
         free(mem);
@@ -305,12 +316,13 @@ fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
     s.Jq = mem + 3 * n * n;
     s.Jv = mem + 4 * n * n;
     s.y = mem + 5 * n * n;
-    double* q = s.y + m->ny;
+    s.qdd = s.y + m->ny;
+    double* q = s.qdd + n;
     double* v = q + n;
     double* work = v + n;
-    memset(q, 0, sizeof(double) * (size_t)(2 * n));
-    store(&s, 0.0, q, v);
-    st = o->method == FSR_RK4 ? run_rk4(&s, q, v, nsteps, work) : run_alpha(&s, q, v, nsteps, work);
+    memset(s.qdd, 0, sizeof(double) * (size_t)(3 * n));
+    st = store(&s, 0.0, q, v);
+    if (!st) st = o->method == FSR_RK4 ? run_rk4(&s, q, v, nsteps, work) : run_alpha(&s, q, v, nsteps, work);
     free(mem);
     free(s.piv);
     r->status = st;

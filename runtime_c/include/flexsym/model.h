@@ -23,6 +23,8 @@ typedef struct {
     const char* const* maneuver_param_names;
     const double* maneuver_param_defaults;
     int mass_constant;        /* 1 when M does not depend on q: factor it once */
+    int outputs_use_acceleration; /* 1 when fsm_outputs reads qdd (else it may be anything) */
+    int bandwidth;            /* half-bandwidth of M and the Jacobians; -1 when dense */
     int length_param;         /* index of the beam length in p (divergence threshold) */
     int v_tip_output;         /* index of v_tip in the outputs, or -1 */
 } fsm_model_info;
@@ -34,7 +36,8 @@ void fsm_force(const double* q, const double* qd, const double* drive, const dou
 /* Jacobians of the residual r = M(q) qdd - f(q, qd, drive, p). */
 void fsm_residual_jac(const double* q, const double* qd, const double* qdd, const double* drive,
                       const double* p, double* dr_dq, double* dr_dqd);
-void fsm_outputs(const double* q, const double* qd, const double* p, double* y);
+void fsm_outputs(const double* q, const double* qd, const double* qdd, const double* drive,
+                 const double* p, double* y);
 /* e = [T, V, h]: kinetic energy, potential energy, Jacobi integral. */
 void fsm_energy(const double* q, const double* qd, const double* drive, const double* p, double* e);
 /* drive3 = [theta, theta', theta''] at time *t. */
