@@ -81,7 +81,8 @@ def _run(cmd: list[str], what: str, cwd: Path | None = None) -> None:
         raise ToolchainError(f"{what} failed (exit {proc.returncode}):\n{tail}")
 
 
-def build(gen_dir: Path, jobs: int = 2) -> Built:
+def build(gen_dir: Path, jobs: int = 2, root: Path | None = None) -> Built:
+    """Build (or reuse) gen_dir under root (default: the cache's build folder)."""
     gen_dir = Path(gen_dir).resolve()
     manifest = read_manifest(gen_dir)
     if manifest is None:
@@ -89,7 +90,7 @@ def build(gen_dir: Path, jobs: int = 2) -> Built:
     name = manifest["spec"]["name"]
     compiler = find_compiler()
     cmake = find_cmake()
-    root = cache_dir() / "build"
+    root = Path(root) if root is not None else cache_dir() / "build"
     final = root / f"{name}-{build_key(gen_dir, compiler)}"
     built = Built(name, final, final / f"flexsym_{name}", final / f"libflexsym_{name}.so")
     if (final / COMPLETE).exists():

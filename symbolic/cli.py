@@ -10,7 +10,8 @@ from .run import INTEGRATORS
 
 
 def _variant_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("variant", help="built-in variant name or alias (m0..m3), the base for overrides")
+    p.add_argument("variant", help="built-in variant name or alias (m0..m3, prestress, ef), the base "
+                   "for overrides")
     g = p.add_argument_group("custom mode set (any of these makes a new variant)")
     g.add_argument("--strain", help="strain model (see `flexsym variants`)")
     g.add_argument("--axial", help="axial modes, e.g. static,sin1,sin2 (empty string for none)")
@@ -22,6 +23,7 @@ def _variant_args(p: argparse.ArgumentParser) -> None:
                    "(the paper's element method on N elements)")
     g.add_argument("--axial-force", dest="axial_force", choices=("constitutive", "equilibrium"),
                    help="axial force from the axial strain (default) or from the axial inertial forces")
+    g.add_argument("--elements", type=int, help="number of finite elements (variant ef)")
     g.add_argument("--name", help="name of the custom variant (default: derived from the base)")
 
 
@@ -30,7 +32,7 @@ def resolve_spec(args):
 
     base = builtin(args.variant)
     overrides = {k: getattr(args, k, None) for k in ("strain", "axial", "bending", "maneuver",
-                                                     "outputs", "stress", "axial_force")}
+                                                     "outputs", "stress", "axial_force", "elements")}
     if all(v is None for v in overrides.values()) and not getattr(args, "name", None):
         return base.validate()
     return customize(base, name=getattr(args, "name", None), **overrides)
@@ -134,6 +136,15 @@ def cmd_spinup(args) -> int:
     return 0
 
 
+def cmd_paper(args) -> int:
+    from .paper import run_paper
+
+    run_paper(Path(args.out), ws=args.ws, ts=args.ts, t_end=args.t_end, dt=args.dt,
+              repeat=args.repeat, end_to_end=not args.no_end_to_end, ref_elements=args.ref_elements,
+              ref_dt=args.ref_dt)
+    return 0
+
+
 def cmd_variants(args) -> int:
     from .energy import STRAIN_MODELS
     from .modes import FAMILIES
@@ -186,6 +197,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variants", default="m0,m1,m2,m3")
     p.add_argument("--out", default="results", help="output folder (default: results)")
     p.set_defaults(func=cmd_spinup)
+
+    p = sub.add_parser("paper", help="reproduce the paper's Fig. 7-9 and Table 1, with an "
+                       "accuracy table against a converged finite-element reference")
+    p.add_argument("--out", default="paper", help="output folder (default: paper)")
+    p.add_argument("--ws", type=float, default=6.0)
+    p.add_argument("--ts", type=float, default=15.0)
+    p.add_argument("--t-end", type=float, default=20.0)
+    p.add_argument("--dt", type=float, default=1e-3, help="step of the compared models (default 1e-3)")
+    p.add_argument("--repeat", type=int, default=5, help="repeats for the CPU medians (default 5)")
+    p.add_argument("--ref-elements", type=int, default=32, help="elements of the reference (default 32)")
+    p.add_argument("--ref-dt", type=float, default=5e-4, help="step of the reference (default 5e-4)")
+    p.add_argument("--no-end-to-end", action="store_true",
+                   help="skip timing generation + compilation from scratch")
+    p.set_defaults(func=cmd_paper)
 
     p = sub.add_parser("variants", help="list built-in variants, strain models and mode families")
     p.set_defaults(func=cmd_variants)

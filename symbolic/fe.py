@@ -79,6 +79,11 @@ class FESpec:
         return self
 
 
+def c_prefix(kernel_name: str) -> str:
+    """Element kernels are fse_*; the manoeuvre kernel implements the model interface (fsm_)."""
+    return "fsm_" if kernel_name == "maneuver" else "fse_"
+
+
 def hermite(l):
     return [1 - 3 * xi**2 + 2 * xi**3, l * (xi - 2 * xi**2 + xi**3), 3 * xi**2 - 2 * xi**3,
             l * (-xi**2 + xi**3)]

@@ -103,10 +103,10 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
 
 
 def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
-    from .fe import CLAMP_OUTPUTS, QUAD_POINTS, build_element_kernels, derive_element, output_plan
+    from .fe import CLAMP_OUTPUTS, QUAD_POINTS, build_element_kernels, c_prefix, derive_element, output_plan
 
     der = derive_element(spec)
-    emitted = [emit(k, C_PREFIX if k.name == "maneuver" else "fse_") for k in build_element_kernels(der)]
+    emitted = [emit(k, c_prefix(k.name)) for k in build_element_kernels(der)]
     needs_clamp = any(o in CLAMP_OUTPUTS for o in spec.outputs)
     outputs = [{"name": o, "unit": "N" if o.startswith("N") else "N m",
                 "description": f"{'axial force' if o.startswith('N') else 'bending moment'} at the "

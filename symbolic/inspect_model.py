@@ -34,10 +34,16 @@ def _latex_names(der: Derivation) -> dict:
 class Report:
     def __init__(self, spec: VariantSpec, latex: bool = False):
         self.spec = spec
-        self.der = derive(spec)
         self.latex = latex
-        self._names = _latex_names(self.der) if latex else {}
         self.lines: list[str] = []
+        if spec.kind == "fe":
+            from .fe import derive_element
+
+            self.der = derive_element(spec)
+            self._names = {}
+        else:
+            self.der = derive(spec)
+            self._names = _latex_names(self.der) if latex else {}
 
     def fmt(self, expr) -> str:
         if self.latex:
@@ -51,6 +57,8 @@ class Report:
         self.lines.append(text)
 
     def render(self, sections=SECTIONS) -> str:
+        if self.spec.kind == "fe":
+            return self._render_fe(sections)
         d, s = self.der, self.spec
         strain = STRAIN_MODELS[s.strain]
         self.add(f"variant {s.name}" + (f" ({', '.join(s.aliases)})" if s.aliases else ""))
@@ -125,3 +133,40 @@ class Report:
             e = emit(k, C_PREFIX)
             o = e.ops
             self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")
+
+    # ----- the finite-element reference ------------------------------------------------
+    def _render_fe(self, sections) -> str:
+        from .fe import QUAD_POINTS, build_element_kernels, c_prefix, hermite, le
+
+        d, s = self.der, self.spec
+        self.add(f"variant {s.name}: {s.description}")
+        self.add(f"  {s.elements} planar ANCF cable elements, 8 coordinates each "
+                 "(r and r_x = dr/dx at both nodes, in the moving frame)")
+        self.add("  root clamp: r = 0, y_x = 0 (x_x, the root stretch, stays free)")
+        self.add(f"  fingerprint {fingerprint(s)}")
+        if "modes" in sections:
+            self.title("Element interpolation: r(xi) = N1 r1 + N2 r1_x + N3 r2 + N4 r2_x, x = x1 + l xi")
+            for i, n in enumerate(hermite(le), 1):
+                self.add(f"N{i} = {n}")
+        if "energy" in sections:
+            self.title("Element energies (geometrically exact: nothing truncated)")
+            self.add("axial strain eps = (r_x . r_x - 1)/2:")
+            self.add(self.fmt(sp.simplify(d.strain)) if not self.latex else sp.latex(d.strain))
+            self.add("curvature kappa = (r_x x r_xx)/|r_x|^3:")
+            self.add(self.fmt(d.curvature))
+            self.add(f"V^e = int_0^l (EA eps^2/2 + EI kappa^2/2) dx, Gauss-Legendre with {QUAD_POINTS} points")
+            self.add("kinetic energy T^e (exact polynomial integration in xi):")
+            self.add(self.fmt(d.T))
+        if "mass" in sections:
+            self.title("Element mass matrix M^e (constant)")
+            self.add(self.fmt(d.M))
+        if "equations" in sections:
+            self.title("Element inertial forces (the elastic forces are -dV^e/de by casadi AD)")
+            self.add(self.fmt(d.f_inertial))
+        if "ops" in sections:
+            self.title("Generated element kernels: operation counts after CSE (add/mul/div/fun/other)")
+            for k in build_element_kernels(d):
+                e = emit(k, c_prefix(k.name))
+                o = e.ops
+                self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")
+        return "\n".join(self.lines) + "\n"

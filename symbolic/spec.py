@@ -139,11 +139,30 @@ def builtin(name: str) -> VariantSpec:
     raise SpecError(f"unknown variant '{name}' (built-in: {known})")
 
 
-def customize(base: VariantSpec, *, name=None, strain=None, axial=None, bending=None,
-              outputs=None, maneuver=None, stress=None, axial_force=None) -> VariantSpec:
+def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs=None,
+              maneuver=None, stress=None, axial_force=None, elements=None):
     """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...').
     Outputs not given explicitly are the defaults of the new variant."""
     from .outputs import canonical_output
+
+    if isinstance(outputs, str):
+        outputs = [o for o in outputs.split(",") if o.strip()]
+    if base.kind == "fe":
+        modal_only = {"strain": strain, "axial": axial, "bending": bending, "stress": stress,
+                      "axial_force": axial_force}
+        given = [k for k, v in modal_only.items() if v is not None]
+        if given:
+            raise SpecError(f"--{given[0].replace('_', '-')} does not apply to the finite-element "
+                            f"variant '{base.name}' (it takes --elements, --outputs, --maneuver)")
+        changes = {k: v for k, v in (("elements", elements), ("maneuver", maneuver)) if v is not None}
+        if outputs is not None:
+            changes["outputs"] = tuple(canonical_output(o) for o in outputs)
+        spec = replace(base, **changes, aliases=(), description=f"custom variant derived from {base.name}")
+        if name is None:
+            name = f"{base.name}_n{spec.elements}" if set(changes) <= {"elements"} else None
+        return _named(spec, base, name)
+    if elements is not None:
+        raise SpecError(f"--elements applies to the finite-element variant 'ef', not to '{base.name}'")
 
     changes = {}
     if strain is not None:
@@ -152,8 +171,6 @@ def customize(base: VariantSpec, *, name=None, strain=None, axial=None, bending=
         changes["axial"] = _refs("axial", axial)
     if bending is not None:
         changes["bending"] = _refs("bending", bending)
-    if isinstance(outputs, str):
-        outputs = [o for o in outputs.split(",") if o.strip()]
     if outputs is not None:
         changes["outputs"] = tuple(canonical_output(o) for o in outputs)
     for key, val in (("maneuver", maneuver), ("stress", stress), ("axial_force", axial_force)):
@@ -162,6 +179,11 @@ def customize(base: VariantSpec, *, name=None, strain=None, axial=None, bending=
     spec = replace(base, **changes, aliases=(), description=f"custom variant derived from {base.name}")
     if outputs is None:
         spec = with_default_outputs(spec)
+    return _named(spec, base, name)
+
+
+def _named(spec, base, name):
+    """Give a customised spec its name (a readable default with a content digest) and validate."""
     if name is None:
         digest = hashlib.sha256(json.dumps(replace(spec, name="x").to_dict(),
                                            sort_keys=True).encode()).hexdigest()[:8]
