@@ -17,7 +17,7 @@ from pathlib import Path
 
 from .errors import ToolchainError
 from .generate import folder_hash, read_manifest
-from .paths import cache_dir, runtime_dir
+from .paths import cache_dir, file_lock, runtime_dir
 
 COMPLETE = ".complete"
 
@@ -95,7 +95,14 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None) -> Built:
     built = Built(name, final, final / f"flexsym_{name}", final / f"libflexsym_{name}.so")
     if (final / COMPLETE).exists():
         return built
-    root.mkdir(parents=True, exist_ok=True)
+    with file_lock(root / f".{final.name}.lock"):
+        if not (final / COMPLETE).exists():  # not built meanwhile by another process
+            _build_into(gen_dir, final, name, cmake, compiler, jobs)
+    return built
+
+
+def _build_into(gen_dir: Path, final: Path, name: str, cmake: str, compiler: str, jobs: int) -> None:
+    root = final.parent
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
     try:
         _run([cmake, "-S", str(gen_dir), "-B", str(tmp), f"-DFLEXSYM_RUNTIME_DIR={runtime_dir()}",
@@ -103,12 +110,7 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None) -> Built:
              f"configuring variant '{name}'")
         _run([cmake, "--build", str(tmp), "-j", str(jobs)], f"compiling variant '{name}'")
         (tmp / COMPLETE).write_text(str(gen_dir) + "\n")
-        try:
-            os.rename(tmp, final)
-        except OSError:  # another process finished the same build first: use theirs
-            if not (final / COMPLETE).exists():
-                raise
+        os.rename(tmp, final)  # atomic: a build directory is complete or absent
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
-    return built

@@ -1,4 +1,4 @@
-"""flexsym command line: generate, build, run, inspect, spinup, variants."""
+"""flexsym command line: generate, build, run, inspect, select, spinup, paper, variants."""
 from __future__ import annotations
 
 import argparse
@@ -11,7 +11,7 @@ from .run import INTEGRATORS
 
 def _variant_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("variant", help="built-in variant name or alias (m0..m3, prestress, ef), the base "
-                   "for overrides")
+                   "for overrides, or a scene file (.toml)")
     g = p.add_argument_group("custom mode set (any of these makes a new variant)")
     g.add_argument("--strain", help="strain model (see `flexsym variants`)")
     g.add_argument("--axial", help="axial modes, e.g. static,sin1,sin2 (empty string for none)")
@@ -27,23 +27,47 @@ def _variant_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--name", help="name of the custom variant (default: derived from the base)")
 
 
-def resolve_spec(args):
+_OVERRIDES = ("strain", "axial", "bending", "maneuver", "outputs", "stress", "axial_force", "elements",
+              "name")
+RUN_DEFAULTS = {"ws": 6.0, "ts": 15.0, "t_end": 20.0, "dt": 1e-3, "integrator": "genalpha"}
+
+
+def _given(args, keys) -> list[str]:
+    return [k for k in keys if getattr(args, k, None) is not None]
+
+
+def resolve(args):
+    """(spec, scene or None) from a variant name with overrides, or from a scene file."""
     from .spec import builtin, customize
 
+    if args.variant.endswith(".toml"):
+        from .scene import load_scene
+
+        scene = load_scene(args.variant)
+        given = _given(args, _OVERRIDES)
+        if given:
+            raise SpecError(f"{args.variant}: --{given[0].replace('_', '-')} does not combine with a "
+                            "scene file: set it in the scene's [model] table")
+        return scene.spec, scene
     base = builtin(args.variant)
-    overrides = {k: getattr(args, k, None) for k in ("strain", "axial", "bending", "maneuver",
-                                                     "outputs", "stress", "axial_force", "elements")}
+    overrides = {k: getattr(args, k, None) for k in _OVERRIDES if k != "name"}
     if all(v is None for v in overrides.values()) and not getattr(args, "name", None):
-        return base.validate()
-    return customize(base, name=getattr(args, "name", None), **overrides)
+        return base.validate(), None
+    return customize(base, name=getattr(args, "name", None), **overrides), None
 
 
-def _run_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--ws", type=float, default=6.0, help="final spin rate omega_s [rad/s] (default 6)")
-    p.add_argument("--ts", type=float, default=15.0, help="spin-up time T_s [s] (default 15)")
-    p.add_argument("--t-end", type=float, default=20.0, help="end time [s] (default 20)")
-    p.add_argument("--dt", type=float, default=1e-3, help="time step [s] (default 1e-3)")
-    p.add_argument("--integrator", choices=INTEGRATORS, default="genalpha")
+def resolve_spec(args):
+    return resolve(args)[0]
+
+
+def _run_args(p: argparse.ArgumentParser, defaults: bool = True) -> None:
+    d = RUN_DEFAULTS if defaults else dict.fromkeys(RUN_DEFAULTS)
+    p.add_argument("--ws", type=float, default=d["ws"], help="final spin rate omega_s [rad/s] (default 6)")
+    p.add_argument("--ts", type=float, default=d["ts"], help="spin-up time T_s [s] (default 15)")
+    p.add_argument("--t-end", type=float, default=d["t_end"], help="end time [s] (default 20)")
+    p.add_argument("--dt", type=float, default=d["dt"], help="time step [s] (default 1e-3)")
+    p.add_argument("--integrator", choices=INTEGRATORS, default=d["integrator"],
+                   help="time integrator (default genalpha)")
 
 
 def cmd_generate(args) -> int:
@@ -72,13 +96,21 @@ def cmd_build(args) -> int:
     return 0
 
 
-def cmd_run(args) -> int:
-    from .spinup import Summary, plot, table
-    from .pipeline import prepare
-    from .run import check_options, run_built
-
-    spec = resolve_spec(args)
-    params = {"ws": args.ws, "ts": args.ts} if spec.maneuver == "spin_up" else {"ws": args.ws}
+def _run_settings(args, spec, scene) -> tuple[dict, Path | None]:
+    """Run options from a scene file, or from the command line with the defaults filled in."""
+    if scene is not None:
+        given = _given(args, RUN_DEFAULTS) + (["param"] if args.param else [])
+        if given:
+            raise SpecError(f"{scene.path}: --{given[0].replace('_', '-')} does not combine with a "
+                            "scene file: set it in the scene")
+        return (dict(t_end=scene.t_end, dt=scene.dt, integrator=scene.integrator, params=scene.params,
+                     out_every=scene.out_every), Path(args.out) if args.out else scene.output_file)
+    for k, v in RUN_DEFAULTS.items():
+        if getattr(args, k) is None:
+            setattr(args, k, v)
+    params = {}
+    if not spec.maneuver.startswith("expression:"):
+        params = {"ws": args.ws, "ts": args.ts} if spec.maneuver == "spin_up" else {"ws": args.ws}
     for item in args.param or []:
         if "=" not in item:
             raise SpecError(f"--param '{item}': expected NAME=VALUE")
@@ -87,16 +119,28 @@ def cmd_run(args) -> int:
             params[k.strip()] = float(v)
         except ValueError:
             raise SpecError(f"--param '{item}': '{v}' is not a number") from None
-    check_options(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params, spec=spec)
+    return (dict(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params),
+            Path(args.out) if args.out else None)
+
+
+def cmd_run(args) -> int:
+    from .spinup import Summary, describe, plot, table
+    from .pipeline import prepare
+    from .run import check_options, run_built
+
+    spec, scene = resolve(args)
+    settings, out = _run_settings(args, spec, scene)
+    check_options(**{k: v for k, v in settings.items() if k != "out_every"}, spec=spec)
     built = prepare(spec)
-    res = run_built(built, t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params,
-                    out=Path(args.out) if args.out else None)
+    res = run_built(built, **settings, out=out)
     s = Summary(spec, res, 0.0)
-    print(table([s], args.ts, args.t_end))
-    if args.out:
-        print(f"results: {args.out}")
-    if args.plot:
-        plot([s], Path(args.plot), f"{spec.name}, omega_s = {args.ws:g} rad/s, T_s = {args.ts:g} s")
+    ts = settings["params"].get("ts", settings["t_end"])
+    print(describe(res, spec.outputs) if scene is not None or "v_tip" not in res.columns else
+          table([s], ts, settings["t_end"]))
+    if out:
+        print(f"results: {out}")
+    if args.plot and "v_tip" in res.columns:
+        plot([s], Path(args.plot), f"{spec.name}, {spec.maneuver}")
         print(f"plot: {args.plot}")
     if not res.ok:
         print(f"flexsym: {res.message}", file=sys.stderr)
@@ -111,7 +155,12 @@ def cmd_inspect(args) -> int:
     for s in sections:
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
-    sys.stdout.write(Report(resolve_spec(args), latex=args.latex).render(sections))
+    spec, scene = resolve(args)
+    sys.stdout.write(Report(spec, latex=args.latex).render(sections))
+    if scene is not None:
+        from .inspect_model import savings
+
+        sys.stdout.write(savings(spec, scene.full_spec))
     return 0
 
 
@@ -176,9 +225,9 @@ def build_parser() -> argparse.ArgumentParser:
     _variant_args(p)
     p.set_defaults(func=cmd_build)
 
-    p = sub.add_parser("run", help="simulate the spin-up with a variant")
+    p = sub.add_parser("run", help="simulate the spin-up with a variant, or a scene file")
     _variant_args(p)
-    _run_args(p)
+    _run_args(p, defaults=False)
     p.add_argument("--param", action="append", help="beam or manoeuvre parameter NAME=VALUE "
                    "(rho, E, A, I, L, ws, ts); repeatable")
     p.add_argument("--out", help="CSV file for the results")

@@ -17,7 +17,7 @@ import sympy as sp
 
 from .energy import BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, StrainModel, alpha, build_fields, kinetic_density, w
 from .integrals import IntegralTable
-from .maneuver import MANEUVERS, Maneuver
+from .maneuver import Maneuver, maneuver_of
 from .modes import Mode, mode
 from .outputs import output_expression
 from .spec import VariantSpec
@@ -97,7 +97,7 @@ class Derivation:
 def derive(spec: VariantSpec) -> Derivation:
     spec.validate()
     strain = STRAIN_MODELS[spec.strain]
-    maneuver = MANEUVERS[spec.maneuver]
+    maneuver = maneuver_of(spec.maneuver)
     modes = {r.coordinate: mode(r) for r in spec.modes}
     groups = {r.coordinate: r.axis for r in spec.modes}
     names = list(modes)

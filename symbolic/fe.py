@@ -26,8 +26,8 @@ import sympy as sp
 from .energy import BEAM_PARAMS, A, E, I, alpha, rho, w
 from .errors import SpecError
 from .integrals import gauss_legendre
-from .maneuver import MANEUVERS, Maneuver
-from .outputs import STRESS_OUTPUTS, point_of
+from .maneuver import Maneuver, maneuver_of
+from .outputs import STRESS_OUTPUTS, check_output_names, point_of
 
 QUAD_POINTS = 5  # exact for EA eps^2 (degree 8 in xi); kappa^2 is rational
 xi = sp.Symbol("xi", real=True)
@@ -41,6 +41,8 @@ class FESpec:
     elements: int = 16
     maneuver: str = "spin_up"
     outputs: tuple[str, ...] = ("v_tip", "u_tip") + STRESS_OUTPUTS + CLAMP_OUTPUTS
+    points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
+    left_out: tuple[tuple[str, str], ...] = ()
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
     kind = "fe"
@@ -54,7 +56,8 @@ class FESpec:
     def to_dict(self) -> dict:
         return {"name": self.name, "kind": "fe", "formulation": "ancf_cable",
                 "elements": self.elements, "quadrature": QUAD_POINTS, "maneuver": self.maneuver,
-                "outputs": list(self.outputs)}
+                "outputs": list(self.outputs), "points": [list(p) for p in self.points],
+                "left_out": [list(x) for x in self.left_out]}
 
     def validate(self) -> "FESpec":
         from .spec import NAME_RE
@@ -64,18 +67,8 @@ class FESpec:
         if not isinstance(self.elements, int) or not 1 <= self.elements <= 512:
             raise SpecError(f"variant '{self.name}': elements must be an integer in 1..512 "
                             f"(got {self.elements!r})")
-        if self.maneuver not in MANEUVERS:
-            raise SpecError(f"variant '{self.name}': unknown manoeuvre '{self.maneuver}'")
-        seen = set()
-        for o in self.outputs:
-            if o in seen:
-                raise SpecError(f"variant '{self.name}': duplicate output '{o}'")
-            seen.add(o)
-            if o in ("v_tip", "u_tip") or o in CLAMP_OUTPUTS:
-                continue
-            p = point_of(o)
-            if p is None or not 0 <= p[1] <= 1:
-                raise SpecError(f"variant '{self.name}': unknown output '{o}'")
+        maneuver_of(self.maneuver)
+        check_output_names(self, extra=CLAMP_OUTPUTS)
         return self
 
 
@@ -136,7 +129,7 @@ def derive_element(spec: FESpec) -> ElementDerivation:
     for xg, wg in zip(*gauss_legendre(QUAD_POINTS)):
         at = {xi: sp.Float(xg, 30)}
         V += sp.Float(wg, 30) * le * (E * A / 2 * eps.xreplace(at)**2 + E * I / 2 * kappa.xreplace(at)**2)
-    maneuver = MANEUVERS[spec.maneuver]
+    maneuver = maneuver_of(spec.maneuver)
     if not maneuver.accelerates:
         f_in = f_in.xreplace({alpha: 0})
     return ElementDerivation(spec, maneuver, e, ed, edd, T, M, f_in, V, eps, sp.sqrt(r1.dot(r1)), kappa)
@@ -188,7 +181,7 @@ def output_plan(spec: FESpec) -> list[dict]:
         elif name in CLAMP_OUTPUTS:
             plan.append({"name": name, "kind": "clamp", "which": 0 if name.startswith("N") else 1})
         else:
-            quantity, at = point_of(name)
+            quantity, at = point_of(name, spec.points)
             t = at * n
             k = int(sp.floor(t))
             if t == k and 0 < k < n:  # an interior node: average the two element ends

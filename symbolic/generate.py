@@ -21,7 +21,7 @@ from .cemit import EmittedKernel, c_double, emit
 from .derive import derive
 from .energy import BEAM_PARAMS
 from .kernels import build_kernels
-from .maneuver import MANEUVERS
+from .maneuver import maneuver_of
 from .outputs import info as output_info
 from .paths import templates_dir
 from .spec import VariantSpec
@@ -80,7 +80,7 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
                    f"{', '.join(m.token for m in spec.axial) or 'none'}; bending modes: "
                    f"{', '.join(m.token for m in spec.bending)}.",
         "coords": [{"name": c, "description": der.modes[c].description} for c in der.coords],
-        "outputs": [vars(output_info(o)) for o in spec.outputs],
+        "outputs": [vars(output_info(o, spec.points)) for o in spec.outputs],
         "mass_constant": der.mass_constant,
         "outputs_use_acceleration": der.outputs_use_acceleration,
     }
@@ -96,7 +96,7 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
         "energy_terms": [{"term": t.name, "formula": t.formula, "differentiated_wrt": list(t.wrt)}
                          for t in der.terms],
         "conservative": der.conservative,
-        "left_out": der.dropped,
+        "left_out": [{"what": w, "why": y} for w, y in spec.left_out] + der.dropped,
         "modal_integrals": integrals,
     }
     return ctx, manifest, "model.c.j2"
@@ -111,7 +111,7 @@ def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
     outputs = [{"name": o, "unit": "N" if o.startswith("N") else "N m",
                 "description": f"{'axial force' if o.startswith('N') else 'bending moment'} at the "
                                "root from the clamp reaction"} if o in CLAMP_OUTPUTS
-               else vars(output_info(o)) for o in spec.outputs]
+               else vars(output_info(o, spec.points)) for o in spec.outputs]
     names = {"ux": "x displacement", "uy": "y displacement", "dx": "change of x_x", "dy": "change of y_x"}
     ctx = _common_context(spec, fp, der.maneuver, emitted) | {
         "summary": f"Finite elements: {spec.elements} geometrically exact ANCF cable elements.",
@@ -131,7 +131,7 @@ def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
                     "strain": str(der.strain), "curvature": str(der.curvature),
                     "kinetic_energy": str(der.T), "quadrature_points": QUAD_POINTS},
         "conservative": True,
-        "left_out": [],
+        "left_out": [{"what": w, "why": y} for w, y in spec.left_out],
     }
     return ctx, manifest, "fe_model.c.j2"
 
@@ -149,6 +149,7 @@ def generate_files(spec) -> dict[str, str]:
         "CMakeLists.txt": env.get_template("CMakeLists.txt.j2").render(ctx),
     }
     emitted = ctx["kernels"]
+    maneuver = maneuver_of(spec.maneuver)
     manifest = {
         "generator": ctx["generator"],
         "versions": ctx["versions"],
@@ -157,9 +158,9 @@ def generate_files(spec) -> dict[str, str]:
         "description": spec.description,
         "outputs": list(spec.outputs),
         "params": [{"name": p.name, "default": p.default, "unit": p.unit} for p in BEAM_PARAMS],
-        "maneuver": {"name": spec.maneuver, "theta": str(MANEUVERS[spec.maneuver].theta),
+        "maneuver": {"name": maneuver.name, "theta": str(maneuver.theta),
                      "params": [{"name": p.name, "default": p.default, "unit": p.unit}
-                                for p in MANEUVERS[spec.maneuver].params]},
+                                for p in maneuver.params]},
         "mass_constant": ctx["mass_constant"],
         "outputs_use_acceleration": ctx["outputs_use_acceleration"],
         "bandwidth": ctx["bandwidth"],

@@ -170,3 +170,30 @@ class Report:
                 o = e.ops
                 self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")
         return "\n".join(self.lines) + "\n"
+
+
+def op_counts(spec) -> dict[str, int]:
+    """Operations per generated kernel of a variant (after CSE)."""
+    if spec.kind == "fe":
+        from .fe import build_element_kernels, c_prefix, derive_element
+
+        return {k.name: emit(k, c_prefix(k.name)).total_ops for k in build_element_kernels(derive_element(spec))}
+    return {k.name: emit(k, C_PREFIX).total_ops for k in build_kernels(derive(spec))}
+
+
+def savings(spec, full) -> str:
+    """What a scene's model leaves out, and the operations that saves per kernel."""
+    mine, base = op_counts(spec), op_counts(full)
+    lines = ["", "What this scene's model leaves out", "----------------------------------"]
+    notes = [f"{w}: {y}" for w, y in getattr(spec, "left_out", ())]
+    if spec.kind == "modal":
+        notes += [f"{d['what']}: {d['why']}" for d in derive(spec).dropped]
+    unused = [o for o in full.outputs if o not in spec.outputs]
+    if unused:
+        notes.append(f"outputs {', '.join(unused)}: not requested")
+    lines += [f"- {n}" for n in notes] or ["- nothing"]
+    lines += ["", f"{'kernel':16s} {'full model':>10s} {'this scene':>10s} {'saved':>8s}"]
+    for k in base:
+        saved = base[k] - mine.get(k, 0)
+        lines.append(f"{k:16s} {base[k]:10d} {mine.get(k, 0):10d} {saved:8d}")
+    return "\n".join(lines) + "\n"

@@ -56,8 +56,16 @@ def canonical_output(token: str) -> str:
     return token
 
 
-def point_of(name: str):
-    """(quantity 'N'|'M', exact position s) of a stress output name, or None."""
+LABEL_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
+
+
+def point_of(name: str, points=()):
+    """(quantity 'N'|'M', exact position s) of a stress output name, or None. `points` are the
+    spec's named positions (label, fraction of L)."""
+    if len(name) > 2 and name[0] in "NM" and name[1] == "_":
+        for label, frac in points:
+            if name[2:] == label:
+                return name[0], sp.Rational(frac)
     m = _POINT_RE.match(name)
     if not m:
         return None
@@ -68,27 +76,37 @@ def point_of(name: str):
     return m.group(1), frac
 
 
-def info(name: str) -> OutputInfo:
+def info(name: str, points=()) -> OutputInfo:
     if name == "v_tip":
         return OutputInfo(name, "m", "transverse tip deflection v_o(L) in the moving frame")
     if name == "u_tip":
         return OutputInfo(name, "m", "axial tip displacement u_o(L) in the moving frame")
-    q, at = point_of(name)
+    q, at = point_of(name, points)
     what = "axial force (tension > 0)" if q == "N" else "bending moment (EI v'')"
     return OutputInfo(name, "N" if q == "N" else "N m", f"{what} at x = {at} L")
 
 
-def check_output_names(spec) -> None:
+def check_output_names(spec, extra=()) -> None:
+    for label, frac in spec.points:
+        if not LABEL_RE.match(label) or label in POINTS or re.match(r"^s\d", label):
+            raise SpecError(f"variant '{spec.name}': position name '{label}' must be letters, digits "
+                            "and _ (it reaches generated C), start with a letter, and not be A, B, C")
+        try:
+            value = sp.Rational(frac)
+        except (TypeError, ValueError):
+            raise SpecError(f"variant '{spec.name}': position '{label}' = {frac!r} is not a number") from None
+        if not 0 <= value <= 1:
+            raise SpecError(f"variant '{spec.name}': position '{label}' is outside the beam")
     seen = set()
     for name in spec.outputs:
-        if name not in ("v_tip", "u_tip"):
-            p = point_of(name)
+        if name not in ("v_tip", "u_tip") and name not in extra:
+            p = point_of(name, spec.points)
             if p is None:
                 raise SpecError(f"variant '{spec.name}': unknown output '{name}' (known: v_tip, "
                                 "u_tip, N_A, N_B, N_C, M_A, M_B, M_C, N@<x/L>, M@<x/L>)")
             if not 0 <= p[1] <= 1:
                 raise SpecError(f"variant '{spec.name}': output '{name}' is outside the beam")
-            if p[0] == "N" and not axial_force_available(spec):
+            if p[0] == "N" and spec.kind == "modal" and not axial_force_available(spec):
                 raise SpecError(
                     f"variant '{spec.name}': {name} is not available: strain model "
                     f"'{spec.strain}' has no axial coordinate to carry an axial force; use "
@@ -219,7 +237,7 @@ def output_expression(der, name: str) -> sp.Expr:
         return field_at(der, der.fields.v, 1)
     if name == "u_tip":
         return field_at(der, der.fields.u, 1)
-    quantity, at = point_of(name)
+    quantity, at = point_of(name, spec.points)
     method, n = stress_method(spec)
     if quantity == "M":
         return _element_method(der, n, at, False) if method == "element" else _continuum_M(der, at)

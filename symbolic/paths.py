@@ -1,7 +1,9 @@
 """Where flexsym finds its templates, runtime and checked-in generated code, and its cache."""
 from __future__ import annotations
 
+import fcntl
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import FlexsymError
@@ -29,6 +31,19 @@ def runtime_dir() -> Path:
 
 def generated_dir() -> Path:
     return _resource("generated")
+
+
+@contextmanager
+def file_lock(path: Path):
+    """An exclusive advisory lock (flock) held for the block: one generator or builder per
+    target at a time, across processes; released when the process dies."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
 
 
 def cache_dir() -> Path:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from .build import Built, build
 from .generate import check_folder, fingerprint, generate
-from .paths import cache_dir, generated_dir
+from .paths import cache_dir, file_lock, generated_dir
 from .spec import BUILTIN, VariantSpec
 
 
@@ -35,8 +35,10 @@ def generated_folder(spec: VariantSpec, log=None) -> Path:
         log(f"flexsym: checked-in code not used: {why}")
     folder = cache_folder(spec)
     if check_folder(spec, folder) is not None:
-        log(f"flexsym: generating variant '{spec.name}' into {folder}")
-        generate(spec, folder)
+        with file_lock(folder.parent / f".{folder.name}.lock"):
+            if check_folder(spec, folder) is not None:  # not done meanwhile by another process
+                log(f"flexsym: generating variant '{spec.name}' into {folder}")
+                generate(spec, folder)
     return folder
 
 

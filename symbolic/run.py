@@ -51,14 +51,14 @@ def _positive(name: str, value) -> None:
 def check_options(*, t_end, dt, integrator, params: dict, spec=None) -> None:
     """Refuse bad run options before anything is generated, built or written."""
     from .energy import BEAM_PARAMS
-    from .maneuver import MANEUVERS
+    from .maneuver import MANEUVERS, maneuver_of
 
     if integrator not in INTEGRATORS:
         raise SpecError(f"unknown integrator '{integrator}' (known: {', '.join(INTEGRATORS)})")
     _positive("t_end", t_end)
     _positive("dt", dt)
     beam = {p.name for p in BEAM_PARAMS}
-    man = {p.name for p in MANEUVERS[spec.maneuver].params} if spec else \
+    man = {p.name for p in maneuver_of(spec.maneuver).params} if spec else \
         {p.name for m in MANEUVERS.values() for p in m.params}
     for name, value in params.items():
         if name not in beam | man:

@@ -30,6 +30,8 @@ class VariantSpec:
     outputs: tuple[str, ...] = ("v_tip", "u_tip")
     stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements)
     axial_force: str = "constitutive"  # or "equilibrium" (from the axial inertial forces)
+    points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
+    left_out: tuple[tuple[str, str], ...] = ()  # (what, why): decided by a scene, in the manifest
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
 
@@ -52,11 +54,12 @@ class VariantSpec:
             "outputs": list(self.outputs),
             "stress": self.stress,
             "axial_force": self.axial_force,
+            "points": [list(p) for p in self.points],
+            "left_out": [list(x) for x in self.left_out],
         }
 
     def validate(self) -> "VariantSpec":
         from .energy import STRAIN_MODELS  # the physics owns the list of strain models
-        from .maneuver import MANEUVERS
 
         if not NAME_RE.match(self.name):
             raise SpecError(f"variant name '{self.name}': use lower-case letters, digits and _ "
@@ -82,9 +85,14 @@ class VariantSpec:
         if "v_tip" in self.outputs and all(mode(r).value_at(0, 1) == 0 for r in self.bending):
             raise SpecError(f"variant '{self.name}': no bending mode moves the tip, so v_tip would "
                             "be identically zero (add the static mode or a clamped-free mode)")
-        if self.maneuver not in MANEUVERS:
-            raise SpecError(f"variant '{self.name}': unknown manoeuvre '{self.maneuver}' "
-                            f"(known: {', '.join(MANEUVERS)})")
+        from .maneuver import maneuver_of
+
+        try:
+            maneuver_of(self.maneuver)
+        except SpecError as exc:
+            raise SpecError(f"variant '{self.name}': {exc}") from None
+        if not self.outputs:
+            raise SpecError(f"variant '{self.name}': no outputs requested")
         if self.axial_force not in ("constitutive", "equilibrium"):
             raise SpecError(f"variant '{self.name}': axial force '{self.axial_force}' must be "
                             "'constitutive' or 'equilibrium'")
@@ -140,7 +148,7 @@ def builtin(name: str) -> VariantSpec:
 
 
 def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs=None,
-              maneuver=None, stress=None, axial_force=None, elements=None):
+              maneuver=None, stress=None, axial_force=None, elements=None, points=None):
     """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...').
     Outputs not given explicitly are the defaults of the new variant."""
     from .outputs import canonical_output
@@ -154,7 +162,8 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
         if given:
             raise SpecError(f"--{given[0].replace('_', '-')} does not apply to the finite-element "
                             f"variant '{base.name}' (it takes --elements, --outputs, --maneuver)")
-        changes = {k: v for k, v in (("elements", elements), ("maneuver", maneuver)) if v is not None}
+        changes = {k: v for k, v in (("elements", elements), ("maneuver", maneuver),
+                                     ("points", points)) if v is not None}
         if outputs is not None:
             changes["outputs"] = tuple(canonical_output(o) for o in outputs)
         spec = replace(base, **changes, aliases=(), description=f"custom variant derived from {base.name}")
@@ -173,7 +182,8 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
         changes["bending"] = _refs("bending", bending)
     if outputs is not None:
         changes["outputs"] = tuple(canonical_output(o) for o in outputs)
-    for key, val in (("maneuver", maneuver), ("stress", stress), ("axial_force", axial_force)):
+    for key, val in (("maneuver", maneuver), ("stress", stress), ("axial_force", axial_force),
+                     ("points", points)):
         if val is not None:
             changes[key] = val
     spec = replace(base, **changes, aliases=(), description=f"custom variant derived from {base.name}")

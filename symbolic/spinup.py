@@ -91,3 +91,14 @@ def plot(summaries: list[Summary], path: Path, title: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def describe(r: RunResult, outputs) -> str:
+    """Per output column: extremes with their times and the final value."""
+    rows = ["| quantity | min | at t [s] | max | at t [s] | final |", "|---|---|---|---|---|---|"]
+    for c in outputs:
+        y = r[c]
+        i, j = int(np.argmin(y)), int(np.argmax(y))
+        rows.append(f"| {c} | {y[i]:.6g} | {r.t[i]:.3f} | {y[j]:.6g} | {r.t[j]:.3f} | {y[-1]:.6g} |")
+    status = "ok" if r.ok else r.message
+    return "\n".join(rows) + f"\n\nstatus: {status}; integration CPU {r.summary['cpu_median'] * 1e3:.2f} ms"
