@@ -194,6 +194,28 @@ def cmd_paper(args) -> int:
     return 0
 
 
+def cmd_select(args) -> int:
+    from .scene import load_scene
+    from .select import select, table
+
+    if not args.tol > 0:
+        raise SpecError(f"--tol must be > 0 (got {args.tol})")
+    if not 1 <= args.max_bending <= 5:
+        raise SpecError(f"--max-bending must be in 1..5 (got {args.max_bending})")
+    scene = load_scene(args.scene)
+    print(f"{scene.path}: candidates on outputs {', '.join(scene.spec.outputs)}, tolerance {args.tol:g}")
+    results, best = select(scene, args.tol, max_bending=args.max_bending, repeat=args.repeat)
+    print()
+    print(table(results, best, args.tol))
+    if best is None:
+        print(f"\nno candidate is within {args.tol:g}; the reference ef is the model to use")
+        return 1
+    s = best.spec
+    print(f"\nchosen: strain = \"{s.strain}\", axial = {[m.token for m in s.axial]}, "
+          f"bending = {[m.token for m in s.bending]} ({best.cost * 1e3:.3f} ms, error {best.error:.2e})")
+    return 0
+
+
 def cmd_variants(args) -> int:
     from .energy import STRAIN_MODELS
     from .modes import FAMILIES
@@ -246,6 +268,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variants", default="m0,m1,m2,m3")
     p.add_argument("--out", default="results", help="output folder (default: results)")
     p.set_defaults(func=cmd_spinup)
+
+    p = sub.add_parser("select", help="cheapest model whose error on a scene stays under a tolerance")
+    p.add_argument("scene", help="scene file (.toml)")
+    p.add_argument("--tol", type=float, required=True,
+                   help="largest allowed error, relative to each output's peak (e.g. 0.01)")
+    p.add_argument("--max-bending", type=int, default=4, help="largest bending set tried (default 4)")
+    p.add_argument("--repeat", type=int, default=3, help="repeats for the CPU medians (default 3)")
+    p.set_defaults(func=cmd_select)
 
     p = sub.add_parser("paper", help="reproduce the paper's Fig. 7-9 and Table 1, with an "
                        "accuracy table against a converged finite-element reference")

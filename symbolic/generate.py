@@ -124,6 +124,7 @@ def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
         "elements": spec.elements,
         "plan": output_plan(spec),
         "needs_clamp": needs_clamp,
+        "needs_stress": any(o not in CLAMP_OUTPUTS and o not in ("v_tip", "u_tip") for o in spec.outputs),
     }
     manifest = {
         "coordinates": [{"name": c["name"], "group": "node", "mode": c["description"]} for c in ctx["coords"]],

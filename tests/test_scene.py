@@ -221,3 +221,21 @@ def test_concurrent_builds_of_one_variant_are_safe(tmp_path):
     assert len(builds) == 1 and not builds[0].name.startswith(".")
     variants = [d for d in (tmp_path / "cache" / "variants").iterdir() if d.is_dir()]
     assert len(variants) == 1 and json.loads((variants[0] / "manifest.json").read_text())
+
+
+def test_select_picks_the_cheapest_model_within_tolerance(tmp_path, capsys):
+    from flexsym.select import choose, select, table
+
+    path, _ = write(tmp_path, GOOD.replace("t_end = 2.0", "t_end = 8.0").replace(
+        'quantities = ["v_tip", "M(A)", "M(hub)", "M(2.5)"]', 'quantities = ["v_tip", "M(A)"]'))
+    scene = load_scene(path)
+    results, best = select(scene, 0.05, max_bending=2, repeat=1, log=lambda m: None)
+    assert len(results) == 8  # 3 strain models (2 axial sets for #1/#2) x 2 bending sets
+    assert all(np.isfinite(c.error) and c.cost > 0 for c in results)
+    passing = [c for c in results if c.error <= 0.05]
+    assert best is not None and best.cost == min(c.cost for c in passing)
+    # One static bending mode cannot give the root moment within 5 % (modal truncation).
+    assert all(len(c.spec.bending) == 2 for c in passing)
+    assert choose(results, 1e-9) is None
+    text = table(results, best, 0.05)
+    assert text.count("**chosen**") == 1 and len(text.splitlines()) == 2 + len(results)

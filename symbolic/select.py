@@ -1,0 +1,112 @@
+"""`flexsym select scene.toml --tol TOL`: the cheapest modal model whose error on the scene's
+outputs, against the geometrically exact reference, stays under TOL.
+
+Candidates: strain models prestress, foreshortening and geometric_stiffness (with axial
+modes {static} or {static, sin1}), each with the bending sets {static}, {static, cp1}, ...,
+up to --max-bending modes. Cost: CPU time of the integration with the scene's solver
+(median of repeats). Error: the largest over the outputs of max_t |y - y_ref| divided by a
+scale: the output's peak |y_ref| for v_tip and u_tip; for N and M the largest peak of that
+quantity over the requested points (M at the free end is zero in every modal model and not
+quite zero in the reference, whose own error there must not decide the choice).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .pipeline import prepare
+from .run import RunResult, run_built
+from .spec import BUILTIN, VariantSpec, _refs
+
+BENDING = ("static", "cp1", "cp2", "cp3", "cp4")
+STRAINS = (("prestress", ((),)), ("foreshortening", ((),)),
+           ("geometric_stiffness", (("static",), ("static", "sin1"))))
+REFERENCE_ELEMENTS = 32
+
+
+@dataclass
+class Candidate:
+    spec: VariantSpec
+    cost: float  # s of CPU, integration alone
+    error: float  # relative, see module docstring
+    status: str
+
+    @property
+    def label(self) -> str:
+        s = self.spec
+        axial = ",".join(m.token for m in s.axial) or "-"
+        return f"{s.strain:20s} axial {axial:11s} bending {','.join(m.token for m in s.bending)}"
+
+
+def candidates(scene, max_bending: int = 4) -> list[VariantSpec]:
+    base = scene.spec
+    wants_n = any(o.startswith("N_") for o in base.outputs)
+    out = []
+    for strain, axial_sets in STRAINS:
+        for axial in axial_sets:
+            for k in range(1, max_bending + 1):
+                tag = {"prestress": "ps", "foreshortening": "fs", "geometric_stiffness": "gs"}[strain]
+                name = f"sel_{tag}_a{len(axial)}_b{k}"
+                spec = VariantSpec(name, strain, _refs("axial", list(axial)), _refs("bending", list(BENDING[:k])),
+                                   maneuver=base.maneuver, outputs=base.outputs, points=base.points,
+                                   axial_force="equilibrium" if wants_n and strain == "foreshortening"
+                                   else "constitutive")
+                out.append(spec.validate())
+    return out
+
+
+def reference_spec(scene):
+    ef = next(b for b in BUILTIN if b.kind == "fe")
+    return replace(ef, name=f"sel_ref_ef{REFERENCE_ELEMENTS}", elements=REFERENCE_ELEMENTS,
+                   outputs=scene.spec.outputs, points=scene.spec.points, maneuver=scene.spec.maneuver,
+                   aliases=()).validate()
+
+
+def error(r: RunResult, ref: RunResult, outputs) -> float:
+    if not r.ok:
+        return math.inf
+    peaks = {o: float(np.max(np.abs(ref[o]))) for o in outputs}
+    worst = 0.0
+    for o in outputs:
+        family = [p for k, p in peaks.items() if k[:2] == o[:2]] if o[:2] in ("N_", "M_") else [peaks[o]]
+        scale = max(max(family), 1e-300)
+        n = min(len(r.t), len(ref.t))
+        worst = max(worst, float(np.max(np.abs(r[o][:n] - ref[o][:n]))) / scale)
+    return worst
+
+
+def select(scene, tol: float, max_bending: int = 4, repeat: int = 3, log=print):
+    interval = scene.dt * scene.out_every
+    ref_dt = interval / max(1, math.ceil(interval / min(scene.dt, 5e-4)))
+    log(f"reference: ef with {REFERENCE_ELEMENTS} elements, dt = {ref_dt:g} s ...")
+    ref = run_built(prepare(reference_spec(scene), log=lambda m: None), t_end=scene.t_end, dt=ref_dt,
+                    params=scene.params, out_every=round(interval / ref_dt), raise_on_failure=True)
+    results = []
+    for spec in candidates(scene, max_bending):
+        built = prepare(spec, log=lambda m: None)
+        kw = dict(t_end=scene.t_end, dt=scene.dt, integrator=scene.integrator, params=scene.params,
+                  out_every=scene.out_every)
+        r = run_built(built, **kw)
+        cost = run_built(built, repeat=repeat, **kw).summary["cpu_median"] if r.ok else math.inf
+        c = Candidate(spec, cost, error(r, ref, scene.spec.outputs), "ok" if r.ok else r.message)
+        results.append(c)
+        log(f"  {c.label}  {c.cost * 1e3:8.3f} ms  error {c.error:.2e}")
+    return results, choose(results, tol)
+
+
+def choose(results, tol: float):
+    """The cheapest candidate within tol, or None."""
+    passing = [c for c in results if c.error <= tol]
+    return min(passing, key=lambda c: c.cost) if passing else None
+
+
+def table(results, best, tol) -> str:
+    rows = ["| strain | axial | bending | CPU [ms] | error | within tol |", "|---|---|---|---|---|---|"]
+    for c in sorted(results, key=lambda c: c.cost):
+        s = c.spec
+        mark = "**chosen**" if c is best else ("yes" if c.error <= tol else "no")
+        rows.append(f"| {s.strain} | {','.join(m.token for m in s.axial) or '-'} | "
+                    f"{','.join(m.token for m in s.bending)} | {c.cost * 1e3:.3f} | {c.error:.2e} | {mark} |")
+    return "\n".join(rows)
