@@ -127,6 +127,7 @@ def cmd_run(args) -> int:
     from .spinup import Summary, describe, plot, table
     from .pipeline import prepare
     from .run import check_options, run_built
+    from .validity import assess
 
     spec, scene = resolve(args)
     settings, out = _run_settings(args, spec, scene)
@@ -142,10 +143,12 @@ def cmd_run(args) -> int:
     if args.plot and "v_tip" in res.columns:
         plot([s], Path(args.plot), f"{spec.name}, {spec.maneuver}")
         print(f"plot: {args.plot}")
+    verdict = assess(spec, res, settings["params"])
+    for note in verdict.notes:
+        print(f"flexsym: {note}", file=sys.stderr)
     if not res.ok:
-        print(f"flexsym: {res.message}", file=sys.stderr)
         return 3
-    return 0
+    return 0 if verdict.valid else 4
 
 
 def cmd_inspect(args) -> int:

@@ -20,7 +20,7 @@ class Summary:
 
     def value_at(self, t: float) -> float | None:
         r = self.result
-        if r.t[-1] < t - 1e-9:
+        if not r.ok or r.t[-1] < t - 1e-9:  # values of a run that stopped mean nothing
             return None
         return float(np.interp(t, r.t, r["v_tip"]))
 
@@ -42,8 +42,7 @@ def run_variants(specs: list[VariantSpec], *, ws: float, ts: float, t_end: float
         res = run_built(built, t_end=t_end, dt=dt, integrator=integrator,
                         params={"ws": ws, "ts": ts}, out=csv)
         out.append(Summary(spec, res, t1 - t0))
-        log(f"  {spec.name}: {res.status} ({res.summary['cpu_median'] * 1e3:.1f} ms CPU)"
-            + (f" -- {res.message}" if not res.ok else ""))
+        log(f"  {spec.name}: {res.status} ({res.summary['cpu_median'] * 1e3:.1f} ms CPU)")
     return out
 
 
@@ -55,9 +54,11 @@ def table(summaries: list[Summary], ts: float, t_end: float) -> str:
     head = (f"| variant | alias | min v_tip [m] | at t [s] | v_tip({ts:g}) [m] | v_tip({t_end:g}) [m] "
             f"| integration CPU [ms] | status |")
     rows = [head, "|" + "---|" * 8]
+    from .validity import assess
+
     for s in summaries:
         vmin, tmin = s.minimum if s.result.ok else (None, None)  # a diverging minimum means nothing
-        status = "ok" if s.result.ok else s.result.message
+        status = assess(s.spec, s.result, s.result.options.get("params")).status
         rows.append(f"| {s.spec.name} | {'/'.join(s.spec.aliases) or '-'} | {_fmt(vmin)} | {_fmt(tmin, '.2f')} "
                     f"| {_fmt(s.value_at(ts))} | {_fmt(s.value_at(t_end))} "
                     f"| {s.result.summary['cpu_median'] * 1e3:.2f} | {status} |")

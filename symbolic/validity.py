@@ -1,0 +1,83 @@
+"""Is a result inside the range of validity of its model, and if a run stopped, why?
+
+Criterion for the modal (floating frame) variants: |v| <= 0.1 L everywhere. Their strain
+measures keep terms of second order in v' only, so their error grows like (v/L)^2: on the
+spin-up beam against `ef` it is 0.4 % of the peak deflection at v/L = 0.057 (omega_s = 6),
+1 % at 0.087 (omega_s = 10) and 3 % at 0.137 (omega_s = 20) (tests/test_hard_cases.py).
+`ef` is geometrically exact and has no such limit (only its mesh and step).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+import sympy as sp
+
+VALIDITY_LIMIT = 0.1  # |v| / L
+
+
+@dataclass
+class Assessment:
+    valid: bool
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def status(self) -> str:
+        return "ok" if self.valid and not self.notes else "; ".join(self.notes)
+
+
+@lru_cache(maxsize=None)
+def _mode_peak(ref) -> float:
+    from .modes import mode, s
+
+    fn = sp.lambdify(s, mode(ref).expr, "numpy")
+    return float(np.max(np.abs(fn(np.linspace(0.0, 1.0, 2001)))))
+
+
+def deflection_bound(spec, result) -> tuple[np.ndarray, str]:
+    """|v| along the run: v_tip when it is an output, else sum_j |q_j| max_s |phi_j(s)|, a bound."""
+    if "v_tip" in result.columns:
+        return np.abs(result["v_tip"]), "|v_tip|"
+    bound = sum(np.abs(result[m.coordinate]) * _mode_peak(m) for m in spec.bending)
+    return bound, "a bound on |v|"
+
+
+def assess(spec, result, params: dict | None = None) -> Assessment:
+    length = (params or {}).get("L", 10.0)
+    a = Assessment(True)
+    if spec.kind == "modal" and len(result.t):
+        v, what = deflection_bound(spec, result)
+        over = v > VALIDITY_LIMIT * length
+        if np.any(over):
+            i = int(np.argmax(over))
+            a.valid = False
+            a.notes.append(f"deformation left the range of validity of the modal model at t = "
+                           f"{result.t[i]:.3g} s: {what} = {v[i]:.3g} m > {VALIDITY_LIMIT:g} L "
+                           f"(peak {np.max(v):.3g} m); second-order strains: errors grow like (v/L)^2, "
+                           "use ef")
+    if not result.ok:
+        a.valid = False
+        hint = diagnose(spec, result)
+        a.notes.append(result.message + (f" -- {hint}" if hint else ""))
+    return a
+
+
+def diagnose(spec, result) -> str:
+    """Why a known model collapses, stated with the numbers of this run."""
+    strain = getattr(spec, "strain", None)
+    if strain == "cubic_energy":
+        axial = [m.coordinate for m in spec.axial]
+        last = {c: float(result[c][-1]) for c in axial}
+        compressed = [f"{c} = {v:.3g} m" for c, v in last.items() if v < 0]
+        return ("strain model 'cubic_energy' differentiates the truncated energy (5) w.r.t. the axial "
+                "coordinates too: that energy is unbounded below, bending drives the axial coordinate "
+                "into compression" + (f" ({', '.join(compressed)} at the end)" if compressed else "")
+                + "; the paper's #1/#2 use eq. (18)-(19) instead (strain model geometric_stiffness)")
+    if strain == "linear":
+        return ("no geometric stiffening: above the first bending frequency (3.8 rad/s for the paper's "
+                "beam) centrifugal softening makes the bending stiffness negative")
+    if strain == "geometric_stiffness":
+        return ("the elastic force of eq. (18)-(19) is not a potential force (the axial equation does "
+                "not see the bending): at large deflection it can feed energy into the motion")
+    return ""
