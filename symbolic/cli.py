@@ -40,8 +40,10 @@ def _run_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ws", type=float, default=6.0, help="final spin rate omega_s [rad/s] (default 6)")
     p.add_argument("--ts", type=float, default=15.0, help="spin-up time T_s [s] (default 15)")
     p.add_argument("--t-end", type=float, default=20.0, help="end time [s] (default 20)")
-    p.add_argument("--dt", type=float, default=1e-3, help="time step [s] (default 1e-3)")
-    p.add_argument("--integrator", choices=INTEGRATORS, default="genalpha")
+    p.add_argument("--dt", type=float, default=1e-3,
+                   help="time step [s] (default 1e-3); for dopri5 the output interval")
+    p.add_argument("--integrator", choices=INTEGRATORS, default="genalpha",
+                   help="rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark")
 
 
 def cmd_generate(args) -> int:
@@ -85,10 +87,11 @@ def cmd_run(args) -> int:
             params[k.strip()] = float(v)
         except ValueError:
             raise SpecError(f"--param '{item}': '{v}' is not a number") from None
-    check_options(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params, spec=spec)
+    check_options(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params, spec=spec,
+                  tol=args.tol)
     built = prepare(spec)
     res = run_built(built, t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params,
-                    out=Path(args.out) if args.out else None)
+                    out=Path(args.out) if args.out else None, tol=args.tol)
     s = Summary(spec, res, 0.0)
     print(table([s], args.ts, args.t_end))
     if args.out:
@@ -170,6 +173,8 @@ def build_parser() -> argparse.ArgumentParser:
     _run_args(p)
     p.add_argument("--param", action="append", help="beam or manoeuvre parameter NAME=VALUE "
                    "(rho, E, A, I, L, ws, ts); repeatable")
+    p.add_argument("--tol", type=float, help="dopri5 error tolerance (rtol; atol = tol * L), "
+                   "default 1e-6; 0: fixed steps --dt")
     p.add_argument("--out", help="CSV file for the results")
     p.add_argument("--plot", help="PNG file for a plot of v_tip(t)")
     p.set_defaults(func=cmd_run)
