@@ -130,9 +130,15 @@ void fsr_matvec(const double* A, int n, int bw, const double* x, double* y)
 {
     if (bw < 0 || bw >= n - 1) {
         for (int i = 0; i < n; ++i) {
-            double s = 0.0;
-            for (int j = 0; j < n; ++j) s += A[i * n + j] * x[j];
-            y[i] = s;
+            const double* Ai = A + i * n;
+            double s0 = 0.0, s1 = 0.0;
+            int j = 0;
+            for (; j + 1 < n; j += 2) {  /* two chains: small n gets no vector code */
+                s0 += Ai[j] * x[j];
+                s1 += Ai[j + 1] * x[j + 1];
+            }
+            if (j < n) s0 += Ai[j] * x[j];
+            y[i] = s0 + s1;
         }
         return;
     }

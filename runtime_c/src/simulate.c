@@ -133,6 +133,13 @@ static fsr_status fail(sim* s, fsr_status st, const char* fmt, ...)
     return st;
 }
 
+/* max(m, |x|) for m >= 0 (libm's fmax is a call in strict C99). */
+static double max_abs(double m, double x)
+{
+    x = fabs(x);
+    return x > m ? x : m;
+}
+
 /* drive = [theta', theta''] at t. The last two times are cached: RK stages and output rows
  * ask for the same time repeatedly, and the manoeuvre costs a sin and a cos. */
 static void drive_at(sim* s, double t, double* drive)
@@ -338,7 +345,7 @@ static double error_norm(const sim* s, const erk_tableau* T, double h, const dou
     for (int j = 0; j < m; ++j) {
         double e = 0.0;
         for (int i = 0; i < T->stages; ++i) e += T->e[i] * k[(size_t)i * (size_t)m + (size_t)j];
-        double sc = s->o->tol * (s->L + fmax(fabs(y[j]), fabs(y1[j])));
+        double sc = s->o->tol * (s->L + max_abs(fabs(y[j]), y1[j]));
         sum += (h * e / sc) * (h * e / sc);
     }
     return sqrt(sum / m);
@@ -535,6 +542,19 @@ static int newton_converged(const sim* s, const newton_state* ns, long k, double
     return ns->theta < 1.0 && ns->theta / (1.0 - ns->theta) * dq <= tol;
 }
 
+/* Predict the next acceleration by linear extrapolation (a + (a - a_old)) when that would
+ * have predicted a1 better than a alone: it halves the iterations of #1-#3 at large steps,
+ * and loses where the acceleration rings at high frequency (ef at 5 ms). */
+static int extrapolation_wins(int n, const double* a1, const double* a, const double* a_old)
+{
+    double e_const = 0.0, e_extra = 0.0;
+    for (int i = 0; i < n; ++i) {
+        e_const = max_abs(e_const, a1[i] - a[i]);
+        e_extra = max_abs(e_extra, a1[i] - 2.0 * a[i] + a_old[i]);
+    }
+    return e_extra < e_const;
+}
+
 /* Generalized-alpha (Chung & Hulbert; Arnold & Bruls form for M(q) q'' = f) with Newton
  * iterations on the acceleration a1; q1 and v1 follow it linearly (dq1 = cb da, dv1 = cg da).
  * Newmark(gamma, beta) is the special case am = af = 0. The iteration matrix is rebuilt (at
@@ -559,19 +579,24 @@ static fsr_status run_alpha(sim* s, double* q)
     double* v = q + n;
     /* a: acceleration, ab: the algorithmic acceleration; 1: their values at t1 */
     double *a = s->work, *ab = a + n, *a1 = ab + n, *q1 = a1 + n, *v1 = q1 + n, *res = v1 + n, *ma = res + n;
+    double* a_old = ma + n;
     double drive[2], tol = o->newton_tol * s->L, ra = (1.0 - af) / (1.0 - am);
+    double pa = af / (1.0 - am), pb = -am / (1.0 - am);
     newton_state ns = {0.0, -1.0, 0};
+    int extrapolate = 0;
     fsr_status st;
     if ((st = accel(s, 0.0, q, v, a))) return st;
     memcpy(ab, a, sizeof(double) * (size_t)n);
+    memcpy(a_old, a, sizeof(double) * (size_t)n);
     for (long k = 0; k < s->nsteps; ++k) {
         double t = time_of(s, k), t1 = time_of(s, k + 1), h = t1 - t;
-        double cb = h * h * bet * ra, cg = h * gam * ra;
-        for (int i = 0; i < n; ++i) {  /* predictor a1 = a; ab becomes ab(t1) - ra a1 */
-            double abo = ab[i], abp = (af * a[i] - am * abo) / (1.0 - am), ab1 = abp + ra * a[i];
+        double cb = h * h * bet * ra, cg = h * gam * ra, h2 = h * h;
+        for (int i = 0; i < n; ++i) {  /* predictor a1; ab becomes ab(t1) - ra a1 */
+            double abo = ab[i], abp = pa * a[i] + pb * abo;
+            a1[i] = extrapolate ? 2.0 * a[i] - a_old[i] : a[i];
+            double ab1 = abp + ra * a1[i];
             ab[i] = abp;
-            a1[i] = a[i];
-            q1[i] = q[i] + h * v[i] + h * h * ((0.5 - bet) * abo + bet * ab1);
+            q1[i] = q[i] + h * v[i] + h2 * ((0.5 - bet) * abo + bet * ab1);
             v1[i] = v[i] + h * ((1.0 - gam) * abo + gam * ab1);
         }
         drive_at(s, t1, drive);
@@ -600,7 +625,7 @@ static fsr_status run_alpha(sim* s, double* q)
                 a1[i] += res[i];
                 q1[i] += cb * res[i];
                 v1[i] += cg * res[i];
-                dq = fmax(dq, fabs(cb * res[i]));
+                dq = max_abs(dq, cb * res[i]);
             }
             s->r->newton_iterations++;
             if (!isfinite(dq)) return check_state(s, t1, q1, v1);
@@ -613,6 +638,8 @@ static fsr_status run_alpha(sim* s, double* q)
             dq_prev = dq;
         }
         for (int i = 0; i < n; ++i) ab[i] += ra * a1[i];
+        extrapolate = extrapolation_wins(n, a1, a, a_old);
+        memcpy(a_old, a, sizeof(double) * (size_t)n);
         memcpy(a, a1, sizeof(double) * (size_t)n);
         memcpy(q, q1, sizeof(double) * (size_t)(2 * n));  /* q1, v1 are contiguous, as q, v */
         if ((st = accept(s, t1, h, q, a, NULL))) return st;
