@@ -65,9 +65,10 @@ def _run_args(p: argparse.ArgumentParser, defaults: bool = True) -> None:
     p.add_argument("--ws", type=float, default=d["ws"], help="final spin rate omega_s [rad/s] (default 6)")
     p.add_argument("--ts", type=float, default=d["ts"], help="spin-up time T_s [s] (default 15)")
     p.add_argument("--t-end", type=float, default=d["t_end"], help="end time [s] (default 20)")
-    p.add_argument("--dt", type=float, default=d["dt"], help="time step [s] (default 1e-3)")
+    p.add_argument("--dt", type=float, default=d["dt"],
+                   help="time step [s] (default 1e-3); for dopri5 the output interval")
     p.add_argument("--integrator", choices=INTEGRATORS, default=d["integrator"],
-                   help="time integrator (default genalpha)")
+                   help="rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark")
 
 
 def cmd_generate(args) -> int:
@@ -99,12 +100,13 @@ def cmd_build(args) -> int:
 def _run_settings(args, spec, scene) -> tuple[dict, Path | None]:
     """Run options from a scene file, or from the command line with the defaults filled in."""
     if scene is not None:
-        given = _given(args, RUN_DEFAULTS) + (["param"] if args.param else [])
+        given = _given(args, list(RUN_DEFAULTS) + ["tol"]) + (["param"] if args.param else [])
         if given:
             raise SpecError(f"{scene.path}: --{given[0].replace('_', '-')} does not combine with a "
                             "scene file: set it in the scene")
         return (dict(t_end=scene.t_end, dt=scene.dt, integrator=scene.integrator, params=scene.params,
-                     out_every=scene.out_every), Path(args.out) if args.out else scene.output_file)
+                     out_every=scene.out_every, tol=scene.tol),
+                Path(args.out) if args.out else scene.output_file)
     for k, v in RUN_DEFAULTS.items():
         if getattr(args, k) is None:
             setattr(args, k, v)
@@ -119,7 +121,7 @@ def _run_settings(args, spec, scene) -> tuple[dict, Path | None]:
             params[k.strip()] = float(v)
         except ValueError:
             raise SpecError(f"--param '{item}': '{v}' is not a number") from None
-    return (dict(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params),
+    return (dict(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params, tol=args.tol),
             Path(args.out) if args.out else None)
 
 
@@ -255,6 +257,8 @@ def build_parser() -> argparse.ArgumentParser:
     _run_args(p, defaults=False)
     p.add_argument("--param", action="append", help="beam or manoeuvre parameter NAME=VALUE "
                    "(rho, E, A, I, L, ws, ts); repeatable")
+    p.add_argument("--tol", type=float, help="dopri5 error tolerance (rtol; atol = tol * L), "
+                   "default 1e-6; 0: fixed steps --dt")
     p.add_argument("--out", help="CSV file for the results")
     p.add_argument("--plot", help="PNG file for a plot of v_tip(t)")
     p.set_defaults(func=cmd_run)

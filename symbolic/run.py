@@ -12,7 +12,8 @@ import numpy as np
 from .build import Built
 from .errors import FlexsymError, SimulationError, SpecError
 
-INTEGRATORS = ("rk4", "genalpha", "newmark")
+INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark")
+NEWTON = ("modified", "full")
 
 
 @dataclass
@@ -48,7 +49,7 @@ def _positive(name: str, value) -> None:
         raise SpecError(f"{name} must be a positive number (got {value!r})")
 
 
-def check_options(*, t_end, dt, integrator, params: dict, spec=None) -> None:
+def check_options(*, t_end, dt, integrator, params: dict, spec=None, tol=None, newton=None) -> None:
     """Refuse bad run options before anything is generated, built or written."""
     from .energy import BEAM_PARAMS
     from .maneuver import MANEUVERS, maneuver_of
@@ -57,6 +58,11 @@ def check_options(*, t_end, dt, integrator, params: dict, spec=None) -> None:
         raise SpecError(f"unknown integrator '{integrator}' (known: {', '.join(INTEGRATORS)})")
     _positive("t_end", t_end)
     _positive("dt", dt)
+    if tol is not None and not (isinstance(tol, (int, float)) and not isinstance(tol, bool)
+                                and 0 <= tol < 1):
+        raise SpecError(f"tol must be a number in [0, 1) (got {tol!r}; 0 = fixed steps dt)")
+    if newton is not None and newton not in NEWTON:
+        raise SpecError(f"unknown newton '{newton}' (known: {', '.join(NEWTON)})")
     beam = {p.name for p in BEAM_PARAMS}
     man = {p.name for p in maneuver_of(spec.maneuver).params} if spec else \
         {p.name for m in MANEUVERS.values() for p in m.params}
@@ -76,8 +82,13 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
               params: dict | None = None, out: Path | None = None, out_every: int | None = None,
               repeat: int = 1, rho_inf: float | None = None, newmark: tuple | None = None,
               blowup: float | None = None, newton_tol: float | None = None,
+              tol: float | None = None, max_steps: int | None = None, newton: str | None = None,
               raise_on_failure: bool = False) -> RunResult:
-    check_options(t_end=t_end, dt=dt, integrator=integrator, params=params or {})
+    """Integrate with the built driver. dt is the step of the fixed-step integrators; for
+    dopri5 (steps adapted to tol, default 1e-6; tol=0: fixed steps dt) it sets the output grid.
+    Rows are written every out_every * dt (default: about every 0.01 s) and at t_end.
+    newton: 'modified' (default, reuses the iteration matrix) or 'full'."""
+    check_options(t_end=t_end, dt=dt, integrator=integrator, params=params or {}, tol=tol, newton=newton)
     if out_every is None:  # about 100 rows per second of simulated time
         out_every = max(1, int(round(0.01 / dt)))
     cmd = [str(built.executable), "--t-end", repr(float(t_end)), "--dt", repr(float(dt)),
@@ -92,6 +103,12 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
         cmd += ["--blowup", repr(float(blowup))]
     if newton_tol is not None:
         cmd += ["--newton-tol", repr(float(newton_tol))]
+    if tol is not None:
+        cmd += ["--tol", repr(float(tol))]
+    if max_steps is not None:
+        cmd += ["--max-steps", str(int(max_steps))]
+    if newton is not None:
+        cmd += ["--newton", newton]
 
     with tempfile.TemporaryDirectory(prefix="flexsym-run-") as tmp:
         csv = Path(out) if out is not None else Path(tmp) / "out.csv"
@@ -109,7 +126,8 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
         data = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2)
     result = RunResult(built.name, summary["status"], summary["message"], summary, columns, data,
                        Path(out) if out is not None else None,
-                       {"t_end": t_end, "dt": dt, "integrator": integrator, "params": params or {}})
+                       {"t_end": t_end, "dt": dt, "integrator": integrator, "params": params or {},
+                        "tol": tol, "newton": newton})
     if raise_on_failure and not result.ok:
         raise SimulationError(f"{built.name}: {result.message}", result)
     return result

@@ -5,7 +5,7 @@ simulation, turned into exactly the variant that scene needs.
     [maneuver]  kind = "spin-up" (omega, duration) | "constant" (omega) | "expression" (theta)
     [model]     variant = "m3"  or  strain + axial + bending (mode lists); optional stress,
                 axial_force, elements (ef), keep_axial, name
-    [solver]    integrator, dt, t_end
+    [solver]    integrator, dt, t_end; tol for dopri5 (then dt is the output interval)
     [output]    file (relative to the working directory), quantities (v_tip, u_tip, N(x), M(x)),
                 positions = { name = x [m] }, interval (s between rows, default 0.01)
 
@@ -48,6 +48,7 @@ class Scene:
     t_end: float
     out_every: int  # steps between output rows
     output_file: Path | None
+    tol: float | None
     columns: dict = field(default_factory=dict)  # scene quantity -> result column
     full_spec: object = None  # the same model without the scene's reductions (for comparison)
 
@@ -131,8 +132,13 @@ def load_scene(path) -> Scene:
     integrator = r.string("solver", "integrator", required=False, default="genalpha")
     if integrator not in INTEGRATORS:
         r.fail("[solver] integrator", f"unknown integrator '{integrator}' (known: {', '.join(INTEGRATORS)})")
-    if "tol" in data["solver"]:
-        r.fail("[solver] tol", f"integrator '{integrator}' is fixed-step: give dt")
+    tol = None
+    if integrator == "dopri5":
+        tol = r.number("solver", "tol", required=False, default=1e-6)
+        if not 0 <= tol < 1:
+            r.fail("[solver] tol", f"must be in [0, 1) (got {tol!r}; 0 = fixed steps dt)")
+    elif "tol" in data["solver"]:
+        r.fail("[solver] tol", f"integrator '{integrator}' is fixed-step: give dt (tol is for dopri5)")
     dt = r.number("solver", "dt", positive=True)
     t_end = r.number("solver", "t_end", positive=True)
     if dt > t_end:
@@ -147,7 +153,7 @@ def load_scene(path) -> Scene:
     points, outputs, columns = _outputs(r, quantities, beam["L"])
     spec, full = _spec(r, maneuver, outputs, points)
     return Scene(path, spec, beam | mparams, integrator, dt, t_end, out_every,
-                 Path(output_file) if output_file else None, columns, full)
+                 Path(output_file) if output_file else None, tol, columns, full)
 
 
 def _maneuver(r: _Reader) -> tuple[str, dict]:

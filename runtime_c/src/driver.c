@@ -1,9 +1,13 @@
 /* Command-line driver: integrate a generated model, write CSV, report a JSON summary.
  *
- *   flexsym_<variant> [--t-end T] [--dt H] [--integrator rk4|genalpha|newmark]
- *                     [--rho-inf R] [--newmark-gamma G] [--newmark-beta B]
+ *   flexsym_<variant> [--t-end T] [--dt H] [--integrator rk4|dopri5|genalpha|newmark]
+ *                     [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
+ *                     [--newmark-beta B] [--newton modified|full] [--newton-tol TOL]
  *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
- *                     [--repeat N] [--blowup F] [--newton-tol TOL] [--info]
+ *                     [--repeat N] [--blowup F] [--info]
+ *
+ * dopri5 adapts its step to --tol (0: fixed steps --dt); its rows are at the output grid,
+ * multiples of out_every * dt, from its dense output.
  *
  * stdout: one JSON line (status, steps, CPU time of the integration alone).
  * stderr: one line naming what went wrong. Exit: 0 ok, 2 usage, 3 simulation stopped, 4 I/O.
@@ -178,6 +182,14 @@ int main(int argc, char** argv)
         else if (!strcmp(a, "--newmark-beta")) { if (!parse_double(val, &o.nm_beta)) return usage("bad --newmark-beta", val); }
         else if (!strcmp(a, "--blowup")) { if (!parse_double(val, &o.blowup)) return usage("bad --blowup", val); }
         else if (!strcmp(a, "--newton-tol")) { if (!parse_double(val, &o.newton_tol)) return usage("bad --newton-tol", val); }
+        else if (!strcmp(a, "--tol")) { if (!parse_double(val, &o.tol)) return usage("bad --tol", val); }
+        else if (!strcmp(a, "--max-steps")) {
+            if (!parse_int(val, &o.max_steps) || o.max_steps < 1) return usage("bad --max-steps", val);
+        } else if (!strcmp(a, "--newton")) {
+            if (!strcmp(val, "modified")) o.newton_full = 0;
+            else if (!strcmp(val, "full")) o.newton_full = 1;
+            else return usage("unknown --newton (modified, full)", val);
+        }
         else if (!strcmp(a, "--out")) out = val;
         else if (!strcmp(a, "--out-every")) {
             if (!parse_int(val, &lv) || lv < 1 || lv > 1000000000L) return usage("bad --out-every", val);
@@ -188,7 +200,8 @@ int main(int argc, char** argv)
             if (!strcmp(val, "rk4")) o.method = FSR_RK4;
             else if (!strcmp(val, "genalpha")) o.method = FSR_GENALPHA;
             else if (!strcmp(val, "newmark")) o.method = FSR_NEWMARK;
-            else return usage("unknown --integrator (rk4, genalpha, newmark)", val);
+            else if (!strcmp(val, "dopri5")) o.method = FSR_DOPRI5;
+            else return usage("unknown --integrator (rk4, dopri5, genalpha, newmark)", val);
         } else if (!strcmp(a, "--param")) {
             if (!set_param(m, p, mp, val)) return usage("bad --param (NAME=VALUE with a known name)", val);
         } else return usage("unknown option", a);
@@ -215,11 +228,15 @@ int main(int argc, char** argv)
 
     printf("{\"status\": \"%s\", \"message\": ", r.status == FSR_OK ? "ok" : r.status == FSR_DIVERGED ? "diverged" : "failed");
     json_string(stdout, r.message);
-    printf(", \"integrator\": \"%s\", \"dt\": %.17g, \"t_end\": %.17g, \"t_stop\": %.17g, \"steps\": %ld, "
-           "\"newton_iterations\": %ld, \"force_evaluations\": %ld, \"rows\": %d, \"repeat\": %ld, "
+    printf(", \"integrator\": \"%s\", \"dt\": %.17g, \"tol\": %.17g, \"t_end\": %.17g, \"t_stop\": %.17g, "
+           "\"steps\": %ld, \"accepted_steps\": %ld, \"rejected_steps\": %ld, \"h_min\": %.9g, "
+           "\"h_max\": %.9g, \"newton\": \"%s\", \"newton_iterations\": %ld, \"jacobian_evaluations\": %ld, "
+           "\"force_evaluations\": %ld, \"omega_max\": %.9g, \"rows\": %d, \"repeat\": %ld, "
            "\"cpu_median\": %.9g, \"cpu_min\": %.9g, \"cpu_max\": %.9g}\n",
-           fsr_method_name(o.method), o.dt, o.t_end, r.t_stop, r.steps, r.newton_iterations,
-           r.force_evaluations, r.nrows, repeat, times[repeat / 2], times[0], times[repeat - 1]);
+           fsr_method_name(o.method), o.dt, o.tol, o.t_end, r.t_stop, r.steps, r.steps, r.rejected_steps,
+           r.h_min, r.h_max, o.newton_full ? "full" : "modified", r.newton_iterations,
+           r.jacobian_evaluations, r.force_evaluations, r.omega_max, r.nrows, repeat,
+           times[repeat / 2], times[0], times[repeat - 1]);
     if (r.status != FSR_OK)
         fprintf(stderr, "flexsym: %s; %d rows up to t = %.6g s %s\n", r.message, r.nrows, r.t_stop,
                 out ? "kept in the output file" : "computed");

@@ -8,12 +8,12 @@ int fsr_chol_factor(double* A, int n)
         double d = A[j * n + j];
         for (int k = 0; k < j; ++k) d -= A[j * n + k] * A[j * n + k];
         if (!(d > 0.0)) return j + 1;
-        d = sqrt(d);
-        A[j * n + j] = d;
+        double inv = 1.0 / sqrt(d);
+        A[j * n + j] = inv;
         for (int i = j + 1; i < n; ++i) {
             double s = A[i * n + j];
             for (int k = 0; k < j; ++k) s -= A[i * n + k] * A[j * n + k];
-            A[i * n + j] = s / d;
+            A[i * n + j] = s * inv;
         }
     }
     return 0;
@@ -24,69 +24,39 @@ void fsr_chol_solve(const double* A, int n, double* b)
     for (int i = 0; i < n; ++i) {
         double s = b[i];
         for (int k = 0; k < i; ++k) s -= A[i * n + k] * b[k];
-        b[i] = s / A[i * n + i];
+        b[i] = s * A[i * n + i];
     }
     for (int i = n - 1; i >= 0; --i) {
         double s = b[i];
         for (int k = i + 1; k < n; ++k) s -= A[k * n + i] * b[k];
-        b[i] = s / A[i * n + i];
+        b[i] = s * A[i * n + i];
     }
 }
 
 int fsr_lu_factor(double* A, int n, int* piv)
 {
-    for (int k = 0; k < n; ++k) {
-        int p = k;
-        double best = fabs(A[k * n + k]);
-        for (int i = k + 1; i < n; ++i) {
-            double v = fabs(A[i * n + k]);
-            if (v > best) { best = v; p = i; }
-        }
-        if (!(best > 0.0)) return k + 1;
-        piv[k] = p;
-        if (p != k) {
-            for (int j = 0; j < n; ++j) {
-                double t = A[k * n + j]; A[k * n + j] = A[p * n + j]; A[p * n + j] = t;
-            }
-        }
-        double inv = 1.0 / A[k * n + k];
-        for (int i = k + 1; i < n; ++i) {
-            double l = A[i * n + k] * inv;
-            A[i * n + k] = l;
-            if (l != 0.0)
-                for (int j = k + 1; j < n; ++j) A[i * n + j] -= l * A[k * n + j];
-        }
-    }
-    return 0;
+    return fsr_band_lu_factor(A, n, n - 1, n - 1, piv);
 }
 
 void fsr_lu_solve(const double* A, int n, const int* piv, double* b)
 {
-    for (int k = 0; k < n; ++k) {
-        int p = piv[k];
-        if (p != k) { double t = b[k]; b[k] = b[p]; b[p] = t; }
-    }
-    for (int i = 0; i < n; ++i) {
-        double s = b[i];
-        for (int k = 0; k < i; ++k) s -= A[i * n + k] * b[k];
-        b[i] = s;
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        double s = b[i];
-        for (int k = i + 1; k < n; ++k) s -= A[i * n + k] * b[k];
-        b[i] = s / A[i * n + i];
-    }
+    fsr_band_lu_solve(A, n, n - 1, n - 1, piv, b);
+}
+
+static int min_int(int a, int b)
+{
+    return a < b ? a : b;
 }
 
 /* Banded LU with partial pivoting (LAPACK dgbtrf's algorithm) on dense row-major storage.
  * Row interchanges widen the upper band to kl + ku; the multipliers of column k stay where
- * step k put them, so the forward solve interleaves interchanges and eliminations. */
+ * step k put them, so the forward solve interleaves interchanges and eliminations.
+ * With kl = ku = n - 1 it is the dense LU. */
 int fsr_band_lu_factor(double* A, int n, int kl, int ku, int* piv)
 {
-    int ku2 = kl + ku;
+    int ku2 = min_int(kl + ku, n - 1);
     for (int k = 0; k < n; ++k) {
-        int last = k + kl < n - 1 ? k + kl : n - 1;
-        int jend = k + ku2 < n - 1 ? k + ku2 : n - 1;
+        int last = min_int(k + kl, n - 1), jend = min_int(k + ku2, n - 1);
         int p = k;
         double best = fabs(A[k * n + k]);
         for (int i = k + 1; i <= last; ++i) {
@@ -101,6 +71,7 @@ int fsr_band_lu_factor(double* A, int n, int kl, int ku, int* piv)
             }
         }
         double inv = 1.0 / A[k * n + k];
+        A[k * n + k] = inv;
         for (int i = k + 1; i <= last; ++i) {
             double l = A[i * n + k] * inv;
             A[i * n + k] = l;
@@ -113,16 +84,68 @@ int fsr_band_lu_factor(double* A, int n, int kl, int ku, int* piv)
 
 void fsr_band_lu_solve(const double* A, int n, int kl, int ku, const int* piv, double* b)
 {
-    int ku2 = kl + ku;
+    int ku2 = min_int(kl + ku, n - 1);
     for (int k = 0; k < n; ++k) {
-        int p = piv[k], last = k + kl < n - 1 ? k + kl : n - 1;
+        int p = piv[k], last = min_int(k + kl, n - 1);
         if (p != k) { double t = b[k]; b[k] = b[p]; b[p] = t; }
         for (int i = k + 1; i <= last; ++i) b[i] -= A[i * n + k] * b[k];
     }
     for (int i = n - 1; i >= 0; --i) {
-        int jend = i + ku2 < n - 1 ? i + ku2 : n - 1;
+        int jend = min_int(i + ku2, n - 1);
         double s = b[i];
         for (int j = i + 1; j <= jend; ++j) s -= A[i * n + j] * b[j];
-        b[i] = s / A[i * n + i];
+        b[i] = s * A[i * n + i];
+    }
+}
+
+static void unit_column(int n, int j, double* e)
+{
+    for (int i = 0; i < n; ++i) e[i] = i == j ? 1.0 : 0.0;
+}
+
+static void set_column(double* Ainv, int n, int j, const double* x)
+{
+    for (int i = 0; i < n; ++i) Ainv[i * n + j] = x[i];
+}
+
+void fsr_chol_inverse(const double* A, int n, double* Ainv, double* work)
+{
+    for (int j = 0; j < n; ++j) {
+        unit_column(n, j, work);
+        fsr_chol_solve(A, n, work);
+        set_column(Ainv, n, j, work);
+    }
+}
+
+void fsr_lu_inverse(const double* A, int n, const int* piv, double* Ainv, double* work)
+{
+    for (int j = 0; j < n; ++j) {
+        unit_column(n, j, work);
+        fsr_lu_solve(A, n, piv, work);
+        set_column(Ainv, n, j, work);
+    }
+}
+
+void fsr_matvec(const double* A, int n, int bw, const double* x, double* y)
+{
+    if (bw < 0 || bw >= n - 1) {
+        for (int i = 0; i < n; ++i) {
+            const double* Ai = A + i * n;
+            double s0 = 0.0, s1 = 0.0;
+            int j = 0;
+            for (; j + 1 < n; j += 2) {  /* two chains: small n gets no vector code */
+                s0 += Ai[j] * x[j];
+                s1 += Ai[j + 1] * x[j + 1];
+            }
+            if (j < n) s0 += Ai[j] * x[j];
+            y[i] = s0 + s1;
+        }
+        return;
+    }
+    for (int i = 0; i < n; ++i) {
+        int j0 = i - bw > 0 ? i - bw : 0, j1 = min_int(i + bw, n - 1);
+        double s = 0.0;
+        for (int j = j0; j <= j1; ++j) s += A[i * n + j] * x[j];
+        y[i] = s;
     }
 }

@@ -2,7 +2,7 @@
 #ifndef FLEXSYM_RUNTIME_H
 #define FLEXSYM_RUNTIME_H
 
-typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2 } fsr_method;
+typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3 } fsr_method;
 
 typedef enum {
     FSR_OK = 0,
@@ -10,18 +10,25 @@ typedef enum {
     FSR_NEWTON_FAILED = 2,   /* implicit step did not converge */
     FSR_SINGULAR = 3,        /* mass or iteration matrix singular / not positive definite */
     FSR_BAD_OPTIONS = 4,
-    FSR_NO_MEMORY = 5
+    FSR_NO_MEMORY = 5,
+    FSR_UNSTABLE_STEP = 6,   /* fixed explicit step above the stability limit: refused */
+    FSR_STEP_FAILED = 7      /* adaptive step control gave up (too many steps, step underflow) */
 } fsr_status;
 
 typedef struct {
     fsr_method method;
     double t_end;            /* integrate on [0, t_end] */
-    double dt;               /* fixed step; the last step is shortened to end at t_end */
-    int out_every;           /* store every out_every-th step (and the last one) */
+    double dt;               /* fixed step (last one shortened to end at t_end); for dopri5 the
+                                output grid: rows at multiples of out_every * dt, and t_end */
+    int out_every;           /* store every out_every-th grid point (and the last one) */
     double rho_inf;          /* generalized-alpha spectral radius at infinity, in [0, 1] */
     double nm_gamma, nm_beta;/* Newmark parameters (method FSR_NEWMARK) */
     double newton_tol;       /* on |delta q|_inf, relative to the beam length */
     int newton_max;
+    int newton_full;         /* 1: new Jacobian and factorisation every iteration (reference);
+                                0: modified Newton, the iteration matrix is reused */
+    double tol;              /* dopri5: rtol = atol / L (see simulate.c); 0 = fixed steps dt */
+    long max_steps;          /* dopri5: accepted + rejected steps before giving up */
     double blowup;           /* diverged when any |q_i| or |v_tip| exceeds blowup * L */
     const double* p;         /* beam parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
@@ -31,9 +38,13 @@ typedef struct {
     fsr_status status;
     char message[512];
     double t_stop;           /* time of the last accepted step */
-    long steps;
+    long steps;              /* accepted steps */
+    long rejected_steps;     /* dopri5 */
+    double h_min, h_max;     /* smallest and largest accepted step */
     long newton_iterations;
+    long jacobian_evaluations; /* iteration matrices built (and factored) */
     long force_evaluations;
+    double omega_max;        /* explicit methods: stability estimate [rad/s], else 0 */
     int ncols;               /* 1 + ny + nq: t, outputs, coordinates */
     int nrows;
     double* rows;            /* nrows x ncols, row-major; owned, release with fsr_free */

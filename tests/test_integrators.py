@@ -1,0 +1,110 @@
+"""Integrators of the C runtime beyond the spin-up physics: dopri5 (order, error control,
+dense output on the output grid), refusal of unstable explicit steps, and modified Newton
+against full Newton."""
+import numpy as np
+import pytest
+
+from flexsym.cli import main
+
+SPIN = dict(params={"ws": 6, "ts": 15})
+
+
+@pytest.fixture(scope="module")
+def m3_reference(simulate):
+    """#3 with RK4 at dt = 0.02/128: error ~1e-15 m (RK4 is at 2e-8 m for dt = 0.01)."""
+    return simulate("m3", integrator="rk4", dt=0.02 / 128, out_every=64, t_end=20.0, **SPIN)
+
+
+def _error(r, ref):
+    """max |v_tip - v_tip(ref)| over the rows of r (all on the reference's grid)."""
+    idx = np.searchsorted(ref.t, r.t - 1e-9)
+    assert np.allclose(ref.t[idx], r.t, atol=1e-9, rtol=0)
+    return np.max(np.abs(r["v_tip"] - ref["v_tip"][idx]))
+
+
+def test_dopri5_fixed_steps_have_order_5(simulate, m3_reference):
+    errors = []
+    for dt in (0.01, 0.005, 0.0025):
+        r = simulate("m3", integrator="dopri5", tol=0, dt=dt, out_every=int(round(0.02 / dt)),
+                     t_end=20.0, **SPIN)
+        assert r.ok and r.summary["rejected_steps"] == 0 and r.summary["steps"] == round(20 / dt)
+        errors.append(_error(r, m3_reference))
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(rates - 5) < 0.3), (errors, rates)
+
+
+def test_dopri5_error_follows_tolerance_and_agrees_with_rk4(simulate, m3_reference):
+    """Adaptive steps: the error falls in proportion to tol; rows stay on the output grid
+    (dense output between steps); accepted and rejected steps are reported."""
+    errors = []
+    for tol in (1e-6, 1e-8):
+        r = simulate("m3", integrator="dopri5", tol=tol, dt=0.01, out_every=1, t_end=20.0, **SPIN)
+        assert r.ok, r.message
+        assert np.allclose(r.t, np.linspace(0, 20, 2001), atol=1e-12, rtol=0)
+        s = r.summary
+        assert s["accepted_steps"] == s["steps"] > 0 and s["rejected_steps"] >= 0
+        assert s["h_max"] > 0.01  # steps longer than the output interval: rows interpolated
+        errors.append(_error(r, m3_reference))
+    assert errors[1] < 1e-6  # agrees with RK4 (dt = 0.02/128)
+    decades = np.log10(errors[0] / errors[1]) / 2
+    assert 0.7 < decades < 1.3, errors
+
+
+def test_dopri5_gives_up_clearly(simulate, tmp_path):
+    out = tmp_path / "m1.csv"
+    r = simulate("m1", integrator="dopri5", tol=1e-6, dt=0.01, t_end=20.0, max_steps=200, out=out, **SPIN)
+    assert r.status == "failed"
+    assert "dopri5 gave up at t = " in r.message and "after 200 steps" in r.message
+    assert "omega_max = 836.7 rad/s" in r.message  # the axial mode limits the step
+    assert r.summary["accepted_steps"] + r.summary["rejected_steps"] == 200
+    rows = np.loadtxt(out, delimiter=",", skiprows=1, ndmin=2)
+    assert rows.shape[0] == r.data.shape[0] >= 1 and rows[-1, 0] <= r.summary["t_stop"] + 1e-12
+
+
+def test_rk4_above_the_stability_limit_is_refused(simulate):
+    r = simulate("m1", integrator="rk4", dt=5e-3, t_end=20.0, **SPIN)
+    assert r.status == "failed"
+    assert r.message == ("rk4 step 5 ms exceeds the stability limit 3.33 ms of this model "
+                         "(omega_max = 836.7 rad/s); use --dt <= 3.3e-3 or an implicit integrator")
+    assert r.summary["steps"] == 0
+    ok = simulate("m1", integrator="rk4", dt=3e-3, t_end=20.0, **SPIN)
+    assert ok.ok, ok.message
+    assert ok.summary["omega_max"] == pytest.approx(836.66, abs=0.01)
+    assert np.max(np.abs(ok["v_tip"])) < 1.0
+
+
+def test_stability_limit_includes_centrifugal_stiffening(simulate):
+    """#3: 68.7 rad/s at rest, 72.8 rad/s at 6 rad/s; dt = 0.04 s is stable only at rest."""
+    r = simulate("m3", integrator="rk4", dt=0.04, t_end=20.0, **SPIN)
+    assert r.status == "failed" and "omega_max = 72.8 rad/s" in r.message
+    slow = simulate("m3", integrator="rk4", dt=0.04, t_end=1.0, params={"ws": 0.0, "ts": 15})
+    assert slow.ok and slow.summary["omega_max"] == pytest.approx(68.73, abs=0.01)
+
+
+def test_cli_refuses_unstable_rk4_with_exit_code_3(capsys):
+    code = main(["run", "m1", "--integrator", "rk4", "--dt", "5e-3", "--t-end", "1"])
+    err = capsys.readouterr().err
+    assert code == 3
+    assert "rk4 step 5 ms exceeds the stability limit 3.33 ms" in err and "--dt <= 3.3e-3" in err
+
+
+def test_cli_runs_dopri5_with_tol(capsys, tmp_path):
+    out = tmp_path / "m3.csv"
+    code = main(["run", "m3", "--integrator", "dopri5", "--tol", "1e-7", "--dt", "0.05",
+                 "--t-end", "2", "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert np.allclose(data[:, 0], np.linspace(0, 2, 41))
+
+
+@pytest.mark.parametrize("name,dt,t_end", [("m1", 5e-3, 2.0), ("ef", 1e-3, 1.0)])
+def test_modified_newton_matches_full_newton(simulate, name, dt, t_end):
+    kw = dict(integrator="genalpha", dt=dt, t_end=t_end, out_every=1, **SPIN)
+    full = simulate(name, newton="full", **kw)
+    mod = simulate(name, newton="modified", **kw)
+    assert full.ok and mod.ok
+    # displacements and coordinates (m, or slopes); not the stress resultants (N, N m)
+    for c in [c for c in full.columns[1:] if not c.startswith(("N_", "M_"))]:
+        assert np.max(np.abs(mod[c] - full[c])) < 1e-9, c
+    # the point of it: far fewer iteration matrices
+    assert mod.summary["jacobian_evaluations"] < full.summary["jacobian_evaluations"] / 20
