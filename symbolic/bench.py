@@ -1,72 +1,59 @@
-"""CPU time against integration error, per variant and integrator (the spin-up, 20 s).
+"""`flexsym bench`: CPU time against error for every variant x integrator x step (or tol).
 
-    python -m flexsym.bench [--variants m3,m1,m2,prestress,ef] [--repeat 21] [--quick]
-
-The error is max |v_tip - v_tip_ref| over the output rows, v_tip_ref from a tiny step
-(RK4 at 1e-4 s for the modal variants; generalized-alpha at 5e-5 s for ef, whose
-discretisation error is then 1/400 of the one at 1e-3 s). CPU is the driver's median of
---repeat runs of the integration alone (rows included, CSV writing excluded).
+For each case, on the paper's 20 s spin-up (omega_s = 6 rad/s, T_s = 15 s):
+  cpu_s            median CPU time of the integration inside the C runtime over --repeat runs
+                   after a warm-up (min and max reported as the spread)
+  err_integration  max |v_tip - v_tip(same variant, tiny step)| over the run: the solver's error
+  err_reference    max |v_tip - v_tip(ef, 32 elements, dt = 5e-4 s)|: solver plus model error
+  err_N_A, err_M_A error of the peak |N_A|, |M_A| against the reference, where available
+and per variant the time to derive + generate its code and to compile it, from scratch.
+Writes bench.csv, bench.md and work_precision.png to --out.
 """
 from __future__ import annotations
 
-import argparse
-from dataclasses import dataclass
+import csv
+import math
+import tempfile
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
+from .build import build
+from .generate import generate_files, write_folder
 from .pipeline import prepare
 from .run import run_built
 from .spec import builtin
 
 SPIN = {"ws": 6.0, "ts": 15.0}
-REF_GRID = 0.001  # reference rows; every case's rows fall on it (steps: multiples of 1 ms)
+T_END = 20.0
+REF_GRID = 0.001  # rows of the references; every case's rows fall on it (steps: multiples of 1 ms)
+REF_ELEMENTS, REF_DT = 32, 5e-4
 
 
 @dataclass(frozen=True)
 class Case:
     integrator: str
-    dt: float                 # step (fixed-step) or output interval (dopri5)
+    dt: float  # step (fixed-step) or output interval (dopri5)
     tol: float | None = None  # dopri5
-    newton: str | None = None
+    newton: str | None = None  # "full": the unmodified Newton reference
 
 
-def _cases(rk4, dopri5, alpha, full=()):
+def _cases(rk4=(), dopri5=(), alpha=(), full=()):
     return ([Case("rk4", dt) for dt in rk4] + [Case("dopri5", 0.01, tol) for tol in dopri5]
             + [Case("genalpha", dt) for dt in alpha] + [Case("genalpha", dt, None, "full") for dt in full])
 
 
 CASES = {
     "m3": _cases((0.038, 0.03, 0.02, 0.01), (1e-4, 1e-6, 1e-8), (0.02, 0.015, 0.01, 0.005), (0.01,)),
-    "prestress": _cases((0.038, 0.02, 0.01), (1e-6,), (0.015, 0.01)),
+    "prestress": _cases((0.038, 0.02, 0.01), (1e-6,), (0.015, 0.01, 0.005)),
     "m1": _cases((0.003, 0.002), (1e-5, 1e-7), (0.02, 0.01, 0.008, 0.006, 0.004, 0.002), (0.008,)),
-    "m2": _cases((0.001,), (1e-6,), (0.02, 0.01, 0.008, 0.006, 0.004), (0.008,)),
-    "ef": _cases((), (), (0.005, 0.004, 0.002, 0.001, 0.0005), (0.001,)),
+    "m2": _cases((0.001,), (1e-6,), (0.02, 0.01, 0.008, 0.006, 0.004, 0.002), (0.008,)),
+    "ef": _cases(alpha=(0.005, 0.004, 0.002, 0.001, 0.0005), full=(0.001,)),
 }
-QUICK = {"m3": CASES["m3"][:1] + CASES["m3"][8:9], "m1": CASES["m1"][6:7], "ef": CASES["ef"][3:4]}
-
-
-def reference(built, name: str):
-    ref_dt, integ = (5e-5, "genalpha") if name == "ef" else (1e-4, "rk4")
-    return run_built(built, t_end=20.0, dt=ref_dt, integrator=integ, params=SPIN,
-                     out_every=int(round(REF_GRID / ref_dt)), raise_on_failure=True)
-
-
-def error(r, ref) -> float:
-    idx = np.searchsorted(ref.t, r.t - 1e-9)
-    if np.any(idx >= len(ref.t)) or not np.allclose(ref.t[idx], r.t, atol=1e-9, rtol=0):
-        raise ValueError("rows not on the reference grid")
-    return float(np.max(np.abs(r["v_tip"] - ref["v_tip"][idx])))
-
-
-def run_case(built, c: Case, ref, repeat: int) -> dict:
-    out_every = max(1, int(round(0.01 / c.dt)))
-    r = run_built(built, t_end=20.0, dt=c.dt, integrator=c.integrator, params=SPIN, tol=c.tol,
-                  newton=c.newton, out_every=out_every, repeat=repeat)
-    s = r.summary
-    return {"status": r.status if r.ok else r.message, "cpu_ms": s["cpu_median"] * 1e3,
-            "error": error(r, ref) if r.ok else float("nan"), "steps": s["accepted_steps"],
-            "rejected": s["rejected_steps"], "f": s["force_evaluations"],
-            "jac": s["jacobian_evaluations"], "rows": s["rows"]}
+QUICK = {"m3": _cases(rk4=(0.038,), alpha=(0.01,)), "m1": _cases(alpha=(0.008,)),
+         "ef": _cases(alpha=(0.004,))}
 
 
 def label(c: Case) -> str:
@@ -75,26 +62,165 @@ def label(c: Case) -> str:
     return f"{c.integrator}{' (full Newton)' if c.newton == 'full' else ''} dt={c.dt * 1e3:g} ms"
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m flexsym.bench", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--variants", default="m3,prestress,m1,m2,ef")
-    ap.add_argument("--repeat", type=int, default=21, help="runs per case (ef: at most 5)")
-    ap.add_argument("--quick", action="store_true", help="a few cases only")
-    args = ap.parse_args(argv)
-    print("| variant | integrator | CPU [ms] | error [m] | steps (rejected) | f evals | Jacobians | rows |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|")
-    for name in args.variants.split(","):
-        built = prepare(builtin(name))
-        ref = reference(built, name)
-        repeat = min(args.repeat, 5) if name == "ef" else args.repeat
-        for c in (QUICK if args.quick else CASES).get(name, []):
-            m = run_case(built, c, ref, repeat)
-            err = f"{m['error']:.2g}" if m["status"] == "ok" else m["status"]
-            print(f"| {name} | {label(c)} | {m['cpu_ms']:.3g} | {err} | {m['steps']} ({m['rejected']}) "
-                  f"| {m['f']} | {m['jac']} | {m['rows']} |", flush=True)
-    return 0
+def _on_grid(r, ref, col):
+    idx = np.searchsorted(ref.t, r.t - 1e-9)
+    if np.any(idx >= len(ref.t)) or not np.allclose(ref.t[idx], r.t, atol=1e-9, rtol=0):
+        raise ValueError("rows not on the reference grid")
+    return r[col] - ref[col][idx]
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+def integration_reference(built, spec):
+    """The same variant with a tiny step: RK4 at 1e-4 s, or generalized-alpha at 5e-5 s for ef."""
+    dt, integ = (5e-5, "genalpha") if spec.kind == "fe" else (1e-4, "rk4")
+    return run_built(built, t_end=T_END, dt=dt, integrator=integ, params=SPIN,
+                     out_every=round(REF_GRID / dt), raise_on_failure=True)
+
+
+def model_reference():
+    spec = replace(builtin("ef"), name=f"ef_n{REF_ELEMENTS}", elements=REF_ELEMENTS, aliases=())
+    return run_built(prepare(spec, log=lambda m: None), t_end=T_END, dt=REF_DT, params=SPIN,
+                     out_every=round(REF_GRID / REF_DT), raise_on_failure=True)
+
+
+def _peak_error(r, ref, col):
+    if col not in r.columns:
+        return math.nan
+    return float(np.max(np.abs(r[col])) - np.max(np.abs(ref[col])))
+
+
+def run_case(built, c: Case, iref, mref, repeat: int) -> dict:
+    r = run_built(built, t_end=T_END, dt=c.dt, integrator=c.integrator, params=SPIN, tol=c.tol,
+                  newton=c.newton, out_every=max(1, round(0.01 / c.dt)), repeat=repeat)
+    s = r.summary
+    ok = r.ok
+    return {
+        "integrator": c.integrator + ("_full_newton" if c.newton == "full" else ""),
+        "dt": c.dt, "tol": c.tol if c.tol is not None else "",
+        "cpu_s": s["cpu_median"], "cpu_min_s": s["cpu_min"], "cpu_max_s": s["cpu_max"],
+        "err_integration": float(np.max(np.abs(_on_grid(r, iref, "v_tip")))) if ok else math.nan,
+        "err_reference": float(np.max(np.abs(_on_grid(r, mref, "v_tip")))) if ok else math.nan,
+        "err_N_A": _peak_error(r, mref, "N_A") if ok else math.nan,
+        "err_M_A": _peak_error(r, mref, "M_A") if ok else math.nan,
+        "steps": s["accepted_steps"], "rejected": s["rejected_steps"],
+        "force_evaluations": s["force_evaluations"], "jacobians": s["jacobian_evaluations"],
+        "status": "ok" if ok else r.message,
+    }
+
+
+def build_times(spec) -> tuple[float, float]:
+    """Seconds to derive and generate the code, and to compile it, from an empty cache."""
+    with tempfile.TemporaryDirectory(prefix="flexsym-bench-") as tmp:
+        t0 = time.perf_counter()
+        folder = Path(tmp) / spec.name
+        write_folder(generate_files(spec), folder)
+        t1 = time.perf_counter()
+        build(folder, root=Path(tmp) / "build")
+        return t1 - t0, time.perf_counter() - t1
+
+
+def run_bench(out: Path, variants=None, quick=False, repeat=None, log=print) -> list[dict]:
+    out.mkdir(parents=True, exist_ok=True)
+    table = QUICK if quick else CASES
+    variants = variants or list(table)
+    repeat = repeat or (3 if quick else 21)
+    log(f"model reference: ef, {REF_ELEMENTS} elements, dt = {REF_DT:g} s ...")
+    mref = model_reference()
+    rows, times = [], {}
+    for name in variants:
+        spec = builtin(name)
+        times[spec.name] = build_times(spec)
+        log(f"{spec.name}: generation {times[spec.name][0]:.2f} s, compilation {times[spec.name][1]:.2f} s")
+        built = prepare(spec, log=lambda m: None)
+        iref = integration_reference(built, spec)
+        reps = min(repeat, 5) if spec.kind == "fe" else repeat
+        for c in table.get(name, []):
+            row = {"variant": spec.name} | run_case(built, c, iref, mref, reps)
+            rows.append(row)
+            log(f"  {label(c):30s} {row['cpu_s'] * 1e3:9.3f} ms  integration {row['err_integration']:.2e} m"
+                f"  reference {row['err_reference']:.2e} m  {'' if row['status'] == 'ok' else row['status']}")
+    _write_csv(rows, out / "bench.csv")
+    (out / "bench.md").write_text(markdown(rows, times), encoding="utf-8")
+    plot(rows, out / "work_precision.png")
+    log(f"wrote {out / 'bench.csv'}, {out / 'bench.md'}, {out / 'work_precision.png'}")
+    return rows
+
+
+FIELDS = ["variant", "integrator", "dt", "tol", "cpu_s", "cpu_min_s", "cpu_max_s", "err_integration",
+          "err_reference", "err_N_A", "err_M_A", "steps", "rejected", "force_evaluations", "jacobians",
+          "status"]
+
+
+def _write_csv(rows, path: Path) -> None:
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=FIELDS)
+        w.writeheader()
+        w.writerows(rows)
+
+
+def _num(x, fmt):
+    return "-" if isinstance(x, float) and math.isnan(x) else format(x, fmt)
+
+
+def markdown(rows, times) -> str:
+    lines = ["| variant | integrator | step / tol | CPU median [ms] (min-max) | integration error [m] "
+             "| error vs ef [m] | peak N_A error [N] | peak M_A error [N m] |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        step = f"tol {r['tol']:g}" if r["tol"] != "" else f"{r['dt'] * 1e3:g} ms"
+        lines.append(f"| {r['variant']} | {r['integrator']} | {step} | {r['cpu_s'] * 1e3:.3f} "
+                     f"({r['cpu_min_s'] * 1e3:.3f}-{r['cpu_max_s'] * 1e3:.3f}) | "
+                     f"{_num(r['err_integration'], '.1e')} | {_num(r['err_reference'], '.1e')} | "
+                     f"{_num(r['err_N_A'], '+.1f')} | {_num(r['err_M_A'], '+.1f')} |")
+    lines += ["", "| variant | derive + generate [s] | compile [s] |", "|---|---|---|"]
+    lines += [f"| {n} | {g:.2f} | {c:.2f} |" for n, (g, c) in times.items()]
+    return "\n".join(lines) + "\n"
+
+
+MARKERS = {"rk4": ("o", "-"), "dopri5": ("s", ":"), "genalpha": ("^", "-"),
+           "genalpha_full_newton": ("x", "--")}
+
+
+def plot(rows, path: Path) -> None:
+    """Log-log CPU time against error: colour = variant, marker and line = integrator."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
+    colour = {v: plt.get_cmap("tab10")(i) for i, v in enumerate(variants)}
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5), sharey=True)
+    curves: dict[tuple, list] = {}
+    for r in rows:
+        if r["status"] == "ok":
+            curves.setdefault((r["variant"], r["integrator"]), []).append(r)
+    for ax, key, title in ((axes[0], "err_integration", "integration error (vs tiny step)"),
+                           (axes[1], "err_reference", "total error (vs ef, 32 elements)")):
+        for (variant, integ), pts in curves.items():
+            pts = sorted(pts, key=lambda p: p["cpu_s"])
+            marker, line = MARKERS.get(integ, ("o", "-"))
+            ax.loglog([max(p[key], 1e-13) for p in pts], [p["cpu_s"] for p in pts], marker=marker,
+                      ls=line, color=colour[variant], ms=5)
+        ax.set_xlabel(f"max |v_tip error| [m]: {title}")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("CPU time of the 20 s spin-up [s]")
+    handles = [Line2D([], [], color=colour[v], lw=3, label=v) for v in variants]
+    handles += [Line2D([], [], color="k", marker=m, ls=ls, label=i) for i, (m, ls) in MARKERS.items()
+                if any(k[1] == i for k in curves)]
+    axes[1].legend(handles=handles, fontsize=8, loc="lower left")
+    fig.suptitle("flexsym work-precision: spin-up beam, omega_s = 6 rad/s, T_s = 15 s, 20 s")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def load_csv(path: Path) -> list[dict]:
+    """bench.csv back as rows with numbers (to redraw the figure)."""
+    rows = []
+    for r in csv.DictReader(open(path, encoding="utf-8")):
+        for k in ("dt", "cpu_s", "cpu_min_s", "cpu_max_s", "err_integration", "err_reference",
+                  "err_N_A", "err_M_A"):
+            r[k] = float(r[k])
+        rows.append(r)
+    return rows

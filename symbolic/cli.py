@@ -221,6 +221,18 @@ def cmd_select(args) -> int:
     return 0
 
 
+def cmd_bench(args) -> int:
+    from .bench import QUICK, CASES, run_bench
+
+    variants = [v.strip() for v in args.variants.split(",")] if args.variants else None
+    known = QUICK if args.quick else CASES
+    for v in variants or []:
+        if v not in known:
+            raise SpecError(f"no benchmark cases for variant '{v}' (have: {', '.join(known)})")
+    run_bench(Path(args.out), variants=variants, quick=args.quick, repeat=args.repeat)
+    return 0
+
+
 def cmd_variants(args) -> int:
     from .energy import STRAIN_MODELS
     from .modes import FAMILIES
@@ -275,6 +287,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variants", default="m0,m1,m2,m3")
     p.add_argument("--out", default="results", help="output folder (default: results)")
     p.set_defaults(func=cmd_spinup)
+
+    p = sub.add_parser("bench", help="CPU time against error: variants x integrators x steps")
+    p.add_argument("--quick", action="store_true", help="a few cases (under a minute)")
+    p.add_argument("--out", default="bench", help="output folder (default: bench)")
+    p.add_argument("--variants", help="comma-separated subset (default: all with cases)")
+    p.add_argument("--repeat", type=int, help="runs per case after a warm-up (default 21; quick 3)")
+    p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("select", help="cheapest model whose error on a scene stays under a tolerance")
     p.add_argument("scene", help="scene file (.toml)")

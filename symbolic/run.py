@@ -83,7 +83,7 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
               repeat: int = 1, rho_inf: float | None = None, newmark: tuple | None = None,
               blowup: float | None = None, newton_tol: float | None = None,
               tol: float | None = None, max_steps: int | None = None, newton: str | None = None,
-              raise_on_failure: bool = False) -> RunResult:
+              energy: bool = False, raise_on_failure: bool = False) -> RunResult:
     """Integrate with the built driver. dt is the step of the fixed-step integrators; for
     dopri5 (steps adapted to tol, default 1e-6; tol=0: fixed steps dt) it sets the output grid.
     Rows are written every out_every * dt (default: about every 0.01 s) and at t_end.
@@ -109,6 +109,8 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
         cmd += ["--max-steps", str(int(max_steps))]
     if newton is not None:
         cmd += ["--newton", newton]
+    if energy:
+        cmd += ["--energy"]
 
     with tempfile.TemporaryDirectory(prefix="flexsym-run-") as tmp:
         csv = Path(out) if out is not None else Path(tmp) / "out.csv"

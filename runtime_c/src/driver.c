@@ -4,10 +4,11 @@
  *                     [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
  *                     [--newmark-beta B] [--newton modified|full] [--newton-tol TOL]
  *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
- *                     [--repeat N] [--blowup F] [--info]
+ *                     [--repeat N] [--blowup F] [--energy] [--info]
  *
  * dopri5 adapts its step to --tol (0: fixed steps --dt); its rows are at the output grid,
- * multiples of out_every * dt, from its dense output.
+ * multiples of out_every * dt, from its dense output. --energy appends columns T, V, h
+ * (kinetic and potential energy, Jacobi integral) to every row.
  *
  * stdout: one JSON line (status, steps, CPU time of the integration alone).
  * stderr: one line naming what went wrong. Exit: 0 ok, 2 usage, 3 simulation stopped, 4 I/O.
@@ -133,6 +134,7 @@ static int write_csv(const char* path, const fsm_model_info* m, const fsr_result
     fputs("t", f);
     for (int i = 0; i < m->ny; ++i) fprintf(f, ",%s", m->output_names[i]);
     for (int i = 0; i < m->nq; ++i) fprintf(f, ",%s", m->coord_names[i]);
+    if (r->ncols > 1 + m->ny + m->nq) fputs(",T,V,h", f);
     fputc('\n', f);
     for (int k = 0; k < r->nrows; ++k) {
         const double* row = r->rows + (size_t)k * (size_t)r->ncols;
@@ -173,6 +175,7 @@ int main(int argc, char** argv)
         const char* a = argv[i];
         const char* val = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--info")) { print_info(m); return 0; }
+        if (!strcmp(a, "--energy")) { o.energy = 1; continue; }
         if (!val) return usage("missing value after", a);
         ++i;
         if (!strcmp(a, "--t-end")) { if (!parse_double(val, &o.t_end)) return usage("bad --t-end", val); }

@@ -242,6 +242,7 @@ static fsr_status store(sim* s, double t, const double* q, const double* v, cons
     fsm_outputs(q, v, qdd, drive, s->o->p, s->y);
     memcpy(row + 1, s->y, sizeof(double) * (size_t)s->m->ny);
     memcpy(row + 1 + s->m->ny, q, sizeof(double) * (size_t)s->n);
+    if (s->o->energy) fsm_energy(q, v, drive, s->o->p, row + 1 + s->m->ny + s->n);
     r->nrows++;
     return FSR_OK;
 }
@@ -701,7 +702,7 @@ fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
     s.o = o;
     s.r = r;
     s.n = m->nq;
-    r->ncols = 1 + m->ny + m->nq;
+    r->ncols = 1 + m->ny + m->nq + (o->energy ? 3 : 0);
     fsr_status st = check_options(&s);
     if (st) return st;
     int n = s.n;

@@ -30,6 +30,7 @@ typedef struct {
     double tol;              /* dopri5: rtol = atol / L (see simulate.c); 0 = fixed steps dt */
     long max_steps;          /* dopri5: accepted + rejected steps before giving up */
     double blowup;           /* diverged when any |q_i| or |v_tip| exceeds blowup * L */
+    int energy;              /* 1: rows end with T, V and the Jacobi integral h (fsm_energy) */
     const double* p;         /* beam parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
 } fsr_options;

@@ -1,0 +1,25 @@
+"""`flexsym bench --quick`: the table, CSV and figure exist and carry consistent numbers."""
+import csv
+
+import numpy as np
+
+from flexsym.cli import main
+
+
+def test_bench_quick(tmp_path, capsys):
+    assert main(["bench", "--quick", "--variants", "m3", "--repeat", "2", "--out", str(tmp_path)]) == 0
+    rows = list(csv.DictReader(open(tmp_path / "bench.csv")))
+    assert {"variant", "integrator", "dt", "cpu_s", "err_integration", "err_reference"} <= set(rows[0])
+    assert [r["integrator"] for r in rows] == ["rk4", "genalpha"]
+    for r in rows:
+        assert r["status"] == "ok" and float(r["cpu_s"]) > 0
+        # Against ef the error is the model's (#3 truncates at second order: ~2 mm), far above
+        # the integration error of these steps.
+        assert float(r["err_integration"]) < 1e-4 < float(r["err_reference"]) < 5e-3
+        assert np.isnan(float(r["err_N_A"]))  # #3 has no axial force
+        assert abs(float(r["err_M_A"])) < 15.0
+    rk4, ga = rows
+    assert float(rk4["err_integration"]) < float(ga["err_integration"])  # 4th order at 38 ms
+    md = (tmp_path / "bench.md").read_text()
+    assert "| foreshortening | rk4 | 38 ms |" in md and "derive + generate [s]" in md
+    assert (tmp_path / "work_precision.png").stat().st_size > 10000
