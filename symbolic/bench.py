@@ -214,13 +214,3 @@ def plot(rows, path: Path) -> None:
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
-
-def load_csv(path: Path) -> list[dict]:
-    """bench.csv back as rows with numbers (to redraw the figure)."""
-    rows = []
-    for r in csv.DictReader(open(path, encoding="utf-8")):
-        for k in ("dt", "cpu_s", "cpu_min_s", "cpu_max_s", "err_integration", "err_reference",
-                  "err_N_A", "err_M_A"):
-            r[k] = float(r[k])
-        rows.append(r)
-    return rows

@@ -136,7 +136,7 @@ def cmd_run(args) -> int:
     check_options(**{k: v for k, v in settings.items() if k != "out_every"}, spec=spec)
     built = prepare(spec)
     res = run_built(built, **settings, out=out)
-    s = Summary(spec, res, 0.0)
+    s = Summary(spec, res)
     ts = settings["params"].get("ts", settings["t_end"])
     print(describe(res, spec.outputs) if scene is not None or "v_tip" not in res.columns else
           table([s], ts, settings["t_end"]))

@@ -17,28 +17,17 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .integrals import IntegralTable
+from .maneuver import Param
 from .modes import Mode, s
 
 
-@dataclass(frozen=True)
-class BeamParam:
-    name: str
-    default: float
-    unit: str
-    description: str
-
-    @property
-    def symbol(self) -> sp.Symbol:
-        return sp.Symbol(self.name, positive=True)
-
-
 # Order fixes the layout of the parameter vector p in every generated kernel.
-BEAM_PARAMS: tuple[BeamParam, ...] = (
-    BeamParam("rho", 3000.0, "kg/m^3", "density"),
-    BeamParam("E", 7.0e10, "N/m^2", "Young's modulus"),
-    BeamParam("A", 4.0e-4, "m^2", "cross-section area"),
-    BeamParam("I", 2.0e-7, "m^4", "second moment of area"),
-    BeamParam("L", 10.0, "m", "length"),
+BEAM_PARAMS: tuple[Param, ...] = (
+    Param("rho", 3000.0, "kg/m^3", "density"),
+    Param("E", 7.0e10, "N/m^2", "Young's modulus"),
+    Param("A", 4.0e-4, "m^2", "cross-section area"),
+    Param("I", 2.0e-7, "m^4", "second moment of area"),
+    Param("L", 10.0, "m", "length"),
 )
 rho, E, A, I, L = (p.symbol for p in BEAM_PARAMS)
 w, alpha = sp.symbols("w alpha", real=True)  # theta' and theta'' (known inputs)
@@ -107,8 +96,6 @@ ENERGY_TERMS: dict[str, EnergyTerm] = {t.name: t for t in (
     EnergyTerm("prestress", "1/2 int N(x) (v_x)^2 dx, N = rho A w^2 (L^2 - x^2)/2",
                lambda f: rho * A * w**2 * L / 4 * (1 - s**2) * f.v_s**2),
 )}
-
-GROUPS = ("axial", "bending")
 
 
 @dataclass(frozen=True)

@@ -17,13 +17,12 @@ differentiates V^e (AD) and emits element kernels; generated C assembles them.
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 
 import casadi as ca
 import sympy as sp
 
-from .energy import BEAM_PARAMS, A, E, I, alpha, rho, w
+from .energy import A, E, I, alpha, rho, w
 from .errors import SpecError
 from .integrals import gauss_legendre
 from .maneuver import Maneuver, maneuver_of

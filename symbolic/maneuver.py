@@ -18,7 +18,10 @@ t = sp.Symbol("t", real=True)
 
 
 @dataclass(frozen=True)
-class ManeuverParam:
+class Param:
+    """A run-time parameter of the generated code (beam or manoeuvre): its value is an input
+    of the kernels, so changing it needs no regeneration."""
+
     name: str
     default: float
     unit: str
@@ -32,7 +35,7 @@ class ManeuverParam:
 @dataclass(frozen=True)
 class Maneuver:
     name: str
-    params: tuple[ManeuverParam, ...]
+    params: tuple[Param, ...]
     theta: sp.Expr
     description: str
 
@@ -51,8 +54,8 @@ class Maneuver:
 
 
 def _spin_up() -> Maneuver:
-    ws = ManeuverParam("ws", 6.0, "rad/s", "final spin rate omega_s")
-    ts = ManeuverParam("ts", 15.0, "s", "spin-up duration T_s")
+    ws = Param("ws", 6.0, "rad/s", "final spin rate omega_s")
+    ts = Param("ts", 15.0, "s", "spin-up duration T_s")
     w, T = ws.symbol, ts.symbol
     ramp = (w / T) * (t**2 / 2 + (T / (2 * sp.pi))**2 * (sp.cos(2 * sp.pi * t / T) - 1))
     theta = sp.Piecewise((ramp, t <= T), (w * (t - T / 2), True))
@@ -61,7 +64,7 @@ def _spin_up() -> Maneuver:
 
 
 def _constant() -> Maneuver:
-    om = ManeuverParam("ws", 6.0, "rad/s", "constant spin rate")
+    om = Param("ws", 6.0, "rad/s", "constant spin rate")
     return Maneuver("constant", (om,), om.symbol * t, "constant spin rate from t = 0")
 
 

@@ -1,7 +1,6 @@
 """The main job: the paper's spin-up beam for variants #0-#3, a summary table and a plot."""
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,7 +15,6 @@ from .spec import VariantSpec
 class Summary:
     spec: VariantSpec
     result: RunResult
-    prepare_s: float  # generation check + build (cached builds cost almost nothing)
 
     def value_at(self, t: float) -> float | None:
         r = self.result
@@ -35,13 +33,11 @@ def run_variants(specs: list[VariantSpec], *, ws: float, ts: float, t_end: float
                  integrator: str, out_dir: Path | None, log=print) -> list[Summary]:
     out = []
     for spec in specs:
-        t0 = time.perf_counter()
         built = prepare(spec)
-        t1 = time.perf_counter()
         csv = out_dir / f"{spec.name}.csv" if out_dir else None
         res = run_built(built, t_end=t_end, dt=dt, integrator=integrator,
                         params={"ws": ws, "ts": ts}, out=csv)
-        out.append(Summary(spec, res, t1 - t0))
+        out.append(Summary(spec, res))
         log(f"  {spec.name}: {res.status} ({res.summary['cpu_median'] * 1e3:.1f} ms CPU)")
     return out
 

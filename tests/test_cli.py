@@ -1,6 +1,4 @@
 """The command line: inspect, custom mode sets, and clear errors for bad input."""
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest

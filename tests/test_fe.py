@@ -3,7 +3,6 @@ mesh and step, and the modal variants against it at a moderate spin rate."""
 from dataclasses import replace
 
 import numpy as np
-import pytest
 import scipy.linalg as sl
 import sympy as sp
 

@@ -3,7 +3,6 @@ agreement and order."""
 import numpy as np
 import pytest
 
-from conftest import BUILTIN_NAMES
 
 
 def test_linear_variant_diverges_at_6_rad_s_and_says_when(simulate, tmp_path):
