@@ -40,17 +40,24 @@ class Case:
     newton: str | None = None  # "full": the unmodified Newton reference
 
 
-def _cases(rk4=(), dopri5=(), alpha=(), full=()):
+def _cases(rk4=(), dopri5=(), alpha=(), full=(), radau=(), radau_full=()):
     return ([Case("rk4", dt) for dt in rk4] + [Case("dopri5", 0.01, tol) for tol in dopri5]
-            + [Case("genalpha", dt) for dt in alpha] + [Case("genalpha", dt, None, "full") for dt in full])
+            + [Case("genalpha", dt) for dt in alpha] + [Case("genalpha", dt, None, "full") for dt in full]
+            + [Case("radau5", dt) for dt in radau] + [Case("radau5", dt, None, "full") for dt in radau_full])
 
 
+# radau5 steps are multiples of the reference grid too; 0.3 s does not divide 20 s (last step
+# 0.2 s). Its rows fall only on its steps: the error is the largest over them.
 CASES = {
-    "m3": _cases((0.038, 0.03, 0.02, 0.01), (1e-4, 1e-6, 1e-8), (0.02, 0.015, 0.01, 0.005), (0.01,)),
-    "prestress": _cases((0.038, 0.02, 0.01), (1e-6,), (0.015, 0.01, 0.005)),
-    "m1": _cases((0.003, 0.002), (1e-5, 1e-7), (0.02, 0.01, 0.008, 0.006, 0.004, 0.002), (0.008,)),
-    "m2": _cases((0.001,), (1e-6,), (0.02, 0.01, 0.008, 0.006, 0.004, 0.002), (0.008,)),
-    "ef": _cases(alpha=(0.005, 0.004, 0.002, 0.001, 0.0005), full=(0.001,)),
+    "m3": _cases((0.038, 0.03, 0.02, 0.01), (1e-4, 1e-6, 1e-8), (0.02, 0.015, 0.01, 0.005), (0.01,),
+                 (0.3, 0.25, 0.2, 0.1, 0.05), (0.25,)),
+    "prestress": _cases((0.038, 0.02, 0.01), (1e-6,), (0.015, 0.01, 0.005), radau=(0.3, 0.25, 0.2, 0.1)),
+    "m1": _cases((0.003, 0.002), (1e-5, 1e-7), (0.02, 0.01, 0.008, 0.006, 0.004, 0.002), (0.008,),
+                 (0.25, 0.2, 0.1, 0.05), (0.2,)),
+    "m2": _cases((0.001,), (1e-6,), (0.02, 0.01, 0.008, 0.006, 0.004, 0.002), (0.008,),
+                 (0.25, 0.2, 0.1, 0.05), (0.2,)),
+    "ef": _cases(alpha=(0.005, 0.004, 0.002, 0.001, 0.0005), full=(0.001,),
+                 radau=(0.2, 0.1, 0.05, 0.02), radau_full=(0.1,)),
 }
 QUICK = {"m3": _cases(rk4=(0.038,), alpha=(0.01,)), "m1": _cases(alpha=(0.008,)),
          "ef": _cases(alpha=(0.004,))}
@@ -177,7 +184,7 @@ def markdown(rows, times) -> str:
 
 
 MARKERS = {"rk4": ("o", "-"), "dopri5": ("s", ":"), "genalpha": ("^", "-"),
-           "genalpha_full_newton": ("x", "--")}
+           "genalpha_full_newton": ("x", "--"), "radau5": ("D", "-."), "radau5_full_newton": ("+", "--")}
 
 
 def plot(rows, path: Path) -> None:

@@ -68,7 +68,8 @@ def _run_args(p: argparse.ArgumentParser, defaults: bool = True) -> None:
     p.add_argument("--dt", type=float, default=d["dt"],
                    help="time step [s] (default 1e-3); for dopri5 the output interval")
     p.add_argument("--integrator", choices=INTEGRATORS, default=d["integrator"],
-                   help="rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark")
+                   help="rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark, "
+                        "radau5 (implicit, order 5, large steps)")
 
 
 def cmd_generate(args) -> int:

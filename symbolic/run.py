@@ -12,7 +12,7 @@ import numpy as np
 from .build import Built
 from .errors import FlexsymError, SimulationError, SpecError
 
-INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark")
+INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5")
 NEWTON = ("modified", "full")
 
 
@@ -84,8 +84,9 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
               blowup: float | None = None, newton_tol: float | None = None,
               tol: float | None = None, max_steps: int | None = None, newton: str | None = None,
               energy: bool = False, raise_on_failure: bool = False) -> RunResult:
-    """Integrate with the built driver. dt is the step of the fixed-step integrators; for
-    dopri5 (steps adapted to tol, default 1e-6; tol=0: fixed steps dt) it sets the output grid.
+    """Integrate with the built driver. dt is the step of the fixed-step integrators (rk4,
+    genalpha, newmark, radau5); for dopri5 (steps adapted to tol, default 1e-6; tol=0: fixed
+    steps dt) it sets the output grid.
     Rows are written every out_every * dt (default: about every 0.01 s) and at t_end.
     newton: 'modified' (default, reuses the iteration matrix) or 'full'."""
     check_options(t_end=t_end, dt=dt, integrator=integrator, params=params or {}, tol=tol, newton=newton)

@@ -1,6 +1,6 @@
 /* Command-line driver: integrate a generated model, write CSV, report a JSON summary.
  *
- *   flexsym_<variant> [--t-end T] [--dt H] [--integrator rk4|dopri5|genalpha|newmark]
+ *   flexsym_<variant> [--t-end T] [--dt H] [--integrator rk4|dopri5|genalpha|newmark|radau5]
  *                     [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
  *                     [--newmark-beta B] [--newton modified|full] [--newton-tol TOL]
  *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
@@ -204,7 +204,8 @@ int main(int argc, char** argv)
             else if (!strcmp(val, "genalpha")) o.method = FSR_GENALPHA;
             else if (!strcmp(val, "newmark")) o.method = FSR_NEWMARK;
             else if (!strcmp(val, "dopri5")) o.method = FSR_DOPRI5;
-            else return usage("unknown --integrator (rk4, dopri5, genalpha, newmark)", val);
+            else if (!strcmp(val, "radau5")) o.method = FSR_RADAU5;
+            else return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5)", val);
         } else if (!strcmp(a, "--param")) {
             if (!set_param(m, p, mp, val)) return usage("bad --param (NAME=VALUE with a known name)", val);
         } else return usage("unknown option", a);

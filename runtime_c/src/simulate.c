@@ -1,5 +1,6 @@
 /* Time integration of a generated model: explicit RK4 and Dormand-Prince 5(4) (one Butcher
- * tableau engine), implicit generalized-alpha and Newmark (modified Newton).
+ * tableau engine), implicit generalized-alpha and Newmark, and the 3-stage Radau IIA method
+ * (order 5), both by modified Newton on one iteration-matrix builder.
  *
  * The state is y = [q, q'] (contiguous); y' = [q', q''] with M(q) q'' = f.
  * Workspace is allocated once before the step loop; the loop itself never allocates.
@@ -73,16 +74,19 @@ typedef struct {
     const fsr_options* o;
     fsr_result* r;
     int n;
-    int bw;        /* half-bandwidth used by the implicit solver, -1 = dense */
+    int bw;        /* half-bandwidth of the model's matrices used by the solvers, -1 = dense */
+    int nst;       /* stages coupled in the Newton system: 1, or 3 for radau5 */
+    int N;         /* its size, nst n (unknowns interleaved: coordinate r, stage i at r nst + i) */
+    int kb;        /* its half-bandwidth, nst (bw + 1) - 1, or -1 = dense */
     double L;
     long nsteps;   /* grid points t_k = k dt, t_nsteps = t_end */
     long next_row; /* grid index of the next output row; nsteps + 1 when all are written */
     double* Mraw;  /* mass matrix as evaluated */
     double* Mfac;  /* its Cholesky factor */
     double* Minv;  /* its inverse, when constant and dense */
-    double* S;     /* Newton iteration matrix, LU-factored */
+    double* S;     /* Newton iteration matrix (N x N), LU-factored */
     double* Sinv;  /* its inverse, when dense */
-    double* tmp;   /* n */
+    double* tmp;   /* N */
     double* Jq;
     double* Jv;
     double* y;     /* outputs */
@@ -120,6 +124,7 @@ const char* fsr_method_name(fsr_method m)
     case FSR_GENALPHA: return "genalpha";
     case FSR_NEWMARK: return "newmark";
     case FSR_DOPRI5: return "dopri5";
+    case FSR_RADAU5: return "radau5";
     }
     return "?";
 }
@@ -180,11 +185,11 @@ static fsr_status mass_at(sim* s, double t, const double* q, int factor)
     return FSR_OK;
 }
 
-/* x = A^-1 x by the explicit inverse of a dense A. */
-static void apply_inverse(sim* s, const double* Ainv, double* x)
+/* x = A^-1 x by the explicit inverse of a dense A of size dim. */
+static void apply_inverse(sim* s, const double* Ainv, int dim, double* x)
 {
-    fsr_matvec(Ainv, s->n, -1, x, s->tmp);
-    memcpy(x, s->tmp, sizeof(double) * (size_t)s->n);
+    fsr_matvec(Ainv, dim, -1, x, s->tmp);
+    memcpy(x, s->tmp, sizeof(double) * (size_t)dim);
 }
 
 static fsr_status accel(sim* s, double t, const double* q, const double* v, double* a)
@@ -195,7 +200,7 @@ static fsr_status accel(sim* s, double t, const double* q, const double* v, doub
     drive_at(s, t, drive);
     fsm_force(q, v, drive, s->o->p, a);
     s->r->force_evaluations++;
-    if (s->m->mass_constant && s->bw < 0) apply_inverse(s, s->Minv, a);
+    if (s->m->mass_constant && s->bw < 0) apply_inverse(s, s->Minv, s->n, a);
     else fsr_chol_solve(s->Mfac, s->n, a);
     return FSR_OK;
 }
@@ -497,34 +502,47 @@ static fsr_status check_fixed_step(sim* s, const erk_tableau* T)
                 limit * 1e3, om, mant, e);
 }
 
-/* ------------------------------------------------------------ generalized-alpha, Newmark */
+/* ------------------------------------------- implicit methods: the Newton iteration matrix */
 
-/* S = M + cb dr/dq + cg dr/dq' at (q, v, a), LU-factored (banded when the model is). */
-static fsr_status iteration_matrix(sim* s, double t, const double* q, const double* v, const double* a,
-                                   const double* drive, double cb, double cg)
+/* Rows r nst + i (r < n) of the Newton iteration matrix of a method with nst coupled stages:
+ * block (i, j) = [i == j] M + cq[j] dr/dq + cv[j] dr/dq' from Mraw, Jq, Jv (generalized-alpha:
+ * one stage, S = M + cb dr/dq + cg dr/dq'). The unknowns are interleaved by coordinate, so a
+ * banded model gives a banded matrix (half-bandwidth kb = nst (bw + 1) - 1); the band LU fills
+ * in up to 2 kb above the diagonal, and those entries are written too (zeros: the model's
+ * matrices vanish outside their band). */
+static void newton_rows(sim* s, int i, const double* cq, const double* cv)
 {
-    int n = s->n, bw = s->bw;
-    fsm_residual_jac(q, v, a, drive, s->o->p, s->Jq, s->Jv);
-    s->r->jacobian_evaluations++;
-    for (int i = 0; i < n; ++i) {
-        /* the band LU fills in up to 2 bw above the diagonal: those entries start as zeros */
-        int j0 = bw < 0 || i < bw ? 0 : i - bw, j1 = bw < 0 || i + 2 * bw >= n ? n - 1 : i + 2 * bw;
-        for (int j = j0; j <= j1; ++j) {
-            size_t ij = (size_t)i * (size_t)n + (size_t)j;
-            s->S[ij] = s->Mraw[ij] + cb * s->Jq[ij] + cg * s->Jv[ij];
+    int n = s->n, N = s->N, nst = s->nst, kb = s->kb;
+    for (int r = 0; r < n; ++r) {
+        int R = r * nst + i;
+        int C0 = kb < 0 || R < kb ? 0 : R - kb, C1 = kb < 0 || R + 2 * kb >= N ? N - 1 : R + 2 * kb;
+        double* row = s->S + (size_t)R * (size_t)N;
+        for (int C = C0, c = C0 / nst, j = C0 - c * nst; C <= C1; ++C) {  /* C = c nst + j */
+            size_t rc = (size_t)r * (size_t)n + (size_t)c;
+            row[C] = (i == j ? s->Mraw[rc] : 0.0) + cq[j] * s->Jq[rc] + cv[j] * s->Jv[rc];
+            if (++j == nst) j = 0, ++c;
         }
     }
-    int bad = bw >= 0 ? fsr_band_lu_factor(s->S, n, bw, bw, s->piv) : fsr_lu_factor(s->S, n, s->piv);
+}
+
+/* LU-factor the iteration matrix, banded when the model is; a dense one also gets its inverse
+ * (the solves are then matrix-vector products, which have no dependency chain: radau5 on #3 at
+ * 0.25 s takes 0.127 ms with it, 0.153 ms with LU solves). */
+static fsr_status newton_factor(sim* s, double t)
+{
+    int N = s->N, kb = s->kb;
+    s->r->jacobian_evaluations++;
+    int bad = kb >= 0 ? fsr_band_lu_factor(s->S, N, kb, kb, s->piv) : fsr_lu_factor(s->S, N, s->piv);
     if (bad) return fail(s, FSR_SINGULAR, "Newton matrix singular at t = %.6g s", t);
-    if (bw < 0) fsr_lu_inverse(s->S, n, s->piv, s->Sinv, s->tmp);
+    if (kb < 0) fsr_lu_inverse(s->S, N, s->piv, s->Sinv, s->tmp);
     return FSR_OK;
 }
 
 /* x = S^-1 x */
 static void newton_solve(sim* s, double* x)
 {
-    if (s->bw >= 0) fsr_band_lu_solve(s->S, s->n, s->bw, s->bw, s->piv, x);
-    else apply_inverse(s, s->Sinv, x);
+    if (s->kb >= 0) fsr_band_lu_solve(s->S, s->N, s->kb, s->kb, s->piv, x);
+    else apply_inverse(s, s->Sinv, s->N, x);
 }
 
 /* Modified Newton: the factored iteration matrix is kept across iterations and steps. */
@@ -535,13 +553,40 @@ typedef struct {
 } newton_state;
 
 /* Converged when the update is below tol, or (modified Newton) when the error it leaves,
- * theta / (1 - theta) |dq| for a contraction theta measured in the last NEWTON_THETA_AGE
- * steps, is (Hairer & Wanner II, IV.8): usually after one iteration instead of two. */
+ * theta / (1 - theta) |dq| for a contraction theta measured in the last NEWTON_THETA_AGE steps,
+ * is (Hairer & Wanner II, IV.8): usually after one iteration instead of two. */
 static int newton_converged(const sim* s, const newton_state* ns, long k, double dq, double tol)
 {
     if (dq <= tol) return 1;
     if (s->o->newton_full || ns->theta < 0.0 || k - ns->theta_step > NEWTON_THETA_AGE) return 0;
     return ns->theta < 1.0 && ns->theta / (1.0 - ns->theta) * dq <= tol;
+}
+
+/* Record the contraction of an iteration; ask for a new matrix when it is too slow. */
+static int newton_contraction(newton_state* ns, long k, double dq, double dq_prev, double theta_max)
+{
+    if (dq_prev > 0.0) {
+        ns->theta = dq / dq_prev;
+        ns->theta_step = k;
+    }
+    return ns->theta > theta_max;
+}
+
+static fsr_status newton_failed(sim* s, double t1, double dq, int it)
+{
+    return fail(s, FSR_NEWTON_FAILED,
+                "Newton iterations did not converge at t = %.6g s (|dq| = %.3g m after %d "
+                "iterations); reduce --dt", t1, dq, it);
+}
+
+/* A non-finite Newton update: name the coordinate (q, v: nq values each, stage after stage). */
+static fsr_status newton_diverged(sim* s, double t1, const double* q, const double* v, int nq)
+{
+    for (int i = 0; i < nq; i += s->n) {
+        fsr_status st = check_state(s, t1, q + i, v + i);
+        if (st) return st;
+    }
+    return fail(s, FSR_DIVERGED, "diverged at t = %.6g s: Newton update not finite", t1);
 }
 
 /* Predict the next acceleration by linear extrapolation (a + (a - a_old)) when that would
@@ -557,6 +602,8 @@ static int extrapolation_wins(int n, const double* a1, const double* a, const do
     }
     return e_extra < e_const;
 }
+
+/* ------------------------------------------------------------ generalized-alpha, Newmark */
 
 /* Generalized-alpha (Chung & Hulbert; Arnold & Bruls form for M(q) q'' = f) with Newton
  * iterations on the acceleration a1; q1 and v1 follow it linearly (dq1 = cb da, dv1 = cg da).
@@ -607,17 +654,16 @@ static fsr_status run_alpha(sim* s, double* q)
         int rebuild = o->newton_full || fabs(h - ns.h) > 1e-6 * h;
         double dq = 0.0, dq_prev = -1.0;
         for (int it = 0;; ++it) {
-            if (it == o->newton_max)
-                return fail(s, FSR_NEWTON_FAILED,
-                            "Newton iterations did not converge at t = %.6g s (|dq| = %.3g m after %d "
-                            "iterations); reduce --dt", t1, dq, it);
+            if (it == o->newton_max) return newton_failed(s, t1, dq, it);
             if ((st = mass_at(s, t1, q1, 0))) return st;
             fsm_force(q1, v1, drive, o->p, res);
             s->r->force_evaluations++;
             fsr_matvec(s->Mraw, n, s->bw, a1, ma);
             for (int i = 0; i < n; ++i) res[i] -= ma[i];  /* -(M a1 - f) */
             if (rebuild) {
-                if ((st = iteration_matrix(s, t1, q1, v1, a1, drive, cb, cg))) return st;
+                fsm_residual_jac(q1, v1, a1, drive, o->p, s->Jq, s->Jv);
+                newton_rows(s, 0, &cb, &cg);
+                if ((st = newton_factor(s, t1))) return st;
                 ns.h = h;
                 ns.theta = dq_prev = -1.0;
                 rebuild = o->newton_full;
@@ -631,13 +677,10 @@ static fsr_status run_alpha(sim* s, double* q)
                 dq = max_abs(dq, cb * res[i]);
             }
             s->r->newton_iterations++;
-            if (!isfinite(dq)) return check_state(s, t1, q1, v1);
-            if (dq_prev > 0.0) {
-                ns.theta = dq / dq_prev;
-                ns.theta_step = k;
-            }
+            if (!isfinite(dq)) return newton_diverged(s, t1, q1, v1, n);
+            int slow = newton_contraction(&ns, k, dq, dq_prev, NEWTON_THETA_MAX);
             if (newton_converged(s, &ns, k, dq, tol)) break;
-            if (ns.theta > NEWTON_THETA_MAX) rebuild = 1;
+            if (slow) rebuild = 1;
             dq_prev = dq;
         }
         for (int i = 0; i < n; ++i) ab[i] += ra * a1[i];
@@ -646,6 +689,186 @@ static fsr_status run_alpha(sim* s, double* q)
         memcpy(a, a1, sizeof(double) * (size_t)n);
         memcpy(q, q1, sizeof(double) * (size_t)(2 * n));  /* q1, v1 are contiguous, as q, v */
         if ((st = accept(s, t1, h, q, a, NULL))) return st;
+    }
+    return FSR_OK;
+}
+
+/* ------------------------------------------------------------------ Radau IIA, 3 stages */
+
+/* The 3-stage Radau IIA method (order 5, stage order 3, L-stable; Hairer & Wanner II, IV.5)
+ * applied to y' = [q', q''], written on the stage accelerations A_i: the stage points are
+ *     Q_i = q + c_i h q' + h^2 sum_j (a a)_ij A_j,   V_i = q' + h sum_j a_ij A_j,
+ * and the 3n equations M(Q_i) A_i = f(Q_i, V_i, t + c_i h) are solved by Newton on A with the
+ * matrix blocks (i, j) = [i == j] M + h^2 (a a)_ij dr/dq + h a_ij dr/dq' (newton_rows). The
+ * method is stiffly accurate (c_3 = 1): q1 = Q_3, q1' = V_3, and A_3 is the acceleration at t1.
+ * L-stability damps the stiff axial and high element modes that the step does not resolve. */
+enum { RADAU_STAGES = 3 };
+
+/* Rebuild radau5's iteration matrix when an iteration contracts by less than this, and at the
+ * start of a step when the last one did (the first iteration is not spent on a stale matrix).
+ * A rebuild (Jacobians, LU and inverse of the 3n x 3n matrix; ef: band LU of 195 unknowns) costs
+ * 2-5 iterations, and the stopping test needs 3 iterations at large steps even with a fresh
+ * matrix, so rebuilding often does not pay. CPU at 0.003 / 0.03 / 0.2: #3 at 0.25 s 0.140 /
+ * 0.121 / 0.126 ms, #2 at 0.2 s 0.48 / 0.36 / 0.21 ms, prestress at 0.25 s 0.079 / 0.055 /
+ * 0.054 ms; ef at 0.1 s 40 ms at 0.03, 34 at 0.1, 30 at 0.2, 28 at 0.3. */
+#define RADAU_THETA_MAX 0.2
+
+/* radau5's stopping test: the update is below tol, or (modified Newton) the error it leaves,
+ * theta / (1 - theta) |dq|, is, theta being the largest of at least two contractions measured
+ * in this step. No estimate from an earlier step, and not one ratio alone: the first, from the
+ * predictor, can understate the contraction of the iterations after it (#1 at 0.2 s: |dq| =
+ * 2.8e-4 then 1.8e-8 m, theta = 6.5e-5, an estimated error of 1.2e-12 m; the error left was
+ * 1.9e-10 m, the next contraction 1e-2; stopping there, modified and full Newton differed by
+ * 6e-7 m in v_tip over the 20 s, and by 7e-11 m with this test). */
+static int radau_converged(const sim* s, double dq, double tol, double theta_hi, int ratios)
+{
+    if (dq <= tol) return 1;
+    if (s->o->newton_full || ratios < 2 || !(theta_hi < 1.0)) return 0;
+    return theta_hi / (1.0 - theta_hi) * dq <= tol;
+}
+
+typedef struct {
+    double c[RADAU_STAGES];
+    double a[RADAU_STAGES][RADAU_STAGES];
+    double aa[RADAU_STAGES][RADAU_STAGES];  /* a a: the displacement coefficients */
+    double e[RADAU_STAGES][RADAU_STAGES];   /* predictor: A at c_i + 1 from the last step's A */
+} radau_tableau;
+
+static void radau_init(radau_tableau* T)
+{
+    const double r6 = sqrt(6.0);
+    const double c[RADAU_STAGES] = {(4.0 - r6) / 10.0, (4.0 + r6) / 10.0, 1.0};
+    const double a[RADAU_STAGES][RADAU_STAGES] = {
+        {(88.0 - 7.0 * r6) / 360.0, (296.0 - 169.0 * r6) / 1800.0, (-2.0 + 3.0 * r6) / 225.0},
+        {(296.0 + 169.0 * r6) / 1800.0, (88.0 + 7.0 * r6) / 360.0, (-2.0 - 3.0 * r6) / 225.0},
+        {(16.0 - r6) / 36.0, (16.0 + r6) / 36.0, 1.0 / 9.0}};
+    for (int i = 0; i < RADAU_STAGES; ++i) {
+        T->c[i] = c[i];
+        for (int j = 0; j < RADAU_STAGES; ++j) {
+            T->a[i][j] = a[i][j];
+            T->aa[i][j] = 0.0;
+            for (int l = 0; l < RADAU_STAGES; ++l) T->aa[i][j] += a[i][l] * a[l][j];
+            /* Lagrange basis polynomial j of the nodes c, at 1 + c_i */
+            T->e[i][j] = 1.0;
+            for (int l = 0; l < RADAU_STAGES; ++l)
+                if (l != j) T->e[i][j] *= (1.0 + c[i] - c[l]) / (c[j] - c[l]);
+        }
+    }
+}
+
+/* Stage accelerations predicted by extrapolating the last step's (the polynomial through its
+ * A_i at c_i, at c_i + 1; with a new step size, its A_3): it beats the constant predictor on
+ * #1-#3 and ef at every step tried (2.8 instead of 3.4 iterations per step on #2 at 0.2 s). */
+static void radau_predict(const radau_tableau* T, int n, int same_h, double* A)
+{
+    for (int r = 0; r < n; ++r) {
+        double old[RADAU_STAGES];
+        for (int j = 0; j < RADAU_STAGES; ++j) old[j] = A[j * n + r];
+        for (int i = 0; i < RADAU_STAGES; ++i) {
+            double x = 0.0;
+            for (int j = 0; j < RADAU_STAGES; ++j) x += T->e[i][j] * old[j];
+            A[i * n + r] = same_h ? x : old[RADAU_STAGES - 1];
+        }
+    }
+}
+
+/* Q_i += sum_j cq_ij d_j, V_i += sum_j cv_ij d_j (the stage points move with the stage
+ * accelerations; d_j of coordinate r at d[r dr + j di]); returns max |sum_j cq_ij d_j|. */
+static double radau_move(int n, double cq[RADAU_STAGES][RADAU_STAGES], double cv[RADAU_STAGES][RADAU_STAGES],
+                         const double* d, int dr, int di, double* Q, double* V)
+{
+    double m = 0.0;
+    for (int r = 0; r < n; ++r) {
+        const double* x = d + r * dr;
+        for (int i = 0; i < RADAU_STAGES; ++i) {
+            double zq = 0.0, zv = 0.0;
+            for (int j = 0; j < RADAU_STAGES; ++j) {
+                zq += cq[i][j] * x[j * di];
+                zv += cv[i][j] * x[j * di];
+            }
+            Q[i * n + r] += zq;
+            V[i * n + r] += zv;
+            m = max_abs(m, zq);
+        }
+    }
+    return m;
+}
+
+/* Fixed steps dt. Modified Newton as generalized-alpha: one matrix from the Jacobians at the
+ * last stage, kept across iterations and steps, rebuilt at the current iterate on a new step
+ * size or a contraction slower than RADAU_THETA_MAX; stopping test: radau_converged (3 or 4
+ * iterations at large steps, 2 or 3 at small ones). newton_full: each block row from its own stage's
+ * Jacobians, rebuilt every iteration (the exact Newton matrix), stopping on |dq| <= tol. */
+static fsr_status run_radau(sim* s, double* y)
+{
+    const fsr_options* o = s->o;
+    const int n = s->n, m = RADAU_STAGES * n, last = RADAU_STAGES - 1;
+    radau_tableau T;
+    radau_init(&T);
+    double *q = y, *v = y + n;
+    double *A = s->work, *Q = A + m, *V = Q + m, *res = V + m, *f = res + m, *ma = f + n;
+    double drive[RADAU_STAGES][2], tol = o->newton_tol * s->L, h_prev = 0.0;
+    newton_state ns = {0.0, -1.0, 0};
+    fsr_status st;
+    if ((st = accel(s, 0.0, q, v, A))) return st;
+    for (int i = 1; i < RADAU_STAGES; ++i) memcpy(A + i * n, A, sizeof(double) * (size_t)n);
+    for (long k = 0; k < s->nsteps; ++k) {
+        double t = time_of(s, k), t1 = time_of(s, k + 1), h = t1 - t;
+        double cq[RADAU_STAGES][RADAU_STAGES], cv[RADAU_STAGES][RADAU_STAGES];
+        for (int i = 0; i < RADAU_STAGES; ++i) {
+            drive_at(s, i == last ? t1 : t + T.c[i] * h, drive[i]);
+            for (int j = 0; j < RADAU_STAGES; ++j) {
+                cq[i][j] = h * h * T.aa[i][j];
+                cv[i][j] = h * T.a[i][j];
+            }
+        }
+        if (k > 0) radau_predict(&T, n, fabs(h - h_prev) <= 1e-6 * h, A);
+        for (int i = 0; i < RADAU_STAGES; ++i)
+            for (int r = 0; r < n; ++r) {
+                Q[i * n + r] = q[r] + T.c[i] * h * v[r];
+                V[i * n + r] = v[r];
+            }
+        radau_move(n, cq, cv, A, 1, n, Q, V);
+        int rebuild = o->newton_full || fabs(h - ns.h) > 1e-6 * h || ns.theta > RADAU_THETA_MAX;
+        double dq = 0.0, dq_prev = -1.0, theta_hi = 0.0;
+        int ratios = 0;
+        for (int it = 0;; ++it) {
+            if (it == o->newton_max) return newton_failed(s, t1, dq, it);
+            for (int i = 0; i < RADAU_STAGES; ++i) {  /* res = -(M(Q_i) A_i - f_i), interleaved */
+                const double *Qi = Q + i * n, *Vi = V + i * n, *Ai = A + i * n;
+                if ((st = mass_at(s, t + T.c[i] * h, Qi, 0))) return st;
+                fsm_force(Qi, Vi, drive[i], o->p, f);
+                s->r->force_evaluations++;
+                fsr_matvec(s->Mraw, n, s->bw, Ai, ma);
+                for (int r = 0; r < n; ++r) res[r * RADAU_STAGES + i] = f[r] - ma[r];
+                if (rebuild && (o->newton_full || i == last)) {
+                    fsm_residual_jac(Qi, Vi, Ai, drive[i], o->p, s->Jq, s->Jv);
+                    for (int b = o->newton_full ? i : 0; b <= i; ++b) newton_rows(s, b, cq[b], cv[b]);
+                }
+            }
+            if (rebuild) {
+                if ((st = newton_factor(s, t1))) return st;
+                ns.h = h;
+                ns.theta = dq_prev = -1.0;
+                ratios = 0;
+                rebuild = o->newton_full;
+            }
+            newton_solve(s, res);
+            for (int r = 0; r < n; ++r)
+                for (int i = 0; i < RADAU_STAGES; ++i) A[i * n + r] += res[r * RADAU_STAGES + i];
+            dq = radau_move(n, cq, cv, res, RADAU_STAGES, 1, Q, V);
+            s->r->newton_iterations++;
+            if (!isfinite(dq)) return newton_diverged(s, t1, Q, V, m);
+            int slow = newton_contraction(&ns, k, dq, dq_prev, RADAU_THETA_MAX);
+            if (dq_prev > 0.0) theta_hi = ratios++ ? max_abs(theta_hi, ns.theta) : ns.theta;
+            if (radau_converged(s, dq, tol, theta_hi, ratios)) break;
+            if (slow) rebuild = 1;
+            dq_prev = dq;
+        }
+        memcpy(q, Q + last * n, sizeof(double) * (size_t)n);
+        memcpy(v, V + last * n, sizeof(double) * (size_t)n);
+        h_prev = h;
+        if ((st = accept(s, t1, h, y, A + last * n, NULL))) return st;
     }
     return FSR_OK;
 }
@@ -684,6 +907,7 @@ static fsr_status integrate(sim* s, double* y)
 {
     fsr_method method = s->o->method;
     if (method == FSR_GENALPHA || method == FSR_NEWMARK) return run_alpha(s, y);
+    if (method == FSR_RADAU5) return run_radau(s, y);
     const erk_tableau* T = method == FSR_RK4 ? &RK4 : &DOPRI5;
     int fixed = !T->embedded || s->o->tol == 0.0;
     fsr_status st = estimate_omega_max(s, &s->r->omega_max);
@@ -712,11 +936,16 @@ fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
     if (s.nsteps < 1) s.nsteps = 1;
     s.next_row = o->out_every < s.nsteps ? o->out_every : s.nsteps;
     s.capacity = s.nsteps / o->out_every + 2;
-    /* work: alpha 11 n; explicit: 2n (dense output) + 7 stages, y1 and a stage of 2n each */
-    size_t nn = (size_t)n * (size_t)n, work = (size_t)(2 + 2 * MAX_STAGES + 4) * (size_t)n;
+    /* the Newton system: nst stages of n coordinates, interleaved (see newton_rows) */
+    s.nst = o->method == FSR_RADAU5 ? RADAU_STAGES : 1;
+    s.N = s.nst * n;
+    s.kb = s.bw >= 0 && 2 * (s.nst * (s.bw + 1) - 1) + 1 < s.N ? s.nst * (s.bw + 1) - 1 : -1;
+    /* work: alpha 8 n; radau5 14 n; explicit: 2n (dense output) + 7 stages, y1 and a stage of 2n */
+    size_t nn = (size_t)n * (size_t)n, NN = (size_t)s.N * (size_t)s.N;
+    size_t work = (size_t)(2 + 2 * MAX_STAGES + 4) * (size_t)n;
     r->rows = malloc(sizeof(double) * (size_t)s.capacity * (size_t)r->ncols);
-    double* mem = malloc(sizeof(double) * (7 * nn + (size_t)m->ny + 5 * (size_t)n + work));
-    s.piv = malloc(sizeof(int) * (size_t)n);
+    double* mem = malloc(sizeof(double) * (5 * nn + 2 * NN + (size_t)m->ny + (size_t)s.N + 4 * (size_t)n + work));
+    s.piv = malloc(sizeof(int) * (size_t)s.N);
     if (!r->rows || !mem || !s.piv) {
         free(mem);
         free(s.piv);
@@ -724,19 +953,19 @@ fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
     }
     s.Mraw = mem;
     s.Mfac = mem + nn;
-    s.S = mem + 2 * nn;
-    s.Jq = mem + 3 * nn;
-    s.Jv = mem + 4 * nn;
-    s.Minv = mem + 5 * nn;
-    s.Sinv = mem + 6 * nn;
-    s.y = mem + 7 * nn;
+    s.Jq = mem + 2 * nn;
+    s.Jv = mem + 3 * nn;
+    s.Minv = mem + 4 * nn;
+    s.S = mem + 5 * nn;
+    s.Sinv = s.S + NN;
+    s.y = s.Sinv + NN;
     s.tmp = s.y + m->ny;
-    s.qdd = s.tmp + n;
+    s.qdd = s.tmp + s.N;
     s.zero = s.qdd + n;
     double* y = s.zero + n;  /* [q, q'] */
     s.work = y + 2 * n;
     memset(s.qdd, 0, sizeof(double) * (size_t)(4 * n));
-    memset(s.S, 0, sizeof(double) * nn);
+    memset(s.S, 0, sizeof(double) * NN);
     st = store(&s, 0.0, y, y + n, NULL);
     if (!st) st = integrate(&s, y);
     free(mem);

@@ -2,7 +2,7 @@
 #ifndef FLEXSYM_RUNTIME_H
 #define FLEXSYM_RUNTIME_H
 
-typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3 } fsr_method;
+typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4 } fsr_method;
 
 typedef enum {
     FSR_OK = 0,
