@@ -56,7 +56,7 @@ def run(scene, out=None) -> RunResult:
         scene = load_scene(scene)
     return run_built(prepare(scene.spec), t_end=scene.t_end, dt=scene.dt,
                      integrator=scene.integrator, params=scene.params, out_every=scene.out_every,
-                     tol=scene.tol, out=out if out is not None else scene.output_file)
+                     tol=scene.tol, step=scene.step, out=out if out is not None else scene.output_file)
 
 
 def simulate(target="m3", *, ws=6.0, ts=15.0, t_end=20.0, dt=1e-3, integrator="genalpha",

@@ -41,6 +41,7 @@ class EmittedKernel:
     signature: str
     body: str
     ops: dict[str, int]
+    used_inputs: frozenset = frozenset()  # names of the inputs the C reads
 
     @property
     def total_ops(self) -> int:
@@ -110,7 +111,8 @@ def emit(kernel: Kernel, prefix: str) -> EmittedKernel:
         body.append("double " + ", ".join(reg(i) for i in sorted(registers)) + ";")
     body.extend(lines)
     return EmittedKernel(kernel, c_name, signature, "\n".join("  " + b for b in body),
-                         {c: ops.get(c, 0) for c in ("add", "mul", "div", "fun", "other")})
+                         {c: ops.get(c, 0) for c in ("add", "mul", "div", "fun", "other")},
+                         frozenset(used_inputs))
 
 
 def _dense_in(fn: ca.Function, i: int, nz: int, port) -> int:

@@ -101,12 +101,12 @@ def cmd_build(args) -> int:
 def _run_settings(args, spec, scene) -> tuple[dict, Path | None]:
     """Run options from a scene file, or from the command line with the defaults filled in."""
     if scene is not None:
-        given = _given(args, list(RUN_DEFAULTS) + ["tol"]) + (["param"] if args.param else [])
+        given = _given(args, list(RUN_DEFAULTS) + ["tol", "step"]) + (["param"] if args.param else [])
         if given:
             raise SpecError(f"{scene.path}: --{given[0].replace('_', '-')} does not combine with a "
                             "scene file: set it in the scene")
         return (dict(t_end=scene.t_end, dt=scene.dt, integrator=scene.integrator, params=scene.params,
-                     out_every=scene.out_every, tol=scene.tol),
+                     out_every=scene.out_every, tol=scene.tol, step=scene.step),
                 Path(args.out) if args.out else scene.output_file)
     for k, v in RUN_DEFAULTS.items():
         if getattr(args, k) is None:
@@ -122,7 +122,8 @@ def _run_settings(args, spec, scene) -> tuple[dict, Path | None]:
             params[k.strip()] = float(v)
         except ValueError:
             raise SpecError(f"--param '{item}': '{v}' is not a number") from None
-    return (dict(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params, tol=args.tol),
+    return (dict(t_end=args.t_end, dt=args.dt, integrator=args.integrator, params=params, tol=args.tol,
+                 step=args.step),
             Path(args.out) if args.out else None)
 
 
@@ -272,6 +273,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "(rho, E, A, I, L, ws, ts); repeatable")
     p.add_argument("--tol", type=float, help="dopri5 error tolerance (rtol; atol = tol * L), "
                    "default 1e-6; 0: fixed steps --dt")
+    p.add_argument("--step", type=float, help="radau5 step [s] (default --dt); rows stay every --dt, "
+                   "from its collocation polynomial")
     p.add_argument("--out", help="CSV file for the results")
     p.add_argument("--plot", help="PNG file for a plot of v_tip(t)")
     p.set_defaults(func=cmd_run)

@@ -83,6 +83,7 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
         "outputs": [vars(output_info(o, spec.points)) for o in spec.outputs],
         "mass_constant": der.mass_constant,
         "outputs_use_acceleration": der.outputs_use_acceleration,
+        "outputs_use_drive": any("drive" in k.used_inputs for k in emitted if k.kernel.name == "outputs"),
     }
     integrals = []
     for sym in der.table.symbols:
@@ -119,6 +120,7 @@ def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
         "outputs": outputs,
         "mass_constant": True,
         "outputs_use_acceleration": needs_clamp,
+        "outputs_use_drive": needs_clamp,  # the clamp reaction has the frame's inertia in it
         "bandwidth": 7,  # a node couples to its neighbours only: 4 + 3 coordinates
         "element_kernels": [k for k in emitted if k.kernel.name != "maneuver"],
         "elements": spec.elements,
@@ -164,6 +166,7 @@ def generate_files(spec) -> dict[str, str]:
                                 for p in maneuver.params]},
         "mass_constant": ctx["mass_constant"],
         "outputs_use_acceleration": ctx["outputs_use_acceleration"],
+        "outputs_use_drive": ctx["outputs_use_drive"],
         "bandwidth": ctx["bandwidth"],
         **extra,
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops,

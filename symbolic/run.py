@@ -49,7 +49,8 @@ def _positive(name: str, value) -> None:
         raise SpecError(f"{name} must be a positive number (got {value!r})")
 
 
-def check_options(*, t_end, dt, integrator, params: dict, spec=None, tol=None, newton=None) -> None:
+def check_options(*, t_end, dt, integrator, params: dict, spec=None, tol=None, newton=None,
+                  step=None) -> None:
     """Refuse bad run options before anything is generated, built or written."""
     from .energy import BEAM_PARAMS
     from .maneuver import MANEUVERS, maneuver_of
@@ -61,6 +62,10 @@ def check_options(*, t_end, dt, integrator, params: dict, spec=None, tol=None, n
     if tol is not None and not (isinstance(tol, (int, float)) and not isinstance(tol, bool)
                                 and 0 <= tol < 1):
         raise SpecError(f"tol must be a number in [0, 1) (got {tol!r}; 0 = fixed steps dt)")
+    if step is not None:
+        _positive("step", step)
+        if integrator != "radau5":
+            raise SpecError(f"step is for radau5 (its step, rows every dt); {integrator} steps at dt")
     if newton is not None and newton not in NEWTON:
         raise SpecError(f"unknown newton '{newton}' (known: {', '.join(NEWTON)})")
     beam = {p.name for p in BEAM_PARAMS}
@@ -83,13 +88,16 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
               repeat: int = 1, rho_inf: float | None = None, newmark: tuple | None = None,
               blowup: float | None = None, newton_tol: float | None = None,
               tol: float | None = None, max_steps: int | None = None, newton: str | None = None,
-              energy: bool = False, raise_on_failure: bool = False) -> RunResult:
+              energy: bool = False, step: float | None = None,
+              raise_on_failure: bool = False) -> RunResult:
     """Integrate with the built driver. dt is the step of the fixed-step integrators (rk4,
     genalpha, newmark, radau5); for dopri5 (steps adapted to tol, default 1e-6; tol=0: fixed
-    steps dt) it sets the output grid.
+    steps dt), and for radau5 given a step, it sets the output grid (rows from the method's
+    dense output).
     Rows are written every out_every * dt (default: about every 0.01 s) and at t_end.
     newton: 'modified' (default, reuses the iteration matrix) or 'full'."""
-    check_options(t_end=t_end, dt=dt, integrator=integrator, params=params or {}, tol=tol, newton=newton)
+    check_options(t_end=t_end, dt=dt, integrator=integrator, params=params or {}, tol=tol,
+                  newton=newton, step=step)
     if out_every is None:  # about 100 rows per second of simulated time
         out_every = max(1, int(round(0.01 / dt)))
     cmd = [str(built.executable), "--t-end", repr(float(t_end)), "--dt", repr(float(dt)),
@@ -106,6 +114,8 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
         cmd += ["--newton-tol", repr(float(newton_tol))]
     if tol is not None:
         cmd += ["--tol", repr(float(tol))]
+    if step is not None:
+        cmd += ["--step", repr(float(step))]
     if max_steps is not None:
         cmd += ["--max-steps", str(int(max_steps))]
     if newton is not None:
@@ -130,7 +140,7 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
     result = RunResult(built.name, summary["status"], summary["message"], summary, columns, data,
                        Path(out) if out is not None else None,
                        {"t_end": t_end, "dt": dt, "integrator": integrator, "params": params or {},
-                        "tol": tol, "newton": newton})
+                        "tol": tol, "newton": newton, "step": step})
     if raise_on_failure and not result.ok:
         raise SimulationError(f"{built.name}: {result.message}", result)
     return result

@@ -5,7 +5,8 @@ simulation, turned into exactly the variant that scene needs.
     [maneuver]  kind = "spin-up" (omega, duration) | "constant" (omega) | "expression" (theta)
     [model]     variant = "m3"  or  strain + axial + bending (mode lists); optional stress,
                 axial_force, elements (ef), keep_axial, name
-    [solver]    integrator, dt, t_end; tol for dopri5 (then dt is the output interval)
+    [solver]    integrator, dt, t_end; tol for dopri5, optional step for radau5 (then dt is the
+                output interval)
     [output]    file (relative to the working directory), quantities (v_tip, u_tip, N(x), M(x)),
                 positions = { name = x [m] }, interval (s between rows, default 0.01)
 
@@ -31,7 +32,7 @@ TABLES = {
     "maneuver": {"kind", "omega", "duration", "theta"},
     "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "elements",
               "keep_axial", "name"},
-    "solver": {"integrator", "dt", "t_end", "tol"},
+    "solver": {"integrator", "dt", "t_end", "tol", "step"},
     "output": {"file", "quantities", "positions", "interval"},
 }
 BEAM_KEYS = {"density": "rho", "youngs_modulus": "E", "area": "A", "inertia": "I", "length": "L"}
@@ -49,6 +50,7 @@ class Scene:
     out_every: int  # steps between output rows
     output_file: Path | None
     tol: float | None
+    step: float | None = None  # radau5's step, when not dt
     columns: dict = field(default_factory=dict)  # scene quantity -> result column
     full_spec: object = None  # the same model without the scene's reductions (for comparison)
 
@@ -139,6 +141,11 @@ def load_scene(path) -> Scene:
             r.fail("[solver] tol", f"must be in [0, 1) (got {tol!r}; 0 = fixed steps dt)")
     elif "tol" in data["solver"]:
         r.fail("[solver] tol", f"integrator '{integrator}' is fixed-step: give dt (tol is for dopri5)")
+    step = None
+    if "step" in data["solver"]:
+        if integrator != "radau5":
+            r.fail("[solver] step", f"is for radau5 (integrator '{integrator}' steps at dt)")
+        step = r.number("solver", "step", positive=True)
     dt = r.number("solver", "dt", positive=True)
     t_end = r.number("solver", "t_end", positive=True)
     if dt > t_end:
@@ -153,7 +160,7 @@ def load_scene(path) -> Scene:
     points, outputs, columns = _outputs(r, quantities, beam["L"])
     spec, full = _spec(r, maneuver, outputs, points)
     return Scene(path, spec, beam | mparams, integrator, dt, t_end, out_every,
-                 Path(output_file) if output_file else None, tol, columns, full)
+                 Path(output_file) if output_file else None, tol, step, columns, full)
 
 
 def _maneuver(r: _Reader) -> tuple[str, dict]:

@@ -87,7 +87,7 @@ def select(scene, tol: float, max_bending: int = 4, repeat: int = 3, log=print):
     for spec in candidates(scene, max_bending):
         built = prepare(spec, log=lambda m: None)
         kw = dict(t_end=scene.t_end, dt=scene.dt, integrator=scene.integrator, params=scene.params,
-                  out_every=scene.out_every)
+                  out_every=scene.out_every, tol=scene.tol, step=scene.step)
         r = run_built(built, **kw)
         cost = run_built(built, repeat=repeat, **kw).summary["cpu_median"] if r.ok else math.inf
         c = Candidate(spec, cost, error(r, ref, scene.spec.outputs), "ok" if r.ok else r.message)

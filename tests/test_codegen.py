@@ -83,6 +83,18 @@ def test_c_matches_casadi_and_sympy(derivation, model, name):
                 assert np.max(np.abs(c_val - sp_val)) <= RTOL * scale, (kname, port.name, "C vs sympy")
 
 
+@pytest.mark.parametrize("name", BUILTIN_NAMES + ["prestress"])
+def test_outputs_use_drive_flag_matches_the_outputs(derivation, name):
+    """The runtime skips the manoeuvre for rows whose outputs do not read it; the flag comes
+    from the inputs the emitted C reads, checked here against the sympy outputs (prestress:
+    its axial force has the centrifugal prestress, so the flag is set)."""
+    der = derivation(name)
+    reads_drive = any(e.has(w, alpha) for e in der.outputs.values())
+    manifest = read_manifest(generated_dir() / builtin(name).name)
+    assert manifest["outputs_use_drive"] == reads_drive
+    assert reads_drive == (name == "prestress")
+
+
 def test_generation_is_deterministic_within_a_process():
     spec = builtin("m3")
     a = generate_files(spec)

@@ -169,9 +169,50 @@ def test_radau5_damps_the_stiff_axial_modes(simulate):
             assert np.max(np.abs(r["N_A"] - ref["N_A"][idx])) < 2.0  # of 2000 N
 
 
+def test_radau5_dense_output_between_steps(simulate, m3_reference):
+    """--step sets radau5's step, rows stay every dt, from the collocation polynomial: at the
+    steps they are the rows of the plain run, in between the error of the 20 s spin-up at
+    0.25 s steps stays at the 1e-4 m level it has at the steps (5.1e-5 m measured)."""
+    kw = dict(integrator="radau5", t_end=20.0, out_every=1, **SPIN)
+    at_steps = simulate("m3", dt=0.25, **kw)
+    dense = simulate("m3", step=0.25, dt=0.01, **kw)
+    assert dense.ok and dense.summary["steps"] == 80 and len(dense.t) == 2001
+    assert np.allclose(dense.t, np.linspace(0.0, 20.0, 2001), atol=1e-12, rtol=0)
+    assert np.max(np.abs(dense["v_tip"][::25] - at_steps["v_tip"])) < 1e-14
+    assert _error(dense, m3_reference) < 1e-4
+
+
+@pytest.mark.parametrize("name", ["m3", "m1"])
+def test_radau5_dense_output_has_order_4(simulate, name):
+    """Between steps the polynomial of degree 3 through the stage points: error O(h^4) (stage
+    order 3, plus one for the interpolation). Rows every 1 ms, the steps' own rows left out;
+    measured rates 3.8 and 4.5."""
+    kw = dict(t_end=2.0, **SPIN)
+    ref = simulate(name, integrator="rk4", dt=1e-4, out_every=10, **kw)
+    errors = []
+    for h in (0.04, 0.02, 0.01):
+        r = simulate(name, integrator="radau5", step=h, dt=1e-3, out_every=1, newton_tol=1e-15, **kw)
+        between = np.abs(r.t / h - np.round(r.t / h)) > 1e-6
+        idx = np.searchsorted(ref.t, r.t - 1e-9)
+        errors.append(np.max(np.abs(r["v_tip"] - ref["v_tip"][idx])[between]))
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(rates > 3.5), (errors, rates)
+
+
+def test_step_is_refused_for_other_integrators(capsys):
+    code = main(["run", "m3", "--integrator", "genalpha", "--step", "0.1", "--t-end", "1"])
+    assert code == 2
+    assert "step is for radau5" in capsys.readouterr().err
+
+
 def test_cli_runs_radau5(capsys, tmp_path):
     out = tmp_path / "m3.csv"
     code = main(["run", "m3", "--integrator", "radau5", "--dt", "0.25", "--t-end", "2", "--out", str(out)])
     assert code == 0, capsys.readouterr().err
     data = np.loadtxt(out, delimiter=",", skiprows=1)
     assert np.allclose(data[:, 0], np.linspace(0, 2, 9))
+    code = main(["run", "m3", "--integrator", "radau5", "--step", "0.25", "--dt", "0.05",
+                 "--t-end", "2", "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert np.allclose(data[:, 0], np.linspace(0, 2, 41))

@@ -1,13 +1,14 @@
 /* Command-line driver: integrate a generated model, write CSV, report a JSON summary.
  *
  *   flexsym_<variant> [--t-end T] [--dt H] [--integrator rk4|dopri5|genalpha|newmark|radau5]
- *                     [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
+ *                     [--step H] [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
  *                     [--newmark-beta B] [--newton modified|full] [--newton-tol TOL]
  *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
  *                     [--repeat N] [--blowup F] [--energy] [--info]
  *
  * dopri5 adapts its step to --tol (0: fixed steps --dt); its rows are at the output grid,
- * multiples of out_every * dt, from its dense output. --energy appends columns T, V, h
+ * multiples of out_every * dt, from its dense output. radau5 steps by --step (default --dt)
+ * and writes rows every --dt from its collocation polynomial. --energy appends columns T, V, h
  * (kinetic and potential energy, Jacobi integral) to every row.
  *
  * stdout: one JSON line (status, steps, CPU time of the integration alone).
@@ -185,6 +186,7 @@ int main(int argc, char** argv)
         else if (!strcmp(a, "--newmark-beta")) { if (!parse_double(val, &o.nm_beta)) return usage("bad --newmark-beta", val); }
         else if (!strcmp(a, "--blowup")) { if (!parse_double(val, &o.blowup)) return usage("bad --blowup", val); }
         else if (!strcmp(a, "--newton-tol")) { if (!parse_double(val, &o.newton_tol)) return usage("bad --newton-tol", val); }
+        else if (!strcmp(a, "--step")) { if (!parse_double(val, &o.step)) return usage("bad --step", val); }
         else if (!strcmp(a, "--tol")) { if (!parse_double(val, &o.tol)) return usage("bad --tol", val); }
         else if (!strcmp(a, "--max-steps")) {
             if (!parse_int(val, &o.max_steps) || o.max_steps < 1) return usage("bad --max-steps", val);

@@ -24,6 +24,7 @@ typedef struct {
     const double* maneuver_param_defaults;
     int mass_constant;        /* 1 when M does not depend on q: factor it once */
     int outputs_use_acceleration; /* 1 when fsm_outputs reads qdd (else it may be anything) */
+    int outputs_use_drive;    /* 1 when fsm_outputs reads drive (else it may be anything) */
     int bandwidth;            /* half-bandwidth of M and the Jacobians; -1 when dense */
     int length_param;         /* index of the beam length in p (divergence threshold) */
     int v_tip_output;         /* index of v_tip in the outputs, or -1 */

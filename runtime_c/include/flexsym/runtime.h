@@ -21,6 +21,8 @@ typedef struct {
     double dt;               /* fixed step (last one shortened to end at t_end); for dopri5 the
                                 output grid: rows at multiples of out_every * dt, and t_end */
     int out_every;           /* store every out_every-th grid point (and the last one) */
+    double step;             /* radau5: step length, rows on the dt grid from its collocation
+                                polynomial; 0 = steps of dt */
     double rho_inf;          /* generalized-alpha spectral radius at infinity, in [0, 1] */
     double nm_gamma, nm_beta;/* Newmark parameters (method FSR_NEWMARK) */
     double newton_tol;       /* on |delta q|_inf, relative to the beam length */
