@@ -6,9 +6,9 @@ For each case, on the paper's 20 s spin-up (omega_s = 6 rad/s, T_s = 15 s):
   err_integration  max |v_tip - v_tip(same variant, tiny step)| over the run: the solver's error
   err_reference    max |v_tip - v_tip(ef, 32 elements, dt = 5e-4 s)|: solver plus model error
   err_N_A, err_M_A error of the peak |N_A|, |M_A| against the reference, where available
+and per variant the time to derive + generate its code and to compile it, from scratch.
 Rows (where the errors are measured) every 10 ms, or at every step when steps are longer and
 the method has no dense output (rk4, generalized-alpha); radau5 and dopri5 interpolate.
-and per variant the time to derive + generate its code and to compile it, from scratch.
 Writes bench.csv, bench.md and work_precision.png to --out.
 """
 from __future__ import annotations
@@ -32,6 +32,7 @@ SPIN = {"ws": 6.0, "ts": 15.0}
 T_END = 20.0
 REF_GRID = 0.001  # rows of the references; every case's rows fall on it (steps: multiples of 1 ms)
 REF_ELEMENTS, REF_DT = 32, 5e-4
+ROWS = 0.01  # s between rows, where the method allows
 
 
 @dataclass(frozen=True)
@@ -48,9 +49,6 @@ class Case:
         if self.integrator in ("radau5", "dopri5"):
             return ROWS
         return self.dt * max(1, round(ROWS / self.dt))
-
-
-ROWS = 0.01
 
 
 def _cases(rk4=(), dopri5=(), alpha=(), full=(), radau=(), radau_full=()):

@@ -66,7 +66,8 @@ def _run_args(p: argparse.ArgumentParser, defaults: bool = True) -> None:
     p.add_argument("--ts", type=float, default=d["ts"], help="spin-up time T_s [s] (default 15)")
     p.add_argument("--t-end", type=float, default=d["t_end"], help="end time [s] (default 20)")
     p.add_argument("--dt", type=float, default=d["dt"],
-                   help="time step [s] (default 1e-3); for dopri5 the output interval")
+                   help="time step [s] (default 1e-3); the output interval for dopri5, and for radau5 "
+                        "with --step")
     p.add_argument("--integrator", choices=INTEGRATORS, default=d["integrator"],
                    help="rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark, "
                         "radau5 (implicit, order 5, large steps)")
