@@ -42,6 +42,13 @@ class RunResult:
     def t(self) -> np.ndarray:
         return self["t"]
 
+    def minus(self, ref: "RunResult", col: str = "v_tip") -> np.ndarray:
+        """self[col] - ref[col] at this run's rows, which must all be on ref's time grid."""
+        idx = np.searchsorted(ref.t, self.t - 1e-9)
+        if np.any(idx >= len(ref.t)) or not np.allclose(ref.t[idx], self.t, atol=1e-9, rtol=0):
+            raise ValueError(f"rows of {self.variant} are not on the reference's time grid")
+        return self[col] - ref[col][idx]
+
 
 def _positive(name: str, value) -> None:
     if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0
