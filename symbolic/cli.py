@@ -156,6 +156,27 @@ def cmd_run(args) -> int:
     return 0 if verdict.valid else 4
 
 
+def cmd_export_fmu(args) -> int:
+    from .fmu import FmuOptions, check_request, export_fmu
+    from .pipeline import generated_folder
+    from .run import check_options
+
+    spec, scene = resolve(args)
+    settings, _ = _run_settings(args, spec, scene)
+    check_options(**{k: v for k, v in settings.items() if k != "out_every"}, spec=spec)
+    dt = settings["dt"]
+    every = settings.get("out_every") or max(1, int(round(0.01 / dt)))
+    opts = FmuOptions(integrator=settings["integrator"], dt=dt, step=settings["step"], tol=settings["tol"],
+                      t_end=settings["t_end"], interval=every * dt, params=settings["params"],
+                      input=args.input)
+    out = Path(args.out)
+    check_request(opts, out)
+    export_fmu(generated_folder(spec), opts, out)
+    print(f"wrote {out}: FMI 3.0 Co-Simulation, {opts.integrator} at dt = {dt:g} s"
+          f"{', drive from the inputs theta_dot, theta_ddot' if opts.input == 'drive' else ''}")
+    return 0
+
+
 def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
@@ -279,6 +300,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="CSV file for the results")
     p.add_argument("--plot", help="PNG file for a plot of v_tip(t)")
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("export-fmu", help="export a variant or scene as an FMI 3.0 Co-Simulation FMU")
+    _variant_args(p)
+    _run_args(p, defaults=False)
+    p.add_argument("--param", action="append", help="start value of a beam or manoeuvre parameter "
+                   "NAME=VALUE; repeatable")
+    p.add_argument("--tol", type=float, help="dopri5: only 0 (fixed steps of dt)")
+    p.add_argument("--step", type=float, help="radau5: only equal to --dt")
+    p.add_argument("--input", default="none", help="none (default): the built-in manoeuvre, its "
+                   "parameters tunable; drive: theta_dot, theta_ddot are inputs from the importer")
+    p.add_argument("--out", required=True, help="the FMU file (NAME.fmu)")
+    p.set_defaults(func=cmd_export_fmu)
 
     p = sub.add_parser("inspect", help="show the derivation of a variant")
     _variant_args(p)
