@@ -170,7 +170,7 @@ def cmd_export_fmu(args) -> int:
                       t_end=settings["t_end"], interval=every * dt, params=settings["params"],
                       input=args.input)
     out = Path(args.out)
-    check_request(opts, out)
+    check_request(opts, out, spec)
     export_fmu(generated_folder(spec), opts, out)
     print(f"wrote {out}: FMI 3.0 Co-Simulation, {opts.integrator} at dt = {dt:g} s"
           f"{', drive from the inputs theta_dot, theta_ddot' if opts.input == 'drive' else ''}")

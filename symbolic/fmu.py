@@ -42,8 +42,10 @@ class FmuOptions:
     input: str = "none"
 
 
-def check_request(opts: FmuOptions, out: Path) -> None:
+def check_request(opts: FmuOptions, out: Path, spec) -> None:
     """Refuse what the FMU cannot do, before anything is generated, built or written."""
+    from .maneuver import maneuver_of
+
     if opts.input not in INPUT_MODES:
         raise SpecError(f"--input '{opts.input}': expected one of {', '.join(INPUT_MODES)}")
     if out.suffix != ".fmu":
@@ -60,6 +62,9 @@ def check_request(opts: FmuOptions, out: Path) -> None:
     if opts.step is not None and opts.step != opts.dt:
         raise SpecError(f"--step {opts.step:g}: the FMU's steps end on its communication points, so "
                         "radau5 steps at dt (drop --step or set --dt to the step)")
+    if opts.input == "drive" and not maneuver_of(spec.maneuver).accelerates:
+        raise SpecError(f"--input drive: '{spec.name}' is generated without theta'' terms (its manoeuvre "
+                        f"'{spec.maneuver}' has theta'' = 0); export a variant whose manoeuvre accelerates")
     if opts.input == "drive" and opts.integrator in ("rk4", "dopri5"):
         raise SpecError(f"--input drive needs an implicit integrator (genalpha, newmark, radau5): the "
                         f"stability limit of {opts.integrator} depends on the drive to come")
