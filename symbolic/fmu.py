@@ -42,20 +42,14 @@ class FmuOptions:
     input: str = "none"
 
 
-def check_request(opts: FmuOptions, out: Path, spec) -> None:
+def check_request(opts: FmuOptions, out: Path | None, spec) -> None:
     """Refuse what the FMU cannot do, before anything is generated, built or written."""
     from .maneuver import maneuver_of
 
     if opts.input not in INPUT_MODES:
         raise SpecError(f"--input '{opts.input}': expected one of {', '.join(INPUT_MODES)}")
-    if out.suffix != ".fmu":
-        raise SpecError(f"--out {out}: an FMU file name ends in .fmu")
-    if not out.parent.is_dir():
-        raise SpecError(f"--out {out}: folder {out.parent} does not exist")
-    if not os.access(out.parent, os.W_OK):
-        raise SpecError(f"--out {out}: folder {out.parent} is not writable")
-    if out.exists() and out.is_dir():
-        raise SpecError(f"--out {out}: is a folder")
+    if out is not None:
+        _check_out(out)
     if opts.integrator == "dopri5" and opts.tol != 0:
         raise SpecError("--integrator dopri5 adapts its steps; the FMU takes fixed steps of dt: "
                         "use --tol 0 (dopri5 at fixed steps) or another integrator")
@@ -68,6 +62,17 @@ def check_request(opts: FmuOptions, out: Path, spec) -> None:
     if opts.input == "drive" and opts.integrator in ("rk4", "dopri5"):
         raise SpecError(f"--input drive needs an implicit integrator (genalpha, newmark, radau5): the "
                         f"stability limit of {opts.integrator} depends on the drive to come")
+
+
+def _check_out(out: Path) -> None:
+    if out.suffix != ".fmu":
+        raise SpecError(f"--out {out}: an FMU file name ends in .fmu")
+    if not out.parent.is_dir():
+        raise SpecError(f"--out {out}: folder {out.parent} does not exist")
+    if not os.access(out.parent, os.W_OK):
+        raise SpecError(f"--out {out}: folder {out.parent} is not writable")
+    if out.is_dir():
+        raise SpecError(f"--out {out}: is a folder")
 
 
 def model_identifier(name: str) -> str:
@@ -207,4 +212,36 @@ def export_fmu(gen_dir: Path, opts: FmuOptions, out: Path) -> Path:
     return out
 
 
-__all__ = ["FmuOptions", "check_request", "export_fmu", "model_description", "INPUT_MODES"]
+def bench(gen_dir: Path, built, opts: FmuOptions, repeat: int = 21) -> dict:
+    """CPU time of the FMU's doStep loop (runtime_c/fmi3/fmu_bench.c: instantiate, initialize,
+    doStep every opts.interval reading every output, free) against the native driver's
+    integration on the same steps and rows (fsr_simulate), medians of `repeat` runs."""
+    import json
+    import subprocess
+
+    from .run import run_built
+
+    gen_dir = Path(gen_dir).resolve()
+    manifest = read_manifest(gen_dir)
+    lay = _layout(manifest)
+    vrs = [str(lay["vr"]["Y"] + i) for i in range(lay["ny"] + lay["nq"])]
+    with tempfile.TemporaryDirectory(prefix="flexsym-fmu-bench-") as tmp:
+        so = build_binary(gen_dir, manifest, opts, Path(tmp))
+        exe = Path(tmp) / "fmu_bench"
+        _run([find_compiler(), "-std=c99", "-O2", "-Wall", f"-I{runtime_dir() / 'fmi3'}",
+              str(runtime_dir() / "fmi3" / "fmu_bench.c"), "-o", str(exe), "-ldl"], "compiling fmu_bench")
+        proc = subprocess.run([str(exe), str(so), token(manifest, opts), repr(opts.t_end), repr(opts.interval),
+                               str(repeat), *vrs], capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise SpecError(f"fmu_bench failed: {proc.stderr.strip()}")
+        fmu = json.loads(proc.stdout)
+    every = int(round(opts.interval / opts.dt))
+    native = run_built(built, t_end=opts.t_end, dt=opts.dt, integrator=opts.integrator, params=opts.params,
+                       out_every=every, repeat=repeat, tol=opts.tol, step=opts.step).summary
+    return {"fmu": fmu["cpu_median"], "fmu_min": fmu["cpu_min"], "fmu_max": fmu["cpu_max"],
+            "native": native["cpu_median"], "native_min": native["cpu_min"], "native_max": native["cpu_max"],
+            "steps": native["steps"], "communication_steps": fmu["steps"],
+            "ratio": fmu["cpu_median"] / native["cpu_median"]}
+
+
+__all__ = ["FmuOptions", "check_request", "export_fmu", "model_description", "bench", "INPUT_MODES"]

@@ -18,6 +18,9 @@
 #include "flexsym/runtime.h"
 #include "flexsym_fmu_config.h"
 
+/* GetFloat64 reads outputs and coordinates as one block of the row */
+typedef char fsu_vr_layout_check[FSU_VR_Q == FSU_VR_Y + FSU_NY ? 1 : -1];
+
 /* Without a stop time the step grid runs to this horizon [s]. */
 #define HORIZON 1.0e6
 
@@ -261,7 +264,15 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
     if (nValues != nValueReferences || (nValueReferences && (!valueReferences || !values)))
         return say(c, fmi3Error, "%s: fmi3GetFloat64: %zu values for %zu value references (all variables "
                    "are scalars)", c->name, nValues, nValueReferences);
+    /* outputs and coordinates: row[1 + vr - FSU_VR_Y] (t, outputs, coordinates; FSU_VR_Q follows
+     * the outputs), read after every step, so first */
+    const double* row = c->run && !c->stale ? fsr_stepper_result(c->run)->rows : NULL;
     for (size_t j = 0; j < nValueReferences; ++j) {
+        long y = (long)valueReferences[j] - FSU_VR_Y;
+        if (row && y >= 0 && y < FSU_NY + FSU_NQ) {
+            values[j] = row[1 + y];
+            continue;
+        }
         int i = 0;
         vkind k = kind_of(valueReferences[j], &i);
         if (k == V_NONE)
@@ -271,8 +282,8 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
             if (c->state == INSTANTIATED && k != V_TIME)
                 return say(c, fmi3Error, "%s: outputs are known from initialization mode on", c->name);
             if (c->state == INITIALIZATION && (c->stale || !c->run) && start_run(c) != fmi3OK) return fmi3Error;
+            row = c->run ? fsr_stepper_result(c->run)->rows : NULL;
         }
-        const double* row = c->run ? fsr_stepper_result(c->run)->rows : NULL;
         switch (k) {
         case V_TIME: values[j] = row ? row[0] : 0.0; break;
         case V_P: values[j] = c->p[i]; break;
