@@ -264,3 +264,36 @@ def test_header_agrees_with_the_standard_headers(tmp_path):
                        check=True)
         outputs.append(subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout)
     assert outputs[0] == outputs[1]
+
+
+def _steps(fmu, vr, t0, t1, h):
+    for k in range(int(round((t1 - t0) / h))):
+        fmu.doStep(currentCommunicationPoint=t0 + k * h, communicationStepSize=h)
+    return fmu.getFloat64([vr["v_tip"]])[0]
+
+
+def test_retuning_between_steps(exported):
+    """A parameter set between steps drops the run's caches: set to its own value the run goes on
+    as before (up to the Newton tolerance: the iteration matrix is rebuilt); E x 100 makes rk4's
+    5 ms step unstable for #3 (omega_max 72.8 -> 728 rad/s), and the next step is refused."""
+    runs = []
+    for retune in (False, True):
+        fmu, vr = _slave(exported["m3"][0], [])
+        fmu.enterInitializationMode(startTime=0.0, stopTime=3.0)
+        fmu.exitInitializationMode()
+        _steps(fmu, vr, 0.0, 1.0, 0.01)
+        if retune:
+            fmu.setFloat64([vr["E"], vr["ws"]], [7.0e10, 6.0])
+        runs.append(_steps(fmu, vr, 1.0, 3.0, 0.01))
+        fmu.freeInstance()
+    assert runs[0] != 0 and abs(runs[1] - runs[0]) <= 1e-9 * abs(runs[0])
+    messages: list = []
+    fmu, vr = _slave(exported["m3-rk4"][0], messages)
+    fmu.enterInitializationMode(startTime=0.0, stopTime=5.0)
+    fmu.exitInitializationMode()
+    _steps(fmu, vr, 0.0, 0.5, 0.01)
+    fmu.setFloat64([vr["E"]], [7.0e12])
+    with pytest.raises(FMICallException):
+        fmu.doStep(currentCommunicationPoint=0.5, communicationStepSize=0.01)
+    assert "exceeds the stability limit" in messages[-1]
+    fmu.freeInstance()
