@@ -6,6 +6,9 @@
  * Workspace is allocated once before the step loop; the loop itself never allocates.
  * Divergence (non-finite state, or a coordinate beyond blowup * L) stops the run with a
  * message naming the time; the rows stored up to then are kept.
+ * A run is resumable step by step (sim_open, sim_begin, sim_step; each method carries its state
+ * in sim between steps): fsr_simulate runs it to t_end, fsr_stepper to times the caller asks
+ * for (an FMU's communication points), so both give the same rows bit for bit.
  */
 #include "flexsym/runtime.h"
 
@@ -76,7 +79,7 @@ typedef struct {
     long theta_step;   /* the step of that measurement */
 } newton_state;
 
-enum { RADAU_STAGES = 3 };  /* radau5: see run_radau */
+enum { RADAU_STAGES = 3 };  /* radau5: see radau_step */
 
 typedef struct {
     double c[RADAU_STAGES];
