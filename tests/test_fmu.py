@@ -84,9 +84,14 @@ def test_fmpy_reproduces_flexsym_run(exported, key):
         assert np.max(np.abs(res[name] - rows[:, j])) <= 1e-12 * scale, name
 
 
+def _unzipped(path: Path) -> str:
+    """The FMU unpacked next to it (in the test's temporary folder)."""
+    return extract(str(path), str(path.with_suffix(".unzipped")))
+
+
 def _slave(path: Path, messages: list):
     md = read_model_description(str(path))
-    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(path)),
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=_unzipped(path),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="test")
     fmu.instantiate(logMessage=lambda env, status, category, message: messages.append(message.decode()))
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -198,7 +203,7 @@ def test_parameters_are_tunable_and_bad_calls_are_refused(exported):
     fmu.freeInstance()
     # a wrong instantiation token: no instance, one line
     md = read_model_description(str(exported["m3"][0]))
-    bad = FMU3Slave(guid="not-the-token", unzipDirectory=extract(str(exported["m3"][0])),
+    bad = FMU3Slave(guid="not-the-token", unzipDirectory=_unzipped(exported["m3"][0]),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bad")
     messages.clear()
     with pytest.raises(Exception):
