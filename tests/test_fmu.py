@@ -85,8 +85,10 @@ def test_fmpy_reproduces_flexsym_run(exported, key):
 
 
 def _unzipped(path: Path) -> str:
-    """The FMU unpacked next to it (in the test's temporary folder)."""
-    return extract(str(path), str(path.with_suffix(".unzipped")))
+    """The FMU unpacked next to it (in the test's temporary folder), once: unpacking again would
+    overwrite a binary that an earlier instance may still have loaded."""
+    folder = path.with_suffix(".unzipped")
+    return str(folder) if folder.is_dir() else extract(str(path), str(folder))
 
 
 def _slave(path: Path, messages: list):
