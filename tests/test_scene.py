@@ -91,7 +91,7 @@ BAD = [
     ('dt = 1.0e-3', 'dt = -1.0e-3', "[solver] dt: must be > 0"),
     ('t_end = 2.0', 't_end = 0.0', "[solver] t_end: must be > 0"),
     ('integrator = "genalpha"', 'integrator = "euler"', "[solver] integrator: unknown integrator 'euler'"),
-    ('dt = 1.0e-3', 'dt = 1.0e-3\nstep = 0.1', "[solver] step: is for radau5 (integrator 'genalpha' steps at dt)"),
+    ('dt = 1.0e-3', 'dt = 1.0e-3\nstep = 0.1', "[solver] step: applies to radau5, not to integrator genalpha"),
     ('integrator = "genalpha"', 'integrator = "radau5"\nstep = 0.0', "[solver] step: must be > 0"),
     ('"M(2.5)"', '"M(12.5)"', "is outside the beam [0, 10] m"),
     ('positions = { hub = 0.5 }', 'positions = { hub = -0.5 }', "[output] positions.hub"),
