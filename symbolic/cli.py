@@ -5,6 +5,7 @@ import argparse
 import signal
 import sys
 import threading
+from dataclasses import replace
 from pathlib import Path
 
 from .errors import FlexsymError, SpecError
@@ -235,14 +236,14 @@ def cmd_paper(args) -> int:
     from .spec import builtin
 
     o = validate(given_options(args, SPINUP_OPTIONS[:4] + ("repeat",)), CLI, builtin("m3"))
-    ref = validate({"t_end": o.t_end, "dt": args.ref_dt}, CLI)
+    ref_dt = replace(BY_NAME["dt"], flag="--ref-dt").convert(args.ref_dt, CLI)
     elements = _elements(args.ref_elements)
     if not 1 <= elements <= 512:
         raise SpecError(f"--ref-elements: must be in 1..512 (got {elements})")
     out = check_output_dir(args.out, "--out")
     run_paper(out, ws=o.params["ws"], ts=o.params["ts"], t_end=o.t_end, dt=o.dt,
               repeat=o.repeat, end_to_end=not args.no_end_to_end, ref_elements=elements,
-              ref_dt=ref.dt)
+              ref_dt=ref_dt)
     return 0
 
 
@@ -313,7 +314,7 @@ class _Parser(argparse.ArgumentParser):
     """Bad command lines are bad input too: one line naming the problem, exit 2."""
 
     def error(self, message):
-        self.exit(2, f"flexsym: error: {self.prog}: {message} (see --help)\n")
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -397,14 +398,20 @@ def _terminate(signum, frame):
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as e:  # --help, or a command line argparse refused (one line, exit 2)
+        return e.code
     main_thread = threading.current_thread() is threading.main_thread()
     previous = {sig: signal.signal(sig, _terminate) for sig in (signal.SIGTERM, signal.SIGHUP)} \
         if main_thread else {}
     try:
         return args.func(args)
     except FlexsymError as e:
-        print(f"flexsym: error: {e}", file=sys.stderr)
+        text = str(e)
+        if isinstance(e, SpecError):  # bad input is one line, whatever the input held
+            text = text.replace("\r", "\\r").replace("\n", "\\n")
+        print(f"flexsym: error: {text}", file=sys.stderr)
         return e.exit_code
     except KeyboardInterrupt:
         print("flexsym: interrupted", file=sys.stderr)

@@ -74,7 +74,7 @@ class Option:
             raise where.error(self, f"must be a number, not {value!r}")
         if isinstance(value, str):
             try:
-                value = int(value) if self.kind is int else float(value)
+                value = float(value)  # "1e6" is a whole number too
             except ValueError:
                 raise where.error(self, f"'{value}' is not {'an integer' if self.kind is int else 'a number'}") from None
         if not isinstance(value, (int, float)):

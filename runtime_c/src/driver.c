@@ -222,7 +222,7 @@ int main(int argc, char** argv)
             if (!parse_int(val, &lv) || lv < 1 || lv > FSR_MAX_STEPS) return usage("bad --out-every (rows every K steps)", val);
             o.out_every = (int)lv;
         } else if (!strcmp(a, "--repeat")) {
-            if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (1..FSR_MAX_REPEAT)", val);
+            if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (runs, 1 to FSR_MAX_REPEAT of flexsym/limits.h)", val);
         } else if (!strcmp(a, "--integrator")) {
             if (!strcmp(val, "rk4")) o.method = FSR_RK4;
             else if (!strcmp(val, "genalpha")) o.method = FSR_GENALPHA;
