@@ -221,7 +221,7 @@ def check_theta(text: str, t_end: float | None = None) -> sp.Expr:
         _check_numeric(expr, t_end, text)
     except SpecError:
         raise
-    except _SYMPY_ERRORS as exc:
+    except _SYMPY_ERRORS + (NameError, KeyError) as exc:
         raise SpecError(f"theta(t) = '{text}': cannot be evaluated ({type(exc).__name__}: {exc})") from None
     return expr
 
@@ -255,6 +255,11 @@ def _bad_values(values, times, text):
 
 def _check_numeric(expr, t_end, text):
     derivs = (expr, sp.diff(expr, t), sp.diff(expr, t, 2))
+    for name, d in zip(NAMES, derivs):
+        if d.has(sp.DiracDelta, sp.Heaviside, sp.Derivative, sp.Subs, sp.sign):
+            raise SpecError(f"theta(t) = '{text}': {name} is not a smooth function of t (sympy "
+                            f"gives {type(next(iter(d.atoms(sp.DiracDelta, sp.Heaviside, sp.Derivative, sp.Subs, sp.sign)))).__name__}); "
+                            "theta and theta' must be continuous")
     f = _numeric(derivs)
     grid = np.linspace(0.0, t_end, GRID)
     values = f(grid)

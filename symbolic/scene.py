@@ -62,6 +62,10 @@ class Scene:
     step = property(lambda self: self.options.step)
 
 
+class _SceneError(SpecError):
+    """Already names the file and the key: not to be wrapped again."""
+
+
 class _Reader:
     """Typed access to the parsed TOML with errors that name the file and the key."""
 
@@ -69,7 +73,7 @@ class _Reader:
         self.path, self.data = path, data
 
     def fail(self, where: str, msg: str):
-        raise SpecError(f"{self.path}: {where}: {msg}")
+        raise _SceneError(f"{self.path}: {where}: {msg}")
 
     def table(self, name: str, required: bool = True) -> dict:
         tab = self.data.get(name)
@@ -267,6 +271,8 @@ def _spec(r: _Reader, maneuver: str, outputs, points):
                          axial_force=axial_force, elements=elements, points=points)
         full = customize(base, name=name, maneuver="spin_up", stress=stress, axial_force=axial_force,
                          elements=elements)
+    except _SceneError:
+        raise
     except SpecError as exc:
         r.fail("[model]", str(exc))
     if spec.kind == "modal" and not keep_axial:

@@ -388,3 +388,103 @@ def test_every_table_option_is_a_run_flag_and_documented():
     for o in OPTIONS:
         assert o.flag in help_text
         assert f"`{o.flag}" in text, f"{o.flag} is not in the README"
+
+
+# ----- fuzz: random expressions and scene mutations -----------------------------------------------
+def _random_expression(rng, depth=0) -> str:
+    leaves = ["t", "pi", "e", "0", "1", "2", "0.5", "-3", "1e308", "9**64", "1e-300", "64", "65", "t*t",
+              "(-1)", "1e400", "0.0"]
+    if depth > 4 or rng.random() < 0.3:
+        return rng.choice(leaves)
+    kind = rng.random()
+    a = _random_expression(rng, depth + 1)
+    if kind < 0.45:
+        op = rng.choice(["+", "-", "*", "/", "**", "**", "%", "//", "@"])
+        return f"({a}{op}{_random_expression(rng, depth + 1)})"
+    if kind < 0.75:
+        fn = rng.choice(["sin", "cos", "tan", "exp", "log", "sqrt", "sinh", "cosh", "tanh", "atan",
+                         "asin", "acos", "abs", "eval", "ifelse"])
+        if fn == "ifelse":
+            cmp = rng.choice(["<", "<=", ">", ">=", "==", "and"])
+            return f"ifelse({a} {cmp} {_random_expression(rng, depth + 1)}, {_random_expression(rng, depth + 1)}, " \
+                   f"{_random_expression(rng, depth + 1)})"
+        return f"{fn}({a})"
+    return f"-{a}"
+
+
+def _mutate(rng, text: str) -> str:
+    chars = list(text)
+    for _ in range(rng.randint(1, 3)):
+        i = rng.randrange(len(chars) + 1)
+        what = rng.random()
+        if what < 0.4 and chars:
+            del chars[min(i, len(chars) - 1)]
+        else:
+            chars.insert(i, rng.choice("()*+-/t0129e.,\n_x[]'\"\\ "))
+    return "".join(chars)
+
+
+def test_fuzz_theta_expressions_are_run_or_refused_in_one_line():
+    """Random θ(t) strings (grammar-built, then mutated): each is accepted (real, finite,
+    continuous on [0, 20 s]) or refused with a SpecError, within a bounded time; never another
+    exception, never a hang."""
+    import random
+
+    rng = random.Random(9)
+    texts = [_random_expression(rng) for _ in range(1200)]
+    texts += [_mutate(rng, rng.choice(texts)) for _ in range(800)]
+    accepted = refused_n = 0
+    start = time.process_time()
+    for text in texts:
+        t0 = time.process_time()
+        try:
+            check_theta(text, 20.0)
+            accepted += 1
+        except SpecError as exc:
+            assert str(exc), text
+            refused_n += 1
+        assert time.process_time() - t0 < 3.0, f"theta(t) = {text!r} took too long"
+    assert accepted > 50 and refused_n > 500, (accepted, refused_n)
+    assert time.process_time() - start < 60
+
+
+VALUES = ["0", "-1", "1e19", "1e-9", "nan", "inf", "true", "3", "0.25", '"x"', "[]"]
+
+
+def test_fuzz_scene_mutations_are_loaded_or_refused_in_one_line(tmp_path):
+    """Random edits of a valid scene: each loads (and its run options validate) or is refused
+    with one line naming the scene file; never a traceback."""
+    import random
+
+    from flexsym.scene import load_scene
+
+    rng = random.Random(90)
+    base = (ROOT / "scenes" / "custom_manoeuvre.toml").read_text().replace("t_end = 10.0", "t_end = 2.0")
+    lines = base.splitlines()
+    path = tmp_path / "m.toml"
+    outcomes = {"ok": 0, "refused": 0}
+    for k in range(400):
+        mutated = list(lines)
+        for _ in range(rng.randint(1, 2)):
+            i = rng.randrange(len(mutated))
+            r = rng.random()
+            if r < 0.3:
+                del mutated[i]
+            elif r < 0.6:
+                mutated[i] = _mutate(rng, mutated[i])
+            else:
+                key = rng.choice(["dt", "t_end", "interval", "omega", "elements", "step", "tol", "energy",
+                                  "max_steps", "rho_inf", "newton", "file", "blowup"])
+                value = rng.choice(VALUES)
+                mutated.insert(i, f"{key} = {value}")
+        path.write_text("\n".join(mutated) + "\n")
+        t0 = time.process_time()
+        try:
+            load_scene(path)
+            outcomes["ok"] += 1
+        except SpecError as exc:
+            msg = str(exc)
+            assert msg.startswith(str(path)) and msg.count(str(path)) == 1, msg
+            outcomes["refused"] += 1
+        assert time.process_time() - t0 < 3.0
+    assert outcomes["ok"] > 20 and outcomes["refused"] > 100, outcomes
