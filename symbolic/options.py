@@ -118,7 +118,7 @@ OPTIONS: tuple[Option, ...] = (
     _o("newton", str, None, "implicit integrators: modified (default, reuses the iteration matrix) "
        "or full (rebuilt every iteration, a reference)", "--newton", "solver.newton", "--newton",
        choices=("modified", "full"), integrators=IMPLICIT),
-    _o("newton_tol", float, None, "implicit integrators: Newton tolerance on |dq|, relative to L "
+    _o("newton_tol", float, None, "implicit integrators: Newton tolerance on max abs(dq), relative to L "
        "(default 1e-12)", "--newton-tol", "solver.newton_tol", "--newton-tol", low=1e-16, high=1e-3,
        integrators=IMPLICIT),
     _o("rho_inf", float, None, "generalized-alpha spectral radius at infinity in [0, 1] (default 0.9)",
@@ -128,13 +128,13 @@ OPTIONS: tuple[Option, ...] = (
     _o("newmark_beta", float, None, "Newmark beta (default 0.25; the paper: 0.5625), at least "
        "(gamma + 1/2)^2 / 4", "--newmark-beta", "solver.newmark_beta", "--newmark-beta", low=0.25,
        high=1.0, integrators=("newmark",)),
-    _o("blowup", float, None, "stop when a coordinate or |v_tip| exceeds this many beam lengths "
+    _o("blowup", float, None, "stop when a coordinate or abs(v_tip) exceeds this many beam lengths "
        "(default 10)", "--blowup", "solver.blowup", "--blowup", low=0.0, low_open=True, high=1e6),
     _o("interval", float, None, "time between output rows [s], a whole number of steps --dt "
        "(default: about 0.01 s)", "--interval", "output.interval", None, low=0.0, low_open=True),
     _o("energy", bool, False, "append the kinetic and potential energy and the Jacobi integral "
        "(columns T, V, h)", "--energy", "output.energy", "--energy"),
-    _o("repeat", int, 1, "timed runs after a warm-up; the CPU time reported is their median",
+    _o("repeat", int, 1, "timed runs (after a warm-up when more than 1); the CPU time reported is their median",
        "--repeat", None, "--repeat", low=1, high=LIMITS["max_repeat"]),
     _o("ws", float, 6.0, "final spin rate omega_s [rad/s] (default 6)", "--ws", "maneuver.omega", None,
        low=-1e4, high=1e4, maneuvers=("spin_up", "constant")),
@@ -366,5 +366,24 @@ def c_header() -> str:
     return "\n".join(lines)
 
 
+def markdown_table() -> str:
+    """The option table as README markdown (tests/test_validation.py keeps the README's copy
+    identical: `python -m flexsym.options --markdown`)."""
+    rows = ["| option | scene key | default | allowed | integrators | what |", "|---|---|---|---|---|---|"]
+    for o in OPTIONS:
+        default = RUNTIME_DEFAULTS.get(o.name, o.default)
+        default = "-" if default is None else ("off" if default is False else f"{default:g}"
+                                               if isinstance(default, float) else str(default))
+        allowed = "true/false" if o.kind is bool else o.range_text().replace("|", "\\|")
+        scene = f"[{o.scene.replace('.', '] ')}" if o.scene else "-"
+        applies = ", ".join(o.integrators) if o.integrators != INTEGRATORS else "all"
+        if o.maneuvers:
+            applies = "manoeuvre " + ", ".join(o.maneuvers)
+        rows.append(f"| `{o.flag}` | {scene} | {default} | {allowed} | {applies} | {o.help} |")
+    return "\n".join(rows) + "\n"
+
+
 if __name__ == "__main__":
-    print(c_header(), end="")
+    import sys
+
+    print(markdown_table() if "--markdown" in sys.argv else c_header(), end="")

@@ -349,37 +349,59 @@ def test_select_is_robust_to_timing_noise():
 
 
 # ----- README commands against the parser ------------------------------------------------------------
-def readme_commands() -> list[str]:
-    text = (ROOT / "README.md").read_text()
-    cmds = []
-    for block in re.findall(r"```(?:bash|sh)?\n(.*?)```", text, re.S):
-        for line in block.splitlines():
-            for part in re.split(r"&&|;", line.split("#")[0]):
-                part = part.strip()
-                if part.startswith("flexsym "):
-                    cmds.append(part)
+def readme_commands() -> list[tuple[str, bool]]:
+    """(command, documented as refused) for every `flexsym ...` line in the README's shell
+    code blocks; a command followed by a `# flexsym: error` comment is a documented refusal."""
+    lines = (ROOT / "README.md").read_text().splitlines()
+    cmds, lang = [], None
+    for i, line in enumerate(lines):
+        if line.startswith("```"):
+            lang = (line[3:].strip() or "text") if lang is None else None
+            continue
+        if lang is None:  # inline commands without placeholders (VARIANT, [--opt], a|b, ...)
+            for span in re.findall(r"`(flexsym [^`]+)`", line):
+                if len(span.split()) > 2 and not re.search(r"[A-Z]{2,}|[\[|…]|F\.csv|F\.png", span):
+                    cmds.append((span, False))
+            continue
+        if lang not in ("bash", "sh"):
+            continue
+        refused = i + 1 < len(lines) and lines[i + 1].startswith("# flexsym: error")
+        for part in re.split(r"&&|;", line.split("#")[0]):
+            if part.strip().startswith("flexsym "):
+                cmds.append((part.strip(), refused))
     return cmds
 
 
 def test_readme_commands_parse():
     """Every `flexsym ...` command in the README's code blocks is accepted by the parser and
-    its run options by the table (nothing is run)."""
+    its run options by the table, or refused as the README says (nothing is run)."""
     import shlex
 
+    from flexsym.cli import RUN_OPTIONS, _params, resolve
+    from flexsym.options import CLI, given_options
+
     cmds = readme_commands()
-    assert len(cmds) >= 6
+    assert len(cmds) >= 12 and any(refused for _, refused in cmds)
     parser = build_parser()
-    for cmd in cmds:
-        argv = shlex.split(cmd)[1:]
+    for cmd, documented_refusal in cmds:
         try:
-            args = parser.parse_args(argv)
+            args = parser.parse_args(shlex.split(cmd)[1:])
         except SystemExit:
             pytest.fail(f"README command does not parse: {cmd}")
         if args.command == "run" and not args.variant.endswith(".toml"):
-            from flexsym.cli import RUN_OPTIONS, _params
-            from flexsym.options import CLI, given_options
+            check = lambda: validate(given_options(args, RUN_OPTIONS) | {"params": _params(args.param)},  # noqa: E731
+                                     CLI, resolve(args)[0])
+            if documented_refusal:
+                with pytest.raises(SpecError):
+                    check()
+            else:
+                check()
 
-            validate(given_options(args, RUN_OPTIONS) | {"params": _params(args.param)}, CLI, builtin(args.variant))
+
+def test_readme_option_table_is_the_table():
+    from flexsym.options import markdown_table
+
+    assert markdown_table() in (ROOT / "README.md").read_text(), "run `python -m flexsym.options --markdown`"
 
 
 def test_every_table_option_is_a_run_flag_and_documented():
