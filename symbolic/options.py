@@ -94,10 +94,7 @@ class Option:
         return value
 
 
-def _o(*a, **k) -> Option:
-    return Option(*a, **k)
-
-
+_o = Option  # rows below: name, type, default, help, flag, scene key, driver flag, rules
 OPTIONS: tuple[Option, ...] = (
     _o("integrator", str, "genalpha", "rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark, "
        "radau5 (implicit, order 5, large steps)", "--integrator", "solver.integrator", "--integrator",
@@ -210,11 +207,6 @@ class RunOptions:
         return args
 
 
-def _count(x: float) -> float:
-    """ceil of a count that may be astronomically large (stays a float: no overflow)."""
-    return math.ceil(x - 1e-9) if x < 1e15 else x
-
-
 def validate(given: dict, where: Where = API, spec=None, columns: int | None = None) -> RunOptions:
     """Check the given options (None = not given) against the table and each other; fill the
     defaults. spec (optional) names the manoeuvre and the columns of a row."""
@@ -256,7 +248,8 @@ def validate(given: dict, where: Where = API, spec=None, columns: int | None = N
         g = values.get("newmark_gamma", RUNTIME_DEFAULTS["newmark_gamma"])
         b = values.get("newmark_beta", RUNTIME_DEFAULTS["newmark_beta"])
         if b < 0.25 * (g + 0.5) ** 2 - 1e-15:
-            raise where.error("newmark_beta", f"{b:g} with gamma = {g:g} is not unconditionally stable "
+            given_b = "" if "newmark_beta" in values else " (the default)"
+            raise where.error("newmark_beta", f"{b:g}{given_b} with gamma = {g:g} is not unconditionally stable "
                                               f"(need beta >= (gamma + 1/2)^2 / 4 = {0.25 * (g + 0.5) ** 2:g})")
     if maneuver is not None and maneuver.startswith("expression:"):
         from .maneuver import check_theta
@@ -280,10 +273,17 @@ def validate(given: dict, where: Where = API, spec=None, columns: int | None = N
     if step is not None and t_end / step > limit:
         raise where.error("step", f"{t_end / step:.3g} steps exceeds the limit of {limit:.0e}")
 
+    steps = max(1, math.ceil(grid - 1e-9))  # an int now: grid is within the limit
     interval = values.pop("interval", None)
-    if interval is None:
-        out_every = given.get("out_every") or max(1, int(round(ROW_INTERVAL / dt)))
-        out_every = min(int(out_every), max(1, _count(grid)))
+    out_every = given.get("out_every")
+    if out_every is not None:  # Python callers may give rows every k steps instead of interval
+        if interval is not None:
+            raise where.error("interval", "give either interval or out_every, not both")
+        if isinstance(out_every, bool) or not isinstance(out_every, int) or out_every < 1:
+            raise SpecError(f"out_every must be a whole number of steps >= 1 (got {out_every!r})")
+        out_every = min(out_every, steps)
+    elif interval is None:
+        out_every = min(max(1, round(ROW_INTERVAL / dt)), steps)
     else:
         if interval > t_end:
             raise where.error("interval", f"{interval:g} s is longer than {where.label('t_end')} = "
@@ -292,9 +292,6 @@ def validate(given: dict, where: Where = API, spec=None, columns: int | None = N
         if out_every < 1 or abs(out_every * dt - interval) > 1e-9 * interval:
             raise where.error("interval", f"must be a whole number of steps {where.label('dt')} = {dt:g} s "
                                           f"(got {interval:g} s)")
-    if not isinstance(out_every, int) or out_every < 1:
-        raise SpecError(f"out_every must be a positive integer (got {out_every!r})")
-    steps = _count(grid)
     rows = steps // out_every + 2
     if rows > LIMITS["max_rows"]:
         raise where.error("dt", f"{rows:.3g} output rows exceeds the limit of {LIMITS['max_rows']:.0e}; "
@@ -306,7 +303,7 @@ def validate(given: dict, where: Where = API, spec=None, columns: int | None = N
                                 f"above the limit of {LIMITS['max_row_bytes'] / 2**30:g} GiB; use a longer "
                                 f"{where.label('interval')}")
     return RunOptions(integrator=integrator, t_end=t_end, dt=dt, params=params, out_every=out_every,
-                      steps=int(steps), rows=int(rows),
+                      steps=steps, rows=rows,
                       **{k: v for k, v in values.items() if k != "integrator"})
 
 
@@ -336,11 +333,12 @@ def add_arguments(parser, names, defaults: dict | None = None) -> None:
     for name in names:
         opt = BY_NAME[name]
         default = (defaults or {}).get(name)
+        text = opt.help + (f" (here: default {default})" if default is not None else "")
         if opt.kind is bool:
             parser.add_argument(opt.flag, dest=name, action="store_const", const=True, default=default,
-                                help=opt.help)
+                                help=text)
         else:
-            parser.add_argument(opt.flag, dest=name, default=default, help=opt.help,
+            parser.add_argument(opt.flag, dest=name, default=default, help=text,
                                 metavar=opt.metavar or name.upper())
 
 
