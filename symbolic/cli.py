@@ -85,6 +85,10 @@ def cmd_generate(args) -> int:
             print(f"generated '{spec.name}' in {checked_in_folder(spec)}")
         return 0
     spec = resolve_spec(args)
+    if args.out is not None:
+        from .run import check_output_dir
+
+        check_output_dir(args.out, "--out")
     dest = Path(args.out) if args.out else (checked_in_folder(spec) if is_builtin(spec) else cache_folder(spec))
     g = generate(spec, dest)
     ops = ", ".join(f"{k} {v['total_ops']}" for k, v in g.manifest["kernels"].items())
@@ -156,6 +160,9 @@ def cmd_run(args) -> int:
     spec, scene = resolve(args)
     options = _run_options(args, spec, scene)
     out, plot_path = _outputs_checked(args, spec, scene)
+    if options.energy and out is None:
+        raise SpecError("--energy: the energy columns (T, V, h) go to the CSV file, and there is none: "
+                        "give --out")
     built = prepare(spec)
     res = run_built(built, options, out=out)
     verdict = assess(spec, res, options.params)
@@ -188,7 +195,7 @@ def cmd_run(args) -> int:
 def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
-    sections = args.section.split(",") if args.section else SECTIONS
+    sections = args.section.split(",") if args.section is not None else SECTIONS
     for s in sections:
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")

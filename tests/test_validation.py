@@ -114,6 +114,9 @@ CLI_BAD = [
     (["select", "scenes/paper.toml", "--tol", "0.1", "--max-bending", "9"], "--max-bending: must be one of 1..5"),
     (["paper", "--ref-dt", "-1"], "--ref-dt: must be > 0"),
     (["run", "m3", "--bogus"], "unrecognized arguments: --bogus"),
+    (["run", "m3", "--energy"], "--energy: the energy columns (T, V, h) go to the CSV file"),
+    (["inspect", "m3", "--section", ""], "unknown section ''"),
+    (["generate", "m3", "--out", "earlier.csv"], "--out earlier.csv: exists and is not a directory"),
 ]
 
 
