@@ -10,6 +10,7 @@ import stat
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -286,10 +287,16 @@ def test_runtime_refuses_what_python_would_have(tmp_path):
 
 # ----- processes -------------------------------------------------------------------------------------
 def _children(pid: int) -> list[int]:
-    out = []
-    for task in Path(f"/proc/{pid}/task").iterdir():
-        out += [int(c) for c in (task / "children").read_text().split()]
-    return out
+    """Processes whose parent is pid (from /proc/*/stat)."""
+    kids = []
+    for stat_file in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat_file.read_text().rsplit(")", 1)[1].split()
+        except (FileNotFoundError, ProcessLookupError, IndexError):
+            continue
+        if int(fields[1]) == pid:
+            kids.append(int(stat_file.parent.name))
+    return kids
 
 
 def _alive(pid: int) -> bool:
@@ -488,6 +495,8 @@ def test_fuzz_scene_mutations_are_loaded_or_refused_in_one_line(tmp_path):
     lines = base.splitlines()
     path = tmp_path / "m.toml"
     outcomes = {"ok": 0, "refused": 0}
+    base_spec = load_scene(ROOT / "scenes" / "custom_manoeuvre.toml").spec
+    runnable = []
     for k in range(400):
         mutated = list(lines)
         for _ in range(rng.randint(1, 2)):
@@ -505,11 +514,19 @@ def test_fuzz_scene_mutations_are_loaded_or_refused_in_one_line(tmp_path):
         path.write_text("\n".join(mutated) + "\n")
         t0 = time.process_time()
         try:
-            load_scene(path)
+            scene = load_scene(path)
             outcomes["ok"] += 1
+            if replace(scene.spec, name=base_spec.name) == base_spec and scene.options.steps <= 10**5 and len(runnable) < 12:
+                runnable.append(path.read_text())
         except SpecError as exc:
             msg = str(exc)
             assert msg.startswith(str(path)) and msg.count(str(path)) == 1, msg
             outcomes["refused"] += 1
         assert time.process_time() - t0 < 3.0
     assert outcomes["ok"] > 20 and outcomes["refused"] > 100, outcomes
+    # Accepted mutations of the same model (one build) with at most 1e5 steps are also run:
+    # they complete, stop with a message (3) or leave the range of validity (4).
+    assert len(runnable) >= 5
+    for text in runnable:  # same file name, so the same variant name: one generation and build
+        path.write_text(text)
+        assert main(["run", str(path), "--out", str(tmp_path / "o.csv")]) in (0, 3, 4), text
