@@ -79,6 +79,8 @@ class Option:
                 raise where.error(self, f"'{value}' is not {'an integer' if self.kind is int else 'a number'}") from None
         if not isinstance(value, (int, float)):
             raise where.error(self, f"must be a number, not {type(value).__name__} ({value!r})")
+        if isinstance(value, int) and abs(value) > 2**53:
+            raise where.error(self, f"{value:.3g} is out of range")
         if not math.isfinite(value):
             raise where.error(self, f"must be finite (got {value!r})")
         if self.kind is int:
@@ -207,9 +209,10 @@ class RunOptions:
         return args
 
 
-def validate(given: dict, where: Where = API, spec=None, columns: int | None = None) -> RunOptions:
+def validate(given: dict, where: Where = API, spec=None) -> RunOptions:
     """Check the given options (None = not given) against the table and each other; fill the
-    defaults. spec (optional) names the manoeuvre and the columns of a row."""
+    defaults. spec (optional) names the manoeuvre and the columns of a row (without it the
+    memory estimate assumes 16 columns; the runtime checks the exact count)."""
     unknown = sorted(set(given) - set(BY_NAME) - {"params", "out_every"})
     if unknown:
         raise SpecError(f"unknown run option '{unknown[0]}' (known: {', '.join(BY_NAME)})")
@@ -296,7 +299,7 @@ def validate(given: dict, where: Where = API, spec=None, columns: int | None = N
     if rows > LIMITS["max_rows"]:
         raise where.error("dt", f"{rows:.3g} output rows exceeds the limit of {LIMITS['max_rows']:.0e}; "
                                 f"use a longer {where.label('interval')}")
-    ncols = columns or (1 + len(getattr(spec, "outputs", ())) + len(getattr(spec, "coordinates", ())) if spec else 16)
+    ncols = 1 + len(spec.outputs) + len(spec.coordinates) if spec is not None else 16
     ncols += 3 if values.get("energy") else 0
     if rows * ncols * 8 > LIMITS["max_row_bytes"]:
         raise where.error("dt", f"{rows:.3g} rows of {ncols} columns need {rows * ncols * 8 / 2**30:.1f} GiB, "

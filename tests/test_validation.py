@@ -19,7 +19,7 @@ from flexsym import api
 from flexsym.cli import build_parser, main
 from flexsym.errors import SpecError
 from flexsym.maneuver import check_theta
-from flexsym.options import LIMITS, OPTIONS, c_header, validate
+from flexsym.options import OPTIONS, c_header, validate
 from flexsym.paths import PACKAGE_DIR, runtime_dir
 from flexsym.select import Candidate, choose
 from flexsym.spec import builtin, customize
