@@ -14,7 +14,13 @@ from .build import Built
 from .errors import FlexsymError, SimulationError, SpecError
 from .options import API, INTEGRATORS, RunOptions, validate
 
-__all__ = ["INTEGRATORS", "RunResult", "run_built", "check_output_path"]
+__all__ = ["INTEGRATORS", "RunResult", "run_built", "check_options", "check_output_path"]
+
+
+def check_options(*, spec=None, **given) -> RunOptions:
+    """Refuse bad run options before anything is generated, built or written: the option table
+    (flexsym.options.validate) with keyword names; returns the validated options."""
+    return validate(given, API, spec)
 
 
 @dataclass
