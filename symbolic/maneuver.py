@@ -230,7 +230,10 @@ NAMES = ("theta", "theta'", "theta''")
 
 
 def _numeric(exprs):
-    fn = sp.lambdify(t, list(exprs), modules="numpy")
+    # Integers beyond int64 would make numpy fall back to Python objects: evaluate them as
+    # doubles, as the generated C does.
+    big = {n: sp.Float(n) for e in exprs for n in e.atoms(sp.Rational) if abs(n.p) > 2**53 or n.q > 2**53}
+    fn = sp.lambdify(t, [e.xreplace(big) for e in exprs], modules="numpy")
 
     def call(x):
         x = np.asarray(x, dtype=float)

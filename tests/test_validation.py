@@ -465,6 +465,9 @@ def test_fuzz_theta_expressions_are_run_or_refused_in_one_line():
     rng = random.Random(9)
     texts = [_random_expression(rng) for _ in range(1200)]
     texts += [_mutate(rng, rng.choice(texts)) for _ in range(800)]
+    alphabet = "t()*+-/.,0123456789e ifelsqrtanpxo<>=_[]{}'\"\\\n\x00é∞"
+    texts += ["".join(rng.choice(alphabet) for _ in range(rng.randint(0, 60))) for _ in range(200)]
+    texts += ["t" + "*t" * 1000, "(" * 1000 + "t" + ")" * 1000, "9" * 1999, "-" * 1999 + "t", "1" + "0" * 400 + "*t"]
     accepted = refused_n = 0
     start = time.process_time()
     for text in texts:
