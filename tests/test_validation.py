@@ -242,6 +242,26 @@ def test_run_options_with_a_scene_name_the_scene_key(capsys, workdir):
     refused(capsys, workdir, ["run", "s.toml", "--repeat", "3"], "it does not combine with a scene file")
 
 
+API_BAD = [
+    (dict(dt=-1), "dt: must be > 0 (got -1)"),
+    (dict(integrator="rk4", rho_inf=0.5), "rho_inf: applies to genalpha, not to integrator rk4"),
+    (dict(bogus=1), "unknown run option 'bogus'"),
+    (dict(t_end=1e19, dt=1), "t_end / dt = 1e+19 steps exceeds the limit"),
+    (dict(out_every=2.5), "out_every must be a whole number of steps >= 1 (got 2.5)"),
+    (dict(out_every=2, interval=0.01), "interval: give either interval or out_every"),
+    (dict(params={"E": 0}), "params E: must be > 0"),
+    (dict(out="missing/x.csv"), "out missing/x.csv: directory missing does not exist"),
+]
+
+
+@pytest.mark.parametrize("kw,fragment", API_BAD, ids=[f for _, f in API_BAD])
+def test_python_api_validates_through_the_table(workdir, kw, fragment):
+    before = snapshot(workdir)
+    with pytest.raises(SpecError, match=re.escape(fragment)):
+        api.simulate("m3", **kw)
+    assert snapshot(workdir) == before
+
+
 # ----- theta(t) ------------------------------------------------------------------------------------
 THETA_BAD = [
     ("t/0", "is infinite"), ("(-1)**0.5*t", "is not real"), ("asin(2)*t", "theta is not finite at t = 0"),
