@@ -12,7 +12,8 @@ from pathlib import Path
 
 from .errors import SpecError
 from .pipeline import compiled, generated_folder, prepare
-from .run import RunResult, check_options, run_built
+from .options import API, validate
+from .run import RunResult, check_output_path, run_built
 from .scene import Scene, load_scene
 from .spec import builtin
 
@@ -54,22 +55,21 @@ def run(scene, out=None) -> RunResult:
     """Run a scene (a Scene or a path to a .toml file); results as numpy arrays."""
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
-    return run_built(prepare(scene.spec), t_end=scene.t_end, dt=scene.dt,
-                     integrator=scene.integrator, params=scene.params, out_every=scene.out_every,
-                     tol=scene.tol, step=scene.step, out=out if out is not None else scene.output_file)
+    out = out if out is not None else scene.output_file
+    if out is not None:
+        out = check_output_path(out, "out")
+    return run_built(prepare(scene.spec), scene.options, out=out)
 
 
-def simulate(target="m3", *, ws=6.0, ts=15.0, t_end=20.0, dt=1e-3, integrator="genalpha",
-             params=None, out=None, **run_options) -> RunResult:
-    """Run a variant on the spin-up (or its own manoeuvre) with run-time parameters."""
+def simulate(target="m3", *, out=None, **options) -> RunResult:
+    """Run a variant on the spin-up (or its own manoeuvre). Options as `flexsym run` and the
+    table in flexsym.options (t_end, dt, integrator, ws, ts, params={...}, tol, step, ...):
+    checked before anything is generated or built; defaults from the table."""
     spec = _spec_of(target)
-    p = {"ws": ws} | ({"ts": ts} if spec.maneuver == "spin_up" else {})
-    if spec.maneuver.startswith("expression:"):
-        p = {}
-    p |= params or {}
-    check_options(t_end=t_end, dt=dt, integrator=integrator, params=p, spec=spec)
-    return run_built(prepare(spec), t_end=t_end, dt=dt, integrator=integrator, params=p, out=out,
-                     **run_options)
+    o = validate(options, API, spec)
+    if out is not None:
+        out = check_output_path(out, "out")
+    return run_built(prepare(spec), o, out=out)
 
 
 def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,ops", latex=False) -> str:
