@@ -192,18 +192,25 @@ def cmd_run(args) -> int:
     return 0 if verdict.valid else 4
 
 
+FMU_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "interval", "ws", "ts")
+
+
 def _fmu_request(args, out: Path | None):
-    """(spec, FmuOptions) for export-fmu and bench-fmu, checked before any work."""
+    """(spec, FmuOptions) for export-fmu and bench-fmu, checked before any work (one table)."""
     from .fmu import FmuOptions, check_request
-    from .run import check_options
 
     spec, scene = resolve(args)
-    settings, _ = _run_settings(args, spec, scene)
-    check_options(**{k: v for k, v in settings.items() if k != "out_every"}, spec=spec)
-    dt = settings["dt"]
-    every = settings.get("out_every") or max(1, int(round(0.01 / dt)))  # the rows of flexsym run
-    opts = FmuOptions(integrator=settings["integrator"], dt=dt, step=settings["step"], tol=settings["tol"],
-                      t_end=settings["t_end"], interval=every * dt, params=settings["params"],
+    if scene is not None:
+        given = given_options(args, FMU_OPTIONS)
+        if given or args.param:
+            name = next(iter(given), "param")
+            raise SpecError(f"{scene.path}: --{name.replace('_', '-')} given with a scene file: set it "
+                            "in the scene")
+        o = scene.options
+    else:
+        o = validate(given_options(args, FMU_OPTIONS) | {"params": _params(args.param)}, CLI, spec)
+    opts = FmuOptions(integrator=o.integrator, dt=o.dt, step=o.step, tol=o.tol, t_end=o.t_end,
+                      interval=o.out_every * o.dt, params=o.params,
                       input=getattr(args, "input", "none"))
     check_request(opts, out, spec)
     return spec, opts
@@ -396,11 +403,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("export-fmu", help="export a variant or scene as an FMI 3.0 Co-Simulation FMU")
     _variant_args(p)
-    _run_args(p, defaults=False)
+    add_arguments(p, FMU_OPTIONS)
     p.add_argument("--param", action="append", help="start value of a beam or manoeuvre parameter "
                    "NAME=VALUE; repeatable")
-    p.add_argument("--tol", type=float, help="dopri5: only 0 (fixed steps of dt)")
-    p.add_argument("--step", type=float, help="radau5: only equal to --dt")
     p.add_argument("--input", default="none", help="none (default): the built-in manoeuvre, its "
                    "parameters tunable; drive: theta_dot, theta_ddot are inputs from the importer")
     p.add_argument("--out", required=True, help="the FMU file (NAME.fmu)")
@@ -409,10 +414,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench-fmu", help="CPU time of an exported FMU's doStep loop against the native "
                        "runtime on the same steps")
     _variant_args(p)
-    _run_args(p, defaults=False)
+    add_arguments(p, FMU_OPTIONS)
     p.add_argument("--param", action="append", help="beam or manoeuvre parameter NAME=VALUE; repeatable")
-    p.add_argument("--tol", type=float, help="dopri5: only 0 (fixed steps of dt)")
-    p.add_argument("--step", type=float, help="radau5: only equal to --dt")
     p.add_argument("--repeat", type=int, default=21, help="runs after a warm-up (default 21)")
     p.set_defaults(func=cmd_bench_fmu, out=None)
 
