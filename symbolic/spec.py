@@ -34,6 +34,15 @@ class VariantSpec:
     left_out: tuple[tuple[str, str], ...] = ()  # (what, why): decided by a scene, in the manifest
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
+    body: object = None  # fedata.BeamBody: modes computed from finite-element data
+
+    def mode(self, ref: ModeRef):
+        """The shape of a mode: the library's analytic one, or the body's computed one."""
+        if self.body is None:
+            return mode(ref)
+        from .fedata import body_mode
+
+        return body_mode(self.body, ref)
 
     @property
     def modes(self) -> tuple[ModeRef, ...]:
@@ -56,7 +65,7 @@ class VariantSpec:
             "axial_force": self.axial_force,
             "points": [list(p) for p in self.points],
             "left_out": [list(x) for x in self.left_out],
-        }
+        } | ({"body": self.body.to_dict()} if self.body is not None else {})
 
     def validate(self) -> "VariantSpec":
         from .energy import STRAIN_MODELS  # the physics owns the list of strain models
@@ -73,7 +82,7 @@ class VariantSpec:
             for r in refs:
                 if r.axis != axis:
                     raise SpecError(f"variant '{self.name}': mode {r.token} is not a {axis} mode")
-                mode(r)  # validates family and index
+                self.mode(r)  # validates family and index (and computes a body's mode)
                 if r in seen:
                     raise SpecError(f"variant '{self.name}': duplicate {axis} mode '{r.token}'")
                 seen.add(r)
@@ -82,7 +91,7 @@ class VariantSpec:
         if model.needs_axial and not self.axial:
             raise SpecError(f"variant '{self.name}': strain model '{self.strain}' needs at least "
                             "one axial mode (its stiffening term is linear in the axial amplitudes)")
-        if "v_tip" in self.outputs and all(mode(r).value_at(0, 1) == 0 for r in self.bending):
+        if "v_tip" in self.outputs and all(self.mode(r).value_at(0, 1) == 0 for r in self.bending):
             raise SpecError(f"variant '{self.name}': no bending mode moves the tip, so v_tip would "
                             "be identically zero (add the static mode or a clamped-free mode)")
         from .maneuver import maneuver_of
