@@ -82,6 +82,22 @@ class BeamBody:
             sections += [sec] * k
         return BeamBody(tuple(nodes), tuple(sections), tuple(masses)).validate()
 
+    def segments(self) -> list[tuple[float, Section]]:
+        """Runs of equal sections, also cut at point masses: what a remeshing must keep."""
+        cuts = {self.node_index(m.x) for m in self.masses}
+        segs, start = [], 0
+        for e in range(1, self.elements + 1):
+            if e == self.elements or self.sections[e] != self.sections[e - 1] or e in cuts:
+                segs.append((self.nodes[e] - self.nodes[start], self.sections[start]))
+                start = e
+        return segs
+
+    def remeshed(self, elements: int) -> "BeamBody":
+        """The same beam (sections, steps, point masses) on about `elements` elements."""
+        if elements == self.elements:
+            return self
+        return BeamBody.from_segments(self.segments(), elements, self.masses)
+
     def validate(self, where: str = "body") -> "BeamBody":
         n = len(self.sections)
         if n < 1 or len(self.nodes) != n + 1:

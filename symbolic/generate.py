@@ -132,6 +132,18 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
     return ctx, manifest, "model.c.j2"
 
 
+def _fe_body(body) -> dict | None:
+    """Per-element ratios to the reference section, node fractions, point masses (ef)."""
+    if body is None:
+        return None
+    r, L = body.reference, body.length
+    rows = [[c_double(v) for v in (s.rho / r.rho, s.E / r.E, s.A / r.A, s.I / r.I, (b - a) / L)]
+            for s, a, b in zip(body.sections, body.nodes, body.nodes[1:])]
+    masses = [{"node": body.node_index(m.x), "ratio": c_double(m.mass / (r.rho * r.A * L))}
+              for m in body.masses if body.node_index(m.x) > 0 and m.mass > 0]
+    return {"elements": rows, "nodes": [c_double(x) for x in body.s_nodes], "masses": masses}
+
+
 def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
     from .fe import CLAMP_OUTPUTS, QUAD_POINTS, build_element_kernels, c_prefix, derive_element, output_plan
 
@@ -156,6 +168,7 @@ def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
         "plan": output_plan(spec),
         "needs_clamp": needs_clamp,
         "needs_stress": any(o not in CLAMP_OUTPUTS and o not in ("v_tip", "u_tip") for o in spec.outputs),
+        "body": _fe_body(spec.body),
     }
     manifest = {
         "coordinates": [{"name": c["name"], "group": "node", "mode": c["description"]} for c in ctx["coords"]],
