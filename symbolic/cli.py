@@ -43,12 +43,14 @@ def resolve(args):
     if args.variant.endswith(".toml"):
         from .scene import load_scene
 
-        scene = load_scene(args.variant)
+        scene = load_scene(args.variant, model=getattr(args, "model", None))
         given = _given(args, _OVERRIDES)
         if given:
             raise SpecError(f"{args.variant}: --{given[0].replace('_', '-')} does not combine with a "
                             "scene file: set it in the scene's [model] table")
         return scene.spec, scene
+    if getattr(args, "model", None) is not None:
+        raise SpecError(f"--model replaces the model of a scene file; '{args.variant}' is not one")
     base = builtin(args.variant)
     overrides = {k: getattr(args, k, None) for k in _OVERRIDES if k != "name"}
     if all(v is None for v in overrides.values()) and not getattr(args, "name", None):
@@ -278,6 +280,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "from its collocation polynomial")
     p.add_argument("--out", help="CSV file for the results")
     p.add_argument("--plot", help="PNG file for a plot of v_tip(t)")
+    p.add_argument("--model", help="with a scene file: replace its model by this variant (m1, m2, "
+                   "m3, prestress, ef, ...; a body's modes are computed from its data)")
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("inspect", help="show the derivation of a variant")

@@ -433,3 +433,75 @@ def body_mode(body: BeamBody, ref) -> BodyMode:
 
 def round_sig(x: float, digits: int = SIG_DIGITS) -> float:
     return float(f"{x:.{digits - 1}e}") if x else 0.0
+
+
+# ----- scene files ------------------------------------------------------------------------
+
+SEGMENT_KEYS = {"length": "length", "density": "rho", "youngs_modulus": "E", "area": "A",
+                "inertia": "I"}
+DEFAULT_ELEMENTS = 100
+
+
+def scene_body(r) -> BeamBody:
+    """The [body] table of a scene (r: scene._Reader): segments meshed with `elements` elements
+    (for the modes), point masses, or an imported finite-element folder."""
+    tab = r.data["body"]
+    for key in ("elements", "ef_elements"):
+        v = tab.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 2000):
+            r.fail(f"[body] {key}", f"must be an integer in 1..2000 (got {v!r})")
+    if "folder" in tab:
+        if "segments" in tab or "point_masses" in tab:
+            r.fail("[body] folder", "an imported body brings its own elements and masses: "
+                   "drop segments and point_masses")
+        from .feimport import read_folder
+
+        folder = r.string("body", "folder")
+        return read_folder(r.path.parent / folder)
+    segs = tab.get("segments")
+    if not isinstance(segs, list) or not segs or not all(isinstance(s, dict) for s in segs):
+        r.fail("[body] segments", "must be a non-empty list of tables {length, density, "
+               "youngs_modulus, area, inertia}")
+    segments = []
+    for i, seg in enumerate(segs):
+        where = f"[body] segments[{i}]"
+        unknown = sorted(set(seg) - set(SEGMENT_KEYS))
+        if unknown:
+            r.fail(f"{where} {unknown[0]}", f"unknown key (known: {', '.join(SEGMENT_KEYS)})")
+        vals = {}
+        for key, short in SEGMENT_KEYS.items():
+            v = seg.get(key)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                r.fail(f"{where} {key}", f"must be a positive number (got {v!r})")
+            vals[short] = float(v)
+        segments.append((vals.pop("length"), Section(**vals)))
+    masses = []
+    pms = tab.get("point_masses", [])
+    if not isinstance(pms, list) or not all(isinstance(m, dict) for m in pms):
+        r.fail("[body] point_masses", "must be a list of tables {x, mass, rotary}")
+    for i, pm in enumerate(pms):
+        where = f"[body] point_masses[{i}]"
+        unknown = sorted(set(pm) - {"x", "mass", "rotary"})
+        if unknown:
+            r.fail(f"{where} {unknown[0]}", "unknown key (known: x, mass, rotary)")
+        vals = {}
+        for key in ("x", "mass", "rotary"):
+            v = pm.get(key, 0.0)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                r.fail(f"{where} {key}", f"must be a number >= 0 (got {v!r})")
+            vals[key] = float(v)
+        masses.append(PointMass(**vals))
+    total = sum(length for length, _ in segments)
+    cuts = [0.0]
+    for length, _ in segments:
+        cuts.append(cuts[-1] + length)
+    for i, m in enumerate(masses):
+        if not any(abs(m.x - c) <= 1e-12 * total for c in cuts):
+            r.fail(f"[body] point_masses[{i}] x", f"x = {m.x:g} m must be a segment end "
+                   f"(one of {', '.join(f'{c:g}' for c in cuts)})")
+    masses = [PointMass(next(c for c in cuts if abs(m.x - c) <= 1e-12 * total), m.mass, m.rotary)
+              for m in masses]
+    try:
+        return BeamBody.from_segments(segments, tab.get("elements", DEFAULT_ELEMENTS), masses)
+    except SpecError as exc:
+        r.fail("[body]", str(exc))

@@ -29,6 +29,7 @@ from .run import INTEGRATORS
 
 TABLES = {
     "beam": {"length", "density", "youngs_modulus", "area", "inertia"},
+    "body": {"segments", "point_masses", "elements", "ef_elements", "folder"},
     "maneuver": {"kind", "omega", "duration", "theta"},
     "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "elements",
               "keep_axial", "name"},
@@ -112,7 +113,8 @@ class _Reader:
         return val
 
 
-def load_scene(path) -> Scene:
+def load_scene(path, model: str | None = None) -> Scene:
+    """model: a variant name that replaces the scene's [model] (flexsym run --model)."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -126,10 +128,34 @@ def load_scene(path) -> Scene:
     unknown = sorted(set(data) - set(TABLES))
     if unknown:
         r.fail(unknown[0], f"unknown table (known: {', '.join(TABLES)})")
-    for name in TABLES:
-        r.table(name, required=name in ("beam", "maneuver", "model", "solver"))
+    if model is not None:
+        if not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model):
+            r.fail("--model", f"'{model}' is not a variant name")
+        data["model"] = {"variant": model, "name": f"{_default_name(path)}_{model}"[:48]}
+        from .outputs import axial_force_available
+        from .spec import builtin
 
-    beam = {BEAM_KEYS[k]: r.number("beam", k, positive=True) for k in BEAM_KEYS}
+        try:
+            base = builtin(model)
+        except SpecError as exc:
+            r.fail("--model", str(exc))
+        if base.kind == "modal" and not axial_force_available(base):
+            data["model"]["axial_force"] = "equilibrium"  # its only way to give the scene's N
+    for name in TABLES:
+        r.table(name, required=name in ("maneuver", "model", "solver"))
+
+    body = None
+    if "body" in data:
+        if "beam" in data:
+            r.fail("[body]", "give either [beam] (a uniform beam) or [body] (finite-element data), not both")
+        from .fedata import scene_body
+
+        body = scene_body(r)
+        ref = body.reference
+        beam = {"rho": ref.rho, "E": ref.E, "A": ref.A, "I": ref.I, "L": body.length}
+    else:
+        r.table("beam")
+        beam = {BEAM_KEYS[k]: r.number("beam", k, positive=True) for k in BEAM_KEYS}
     maneuver, mparams = _maneuver(r)
     integrator = r.string("solver", "integrator", required=False, default="genalpha")
     if integrator not in INTEGRATORS:
@@ -158,7 +184,7 @@ def load_scene(path) -> Scene:
     output_file = r.string("output", "file", required=False)
     quantities = r.strings("output", "quantities", required=False) or ["v_tip"]
     points, outputs, columns = _outputs(r, quantities, beam["L"])
-    spec, full = _spec(r, maneuver, outputs, points)
+    spec, full = _spec(r, maneuver, outputs, points, body)
     return Scene(path, spec, beam | mparams, integrator, dt, t_end, out_every,
                  Path(output_file) if output_file else None, tol, step, columns, full)
 
@@ -242,7 +268,7 @@ def _outputs(r: _Reader, quantities: list[str], length: float):
     return tuple((k, v) for k, v in points.items() if k in used), tuple(outputs), columns
 
 
-def _spec(r: _Reader, maneuver: str, outputs, points):
+def _spec(r: _Reader, maneuver: str, outputs, points, body=None):
     from .spec import VariantSpec, _refs, builtin, customize
 
     tab = r.data["model"]
@@ -270,6 +296,13 @@ def _spec(r: _Reader, maneuver: str, outputs, points):
         if not isinstance(keep_axial, bool):
             r.fail("[model] keep_axial", f"must be true or false (got {keep_axial!r})")
         name = name or _default_name(r.path)
+        if body is not None:  # the body replaces the uniform beam of every model
+            if base.kind == "fe":
+                n = elements if elements is not None else r.data["body"].get("ef_elements", 32)
+                base, elements = replace(base, body=body.remeshed(n), elements=None), None
+                base = replace(base, elements=base.body.elements)
+            else:
+                base = replace(base, body=body)
         spec = customize(base, name=name, outputs=list(outputs), maneuver=maneuver, stress=stress,
                          axial_force=axial_force, elements=elements, points=points)
         full = customize(base, name=name, maneuver="spin_up", stress=stress, axial_force=axial_force,
