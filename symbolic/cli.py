@@ -158,6 +158,19 @@ def cmd_run(args) -> int:
     return 0 if verdict.valid else 4
 
 
+def cmd_fe_export(args) -> int:
+    from .feimport import write_folder
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    body = getattr(scene.spec, "body", None)
+    if body is None:
+        raise SpecError(f"{args.scene}: has no [body] table to export")
+    folder = write_folder(body, Path(args.out))
+    print(f"{body.summary()}: written to {folder} (body.toml, M.mtx, K.mtx, KG.mtx)")
+    return 0
+
+
 def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
@@ -283,6 +296,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--model", help="with a scene file: replace its model by this variant (m1, m2, "
                    "m3, prestress, ef, ...; a body's modes are computed from its data)")
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("fe-export", help="write a scene's body as finite-element data (body.toml + "
+                       "Matrix Market M, K, KG)")
+    p.add_argument("scene", help="scene file (.toml) with a [body] table")
+    p.add_argument("--out", required=True, help="new folder to write")
+    p.set_defaults(func=cmd_fe_export)
 
     p = sub.add_parser("inspect", help="show the derivation of a variant")
     _variant_args(p)
