@@ -179,7 +179,15 @@ def cmd_inspect(args) -> int:
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
     spec, scene = resolve(args)
-    sys.stdout.write(Report(spec, latex=args.latex).render(sections))
+    if args.plot_modes and spec.kind != "modal":
+        raise SpecError(f"--plot-modes: '{spec.name}' has no mode shapes (finite elements)")
+    report = Report(spec, latex=args.latex)
+    sys.stdout.write(report.render(sections))
+    if args.plot_modes:
+        from .inspect_model import plot_modes
+
+        plot_modes(report.der, Path(args.plot_modes))
+        print(f"mode shapes: {args.plot_modes}")
     if scene is not None:
         from .inspect_model import savings
 
@@ -306,6 +314,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("inspect", help="show the derivation of a variant")
     _variant_args(p)
     p.add_argument("--latex", action="store_true", help="print expressions as LaTeX")
+    p.add_argument("--plot-modes", dest="plot_modes", help="PNG file for a plot of the mode shapes")
+    p.add_argument("--model", help="with a scene file: inspect this variant on the scene's body")
     p.add_argument("--section", help="comma-separated subset of: modes, energy, integrals, mass, "
                    "stiffness, equations, ops")
     p.set_defaults(func=cmd_inspect)

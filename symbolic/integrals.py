@@ -273,6 +273,8 @@ class BodyIntegralTable(IntegralTable):
         self.body = body
 
     def weight(self, kind: str) -> sp.Expr:
+        if kind == "rot" and not any(m.rotary for m in self.body.masses):
+            return sp.Integer(0)
         return self.factor(Factor("weight", kind))
 
     def weight_at(self, kind: str, at) -> sp.Expr:

@@ -140,6 +140,23 @@ def test_invariants_from_the_discretisation_converge_to_the_analytic_ones():
     assert 3.5 < worst[0]["axial"] / worst[1]["axial"] < 4.5
 
 
+def test_modal_mass_and_stiffness_with_point_inertia_reproduce_the_fe_frequencies():
+    """With a tip mass, a rotary inertia and a mid-span mass, the derived M and K_L of one
+    clamped-free mode give exactly its finite-element frequency (mu, rot and ei weights)."""
+    from flexsym.energy import A, E, I, L, rho
+
+    body = BeamBody.from_segments([(5.0, PAPER), (5.0, OUTER)], 10,
+                                  (PointMass(10.0, 0.5, 0.3), PointMass(5.0, 0.2)))
+    for k in (1, 2):
+        der = derive(customize(replace(builtin("m0"), body=body), strain="linear", axial="",
+                               bending=f"cf{k}", outputs="v_tip"))
+        vals = {rho: PAPER.rho, E: PAPER.E, A: PAPER.A, I: PAPER.I, L: 10.0}
+        m = float(der.numeric(der.M)[0, 0].subs(vals))
+        kk = float(der.numeric(der.stiffness_split()[0])[0, 0].subs(vals))
+        assert np.sqrt(kk / m) == pytest.approx(body.mode_shape("bending", "clamped_free", k).frequency,
+                                                rel=1e-11)
+
+
 def test_prestress_distribution_of_a_body_includes_the_tip_mass():
     body = stepped(20)
     s = np.array([0.0, 0.25, 0.5, 0.75, 0.999])
