@@ -2,6 +2,9 @@
 simulation, turned into exactly the variant that scene needs.
 
     [beam]      length, density, youngs_modulus, area, inertia            (SI units)
+    [body]      instead of [beam]: a body from finite-element data: segments (length and
+                section each), point_masses, elements (for its modes), ef_elements, or
+                folder (an imported one; fedata.scene_body, feimport)
     [maneuver]  kind = "spin-up" (omega, duration) | "constant" (omega) | "expression" (theta)
     [model]     variant = "m3"  or  strain + axial + bending (mode lists); optional stress,
                 axial_force, elements (ef), keep_axial, name

@@ -268,6 +268,14 @@ def test_malformed_fe_folders_are_refused_with_one_line(case, exported, tmp_path
     assert not (tmp_path / "out.csv").exists()
 
 
+def test_model_option_needs_a_scene_and_a_known_variant(capsys):
+    assert main(["run", "m1", "--model", "m2"]) == 2
+    assert "--model replaces the model of a scene file" in capsys.readouterr().err
+    assert main(["run", str(SCENE), "--model", "m9"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--model" in err and "unknown variant 'm9'" in err
+
+
 def test_fe_data_variant_c_matches_casadi_and_sympy():
     from test_codegen import RTOL, _random_inputs, _sympy_eval, _sympy_reference
 
@@ -304,6 +312,15 @@ def _run(spec, t_end, dt=1e-3):
     from flexsym.run import run_built
 
     return run_built(prepare(spec, log=lambda m: None), t_end=t_end, dt=dt)
+
+
+def test_ef_on_a_uniform_body_is_ef():
+    """The per-element tables of a body reduce to ef's uniform mesh exactly."""
+    plain = customize(builtin("ef"), elements=4, name="ef_plain4", outputs="v_tip,M_A,N@0.5,N_A_clamp")
+    body = replace(plain, body=uniform(4), name="ef_body4").validate()
+    a, b = _run(plain, 2.0), _run(body, 2.0)
+    for c in ("v_tip", "M_A", "N_s0p5", "N_A_clamp"):
+        assert np.array_equal(a[c], b[c])
 
 
 def test_uniform_body_converges_to_the_analytic_variant_at_fourth_order():
