@@ -23,11 +23,13 @@ def _variant_args(p: argparse.ArgumentParser) -> None:
                    "(the paper's element method on N elements)")
     g.add_argument("--axial-force", dest="axial_force", choices=("constitutive", "equilibrium"),
                    help="axial force from the axial strain (default) or from the axial inertial forces")
+    g.add_argument("--moment", choices=("constitutive", "equilibrium"),
+                   help="bending moment from the curvature (default) or from the inertial loads")
     g.add_argument("--elements", type=int, help="number of finite elements (variant ef)")
     g.add_argument("--name", help="name of the custom variant (default: derived from the base)")
 
 
-_OVERRIDES = ("strain", "axial", "bending", "maneuver", "outputs", "stress", "axial_force", "elements",
+_OVERRIDES = ("strain", "axial", "bending", "maneuver", "outputs", "stress", "axial_force", "moment", "elements",
               "name")
 RUN_DEFAULTS = {"ws": 6.0, "ts": 15.0, "t_end": 20.0, "dt": 1e-3, "integrator": "genalpha"}
 

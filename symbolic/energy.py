@@ -47,6 +47,8 @@ class Fields:
     v_s: sp.Expr
     v_ss: sp.Expr
     v_dot_s: sp.Expr = sp.Integer(0)  # d/ds of the transverse velocity (rotary inertia)
+    v_ddot: sp.Expr = sp.Integer(0)  # transverse acceleration (moment from equilibrium)
+    v_ddot_s: sp.Expr = sp.Integer(0)
     weights: dict = None  # section distributions mu, ea, ei, nhat, rot (IntegralTable.weight)
 
 
@@ -73,7 +75,10 @@ def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
                 u_ddot += -h * (qd[mi.name] * qd[mj.name] + q[mi.name] * qdd[mj.name]) / L
     v_dot_s = sum((mv(m.name, 1) * qd[m.name] for m in bending), sp.Integer(0))
     weights = {k: table.weight(k) for k in ("mu", "ea", "ei", "nhat", "rot")}
-    return Fields(u, u_dot, u_ddot, u_stretch, u_s, v, v_dot, v_s, v_ss, v_dot_s, weights)
+    v_ddot = sum((mv(m.name) * qdd[m.name] for m in bending), sp.Integer(0))
+    v_ddot_s = sum((mv(m.name, 1) * qdd[m.name] for m in bending), sp.Integer(0))
+    return Fields(u, u_dot, u_ddot, u_stretch, u_s, v, v_dot, v_s, v_ss, v_dot_s, v_ddot, v_ddot_s,
+                  weights)
 
 
 def kinetic_density(f: Fields) -> sp.Expr:

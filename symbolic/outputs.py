@@ -167,6 +167,24 @@ def _equilibrium_N(der, at) -> sp.Expr:
     return -rho * A * L * der.table.integrate(f.weights["mu"] * a_x, at, 1)
 
 
+def _equilibrium_M(der, at) -> sp.Expr:
+    """M(x) from the equilibrium of the part beyond x: the moment about the section of its
+    inertial loads q = -rho A a (a in the moving frame, point masses included) and of the
+    inertial couples -J (theta'' + v'') of point rotary inertias:
+    M(x) = int_x^L [(xb + u(xb) - x - u(x)) q_y - (v(xb) - v(x)) q_x] dxb."""
+    f = der.fields
+    x_abs = L * s + f.u
+    a_x = f.u_ddot - 2 * w * f.v_dot - alpha * f.v - w**2 * x_abs
+    a_y = f.v_ddot + 2 * w * f.u_dot + alpha * x_abs - w**2 * f.v
+    dx = x_abs - L * at - field_at(der, f.u, at)
+    dy = f.v - field_at(der, f.v, at)
+    M = -rho * A * L * der.table.integrate(f.weights["mu"] * (dx * a_y - dy * a_x), at, 1)
+    rot = f.weights["rot"]
+    if rot != 0:
+        M -= rho * A * L**3 * der.table.integrate(rot * (alpha + f.v_ddot_s / L), at, 1)
+    return M
+
+
 def element_matrices(le, EA=E * A, EI=E * I):
     """The paper's K_L^e (7) and K_GL^e (8) for dofs (u1, v1, th1, u2, v2, th2).
 
@@ -292,7 +310,7 @@ def output_expression(der, name: str) -> sp.Expr:
         return _continuum_N(der, at) if want_N else _continuum_M(der, at)
 
     if quantity == "M":
-        return from_modes(False)
+        return _equilibrium_M(der, at) if spec.moment == "equilibrium" else from_modes(False)
     if spec.axial_force == "equilibrium":
         return _equilibrium_N(der, at)
     N = sp.Integer(0)

@@ -34,7 +34,7 @@ TABLES = {
     "beam": {"length", "density", "youngs_modulus", "area", "inertia"},
     "body": {"segments", "point_masses", "elements", "ef_elements", "folder"},
     "maneuver": {"kind", "omega", "duration", "theta"},
-    "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "elements",
+    "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "moment", "elements",
               "keep_axial", "name"},
     "solver": {"integrator", "dt", "t_end", "tol", "step"},
     "output": {"file", "quantities", "positions", "interval"},
@@ -295,6 +295,7 @@ def _spec(r: _Reader, maneuver: str, outputs, points, body=None):
                 r.fail("[model] elements", f"must be an integer (got {elements!r})")
         stress = r.string("model", "stress", required=False)
         axial_force = r.string("model", "axial_force", required=False)
+        moment = r.string("model", "moment", required=False)
         keep_axial = tab.get("keep_axial", False)
         if not isinstance(keep_axial, bool):
             r.fail("[model] keep_axial", f"must be true or false (got {keep_axial!r})")
@@ -307,8 +308,9 @@ def _spec(r: _Reader, maneuver: str, outputs, points, body=None):
             else:
                 base = replace(base, body=body)
         spec = customize(base, name=name, outputs=list(outputs), maneuver=maneuver, stress=stress,
-                         axial_force=axial_force, elements=elements, points=points)
+                         axial_force=axial_force, elements=elements, points=points, moment=moment)
         full = customize(base, name=name, maneuver="spin_up", stress=stress, axial_force=axial_force,
+                         moment=moment,
                          elements=elements)
     except SpecError as exc:
         r.fail("[model]", str(exc))

@@ -30,6 +30,7 @@ class VariantSpec:
     outputs: tuple[str, ...] = ("v_tip", "u_tip")
     stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements)
     axial_force: str = "constitutive"  # or "equilibrium" (from the axial inertial forces)
+    moment: str = "constitutive"  # or "equilibrium" (M from the inertial loads beyond the station)
     points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
     left_out: tuple[tuple[str, str], ...] = ()  # (what, why): decided by a scene, in the manifest
     description: str = ""
@@ -65,7 +66,8 @@ class VariantSpec:
             "axial_force": self.axial_force,
             "points": [list(p) for p in self.points],
             "left_out": [list(x) for x in self.left_out],
-        } | ({"body": self.body.to_dict()} if self.body is not None else {})
+        } | ({"body": self.body.to_dict()} if self.body is not None else {}) | (
+            {"moment": self.moment} if self.moment != "constitutive" else {})
 
     def validate(self) -> "VariantSpec":
         from .energy import STRAIN_MODELS  # the physics owns the list of strain models
@@ -102,6 +104,9 @@ class VariantSpec:
             raise SpecError(f"variant '{self.name}': {exc}") from None
         if not self.outputs:
             raise SpecError(f"variant '{self.name}': no outputs requested")
+        if self.moment not in ("constitutive", "equilibrium"):
+            raise SpecError(f"variant '{self.name}': moment '{self.moment}' must be "
+                            "'constitutive' or 'equilibrium'")
         if self.axial_force not in ("constitutive", "equilibrium"):
             raise SpecError(f"variant '{self.name}': axial force '{self.axial_force}' must be "
                             "'constitutive' or 'equilibrium'")
@@ -157,7 +162,7 @@ def builtin(name: str) -> VariantSpec:
 
 
 def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs=None,
-              maneuver=None, stress=None, axial_force=None, elements=None, points=None):
+              maneuver=None, stress=None, axial_force=None, elements=None, points=None, moment=None):
     """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...').
     Outputs not given explicitly are the defaults of the new variant."""
     from .outputs import canonical_output
@@ -166,7 +171,7 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
         outputs = [o for o in outputs.split(",") if o.strip()]
     if base.kind == "fe":
         modal_only = {"strain": strain, "axial": axial, "bending": bending, "stress": stress,
-                      "axial_force": axial_force}
+                      "axial_force": axial_force, "moment": moment}
         given = [k for k, v in modal_only.items() if v is not None]
         if given:
             raise SpecError(f"--{given[0].replace('_', '-')} does not apply to the finite-element "
@@ -192,6 +197,7 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
     if outputs is not None:
         changes["outputs"] = tuple(canonical_output(o) for o in outputs)
     for key, val in (("maneuver", maneuver), ("stress", stress), ("axial_force", axial_force),
+                     ("moment", moment),
                      ("points", points)):
         if val is not None:
             changes[key] = val
