@@ -268,6 +268,21 @@ def test_malformed_fe_folders_are_refused_with_one_line(case, exported, tmp_path
     assert not (tmp_path / "out.csv").exists()
 
 
+def test_generation_from_fe_data_is_deterministic_and_records_its_tools():
+    import json
+
+    from flexsym.generate import generate_files
+
+    spec = customize(replace(builtin("m2"), body=stepped(12)), name="fe_det")
+    first = generate_files(spec)
+    fedata._SHAPES.clear()  # recompute the eigenvectors
+    assert generate_files(spec) == first
+    manifest = json.loads(first["manifest.json"])
+    assert {"numpy", "scipy"} <= set(manifest["versions"])
+    assert {i["method"] for i in manifest["modal_integrals"]} == {"fe_gauss"}
+    assert manifest["params"][0]["default"] == PAPER.rho and manifest["body"]["masses"]
+
+
 def test_model_option_needs_a_scene_and_a_known_variant(capsys):
     assert main(["run", "m1", "--model", "m2"]) == 2
     assert "--model replaces the model of a scene file" in capsys.readouterr().err
