@@ -278,6 +278,8 @@ class BodyIntegralTable(IntegralTable):
         return self.factor(Factor("weight", kind))
 
     def weight_at(self, kind: str, at) -> sp.Expr:
+        import numpy as np
+
         from . import fedata
 
         body, x = self.body, float(at)
@@ -285,10 +287,11 @@ class BodyIntegralTable(IntegralTable):
             return sp.Float(repr(fedata.round_sig(float(fedata.nhat(body, x)[0]))), 17)
         if kind == "rot":
             return sp.Integer(0)
-        e = int(fedata.locate(body, __import__("numpy").array([x]))[0])
+        e = int(fedata.locate(body, np.array([x]))[0])
         return sp.Float(repr(float(body.ratios()[kind][e])), 17)
 
-    def _factor_values(self, f: Factor, elem, pts, a, b):
+    def _factor_values(self, f: Factor, elem, pts):
+        """The factor at points pts, each inside element elem[i]."""
         import numpy as np
 
         from . import fedata
@@ -338,7 +341,7 @@ class BodyIntegralTable(IntegralTable):
         elem = np.repeat(elems, len(gx))
         terms = wts * pts**s_pow
         for f in factors:
-            terms = terms * self._factor_values(f, elem, pts, a, b)
+            terms = terms * self._factor_values(f, elem, pts)
         total, scale = float(terms.sum()), float(np.abs(terms).sum())
         # point masses (Dirac terms of mu and rot) in (a, b], or at a = 0
         weights = [f.a for f in factors if f.kind == "weight" and f.a in ("mu", "rot")]
@@ -355,7 +358,7 @@ class BodyIntegralTable(IntegralTable):
                 term = c * sk**s_pow
                 for f in factors:
                     if f.kind != "weight":
-                        term = term * float(self._factor_values(f, el, at, a, b)[0])
+                        term = term * float(self._factor_values(f, el, at)[0])
                 total += term
                 scale += abs(term)
         value = fedata.round_sig(total)

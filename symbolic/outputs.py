@@ -249,6 +249,8 @@ def _element_method(der, n: int, at, want_N: bool) -> sp.Expr:
 def _body_element_method(der, at, want_N: bool, side: int = 0) -> sp.Expr:
     """The element method (23)-(25) on the body's own elements and sections. At a node: the
     end value of the element on the left (side -1), on the right (+1), or their mean (0)."""
+    import numpy as np
+
     from .fedata import locate
 
     body = der.spec.body
@@ -262,7 +264,7 @@ def _body_element_method(der, at, want_N: bool, side: int = 0) -> sp.Expr:
 
     node = body.node_index(x * body.length)
     if node is None:
-        e = int(locate(body, __import__("numpy").array([x]))[0])
+        e = int(locate(body, np.array([x]))[0])
         left, right = ends(e)
         xi = (x - float(body.s_nodes[e])) / float(body.s_nodes[e + 1] - body.s_nodes[e])
         return sp.expand((1 - sp.Float(repr(xi), 17)) * left + sp.Float(repr(xi), 17) * right)
