@@ -156,6 +156,43 @@ def test_modal_mass_and_stiffness_with_point_inertia_reproduce_the_fe_frequencie
                                                 rel=1e-11)
 
 
+def test_geometric_stiffness_and_foreshortening_are_the_papers_element_sums():
+    """K_G of #1 on a body is eq. (28)-(29): sum_e P_e X^T K_G^e X with P_e from the axial
+    mode in each element; the foreshortening kernel at a node is the nodal sum of eq. (34)-(38),
+    H_ab(x_n) = sum_{e < n} X_a^T K_G^e X_b."""
+    from flexsym.energy import A, E, L, w
+
+    body = stepped(10)
+    der = derive(customize(replace(builtin("m1"), body=body), outputs="v_tip"))
+    KG = der.numeric(der.stiffness_split()[1])
+    q_u = der.q[0]
+    names = der.coords[1:]
+    X = np.array([_dofs(body, der.modes[n].shape) for n in names]).T
+    u = np.array(der.modes[der.coords[0]].shape.values)
+    total = np.zeros((3 * body.elements, 3 * body.elements))
+    per_element = []
+    for e, sec in enumerate(body.sections):
+        l = body.nodes[e + 1] - body.nodes[e]
+        ke = np.zeros_like(total)
+        idx = np.arange(3 * e - 3, 3 * e + 3)
+        keep = idx >= 0
+        ke[np.ix_(idx[keep], idx[keep])] = fedata.element_matrices(sec, l)[2][np.ix_(keep, keep)]
+        per_element.append(ke)
+        total += sec.E * sec.A * (u[e + 1] - u[e]) / l * ke  # P_e per unit amplitude
+    vals = {E: PAPER.E, A: PAPER.A, L: body.length, w: 0}
+    ours = np.array([[float(sp.diff(KG[1 + i, 1 + j], q_u).subs(vals)) for j in range(3)] for i in range(3)])
+    assert np.allclose(ours, X.T @ total @ X, rtol=1e-11, atol=0)
+    # H_ab at node n from the element sums, against the invariant on [0, s_n]
+    t = der.table
+    n = 7
+    partial = sum(per_element[:n])
+    for i, a in enumerate(names):
+        for j, b in enumerate(names):
+            sym = t.monomial_symbol([(t.mode_value(a, 1), 1), (t.mode_value(b, 1), 1)], 0, sp.Rational(n, 10))
+            ref = X[:, i] @ partial @ X[:, j] * body.length  # d/dx -> d/ds
+            assert float(t.value(sym).value) == pytest.approx(ref, rel=1e-11, abs=1e-12)
+
+
 def test_prestress_distribution_of_a_body_includes_the_tip_mass():
     body = stepped(20)
     s = np.array([0.0, 0.25, 0.5, 0.75, 0.999])
