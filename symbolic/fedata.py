@@ -17,7 +17,9 @@ that the same variants (m1, m2, m3, prestress) apply to any body:
     bending cpK     k-th normal mode with v_tip fixed (fixed-interface)    (clamped-pinned Psi_k)
     bending cfK     k-th clamped-free normal mode                          (Lambda_k)
 
-Static modes have tip value 1; normal modes are mass-normalised (int mu phi^2 ds = 1 with
+Static modes have tip value 1 and are computed in exact rational arithmetic (the tip-load
+response of the element table, which the element reproduces exactly), rounded once to
+double; normal modes are eigenvectors (doubles), mass-normalised (int mu phi^2 ds = 1 with
 the point masses) with the sign fixed by their first significant nodal value (positive), so
 that generation is deterministic.
 
@@ -266,7 +268,32 @@ def _mode_cache(body: BeamBody, axis: str, family: str, index: int) -> ShapeData
 _SHAPES: dict = {}
 
 
+def _static_mode(body: BeamBody, axis: str) -> ShapeData:
+    """The constraint mode in exact rational arithmetic (every double is a rational): the
+    response to a tip load, u' = c / EA or v'' = c (L - x) / EI per element, normalised to a
+    unit tip value, rounded once to double. The element reproduces it exactly (nodal loads,
+    piecewise constant sections), so this is the finite-element solution without its solve."""
+    from fractions import Fraction as F
+
+    x = [F(v) for v in body.nodes]
+    L = x[-1]
+    if axis == "axial":
+        u = [F(0)]
+        for e, sec in enumerate(body.sections):
+            u.append(u[-1] + (x[e + 1] - x[e]) / (F(sec.E) * F(sec.A)))
+        return ShapeData(axis, tuple(float(v / u[-1]) for v in u))
+    v, th = [F(0)], [F(0)]
+    for e, sec in enumerate(body.sections):
+        l, c, ei = x[e + 1] - x[e], L - x[e], F(sec.E) * F(sec.I)
+        v.append(v[-1] + th[-1] * l + (c * l**2 / 2 - l**3 / 6) / ei)
+        th.append(th[-1] + (c * l - l**2 / 2) / ei)
+    return ShapeData(axis, tuple(float(a / v[-1]) for a in v),
+                     tuple(float(b * L / v[-1]) for b in th))
+
+
 def _compute_mode(body: BeamBody, axis: str, family: str, index: int) -> ShapeData:
+    if family == "static":
+        return _static_mode(body, axis)
     M, K, _ = body.assembled
     dofs = _axis_dofs(body, axis)
     Ka, Ma = K[np.ix_(dofs, dofs)], M[np.ix_(dofs, dofs)]
@@ -274,25 +301,20 @@ def _compute_mode(body: BeamBody, axis: str, family: str, index: int) -> ShapeDa
     tip = nd - 1 if axis == "axial" else nd - 2  # u_n, or v_n (the tip rotation stays free)
     inner = np.array([i for i in range(nd) if i != tip])
     x = np.zeros(nd)
-    freq = None
-    if family == "static":
-        x[tip] = 1.0
-        x[inner] = np.linalg.solve(Ka[np.ix_(inner, inner)], -Ka[inner, tip])
-    else:
-        keep = inner if family in ("sine", "clamped_pinned") else np.arange(nd)
-        if index > len(keep):
-            raise SpecError(f"{axis} mode {family}{index}: the body's {body.elements} elements "
-                            f"have only {len(keep)} such modes")
-        w2, X = _eig(Ka[np.ix_(keep, keep)], Ma[np.ix_(keep, keep)])
-        x[keep] = X[:, index - 1]
-        freq = math.sqrt(max(w2[index - 1], 0.0))
-        norm = math.sqrt(x @ Ma @ x / (body.reference.rho * body.reference.A * body.length))
-        x /= norm
-        big = np.abs(x).max()
-        vals = x if axis == "axial" else x[0::2]
-        first = next(v for v in vals if abs(v) > 1e-8 * big)
-        if first < 0:
-            x = -x
+    keep = inner if family in ("sine", "clamped_pinned") else np.arange(nd)
+    if index > len(keep):
+        raise SpecError(f"{axis} mode {family}{index}: the body's {body.elements} elements "
+                        f"have only {len(keep)} such modes")
+    w2, X = _eig(Ka[np.ix_(keep, keep)], Ma[np.ix_(keep, keep)])
+    x[keep] = X[:, index - 1]
+    freq = math.sqrt(max(w2[index - 1], 0.0))
+    norm = math.sqrt(x @ Ma @ x / (body.reference.rho * body.reference.A * body.length))
+    x /= norm
+    big = np.abs(x).max()
+    vals = x if axis == "axial" else x[0::2]
+    first = next(v for v in vals if abs(v) > 1e-8 * big)
+    if first < 0:
+        x = -x
     L = body.length
     if axis == "axial":
         return ShapeData(axis, (0.0,) + tuple(float(v) for v in x), (), freq)

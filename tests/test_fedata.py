@@ -57,9 +57,22 @@ def test_static_modes_of_a_uniform_beam_are_the_papers_exactly():
     s = body.s_nodes
     ax = body.mode_shape("axial", "static", 1)
     be = body.mode_shape("bending", "static", 1)
-    assert np.allclose(ax.values, s, atol=1e-14)
-    assert np.allclose(be.values, 1.5 * s**2 - 0.5 * s**3, atol=1e-13)
-    assert np.allclose(be.slopes, 3 * s - 1.5 * s**2, atol=1e-12)
+    assert np.allclose(ax.values, s, rtol=0, atol=2e-16)  # exact rationals, rounded once
+    assert np.allclose(be.values, 1.5 * s**2 - 0.5 * s**3, rtol=0, atol=5e-16)
+    assert np.allclose(be.slopes, 3 * s - 1.5 * s**2, rtol=0, atol=1e-15)
+    # ... and the finite-element solution of K x = 0 with a unit tip value, for a stepped body
+    body = stepped(10)
+    n = body.elements
+    M, K, _ = body.assembled
+    for axis, dofs, tip in (("axial", [3 * i for i in range(n)], n - 1),
+                            ("bending", [3 * i + c for i in range(n) for c in (1, 2)], 2 * n - 2)):
+        Ka = K[np.ix_(dofs, dofs)]
+        inner = [i for i in range(len(dofs)) if i != tip]
+        x = np.zeros(len(dofs))
+        x[tip] = 1.0
+        x[inner] = np.linalg.solve(Ka[np.ix_(inner, inner)], -Ka[inner, tip])
+        exact = _dofs(body, body.mode_shape(axis, "static", 1))[dofs]
+        assert np.allclose(x, exact, rtol=1e-12, atol=1e-14)
 
 
 def test_normal_modes_orthogonality_boundary_conditions_and_frequencies():
