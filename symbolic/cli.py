@@ -26,11 +26,13 @@ def _variant_args(p: argparse.ArgumentParser) -> None:
                    "(the paper's element method on N elements)")
     g.add_argument("--axial-force", dest="axial_force", choices=("constitutive", "equilibrium"),
                    help="axial force from the axial strain (default) or from the axial inertial forces")
+    g.add_argument("--moment", choices=("constitutive", "equilibrium"),
+                   help="bending moment from the curvature (default) or from the inertial loads")
     g.add_argument("--elements", help="number of finite elements (variant ef)")
     g.add_argument("--name", help="name of the custom variant (default: derived from the base)")
 
 
-_OVERRIDES = ("strain", "axial", "bending", "maneuver", "outputs", "stress", "axial_force", "elements",
+_OVERRIDES = ("strain", "axial", "bending", "maneuver", "outputs", "stress", "axial_force", "moment", "elements",
               "name")
 RUN_OPTIONS = tuple(o.name for o in OPTIONS)  # every option of the table is a `flexsym run` flag
 SPINUP_OPTIONS = ("ws", "ts", "t_end", "dt", "integrator")
@@ -60,8 +62,10 @@ def resolve(args):
         if given:
             raise SpecError(f"{args.variant}: --{given[0].replace('_', '-')} does not combine with a "
                             "scene file: set it in the scene's [model] table")
-        scene = load_scene(args.variant)
+        scene = load_scene(args.variant, model=getattr(args, "model", None))
         return scene.spec, scene
+    if getattr(args, "model", None) is not None:
+        raise SpecError(f"--model replaces the model of a scene file; '{args.variant}' is not one")
     base = builtin(args.variant)
     overrides = {k: getattr(args, k, None) for k in _OVERRIDES if k != "name"}
     overrides["elements"] = _elements(overrides["elements"])
@@ -246,6 +250,19 @@ def cmd_bench_fmu(args) -> int:
     return 0
 
 
+def cmd_fe_export(args) -> int:
+    from .feimport import write_folder
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    body = getattr(scene.spec, "body", None)
+    if body is None:
+        raise SpecError(f"{args.scene}: has no [body] table to export")
+    folder = write_folder(body, Path(args.out))
+    print(f"{body.summary()}: written to {folder} (body.toml, M.mtx, K.mtx, KG.mtx)")
+    return 0
+
+
 def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
@@ -254,7 +271,15 @@ def cmd_inspect(args) -> int:
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
     spec, scene = resolve(args)
-    sys.stdout.write(Report(spec, latex=args.latex).render(sections))
+    if args.plot_modes and spec.kind != "modal":
+        raise SpecError(f"--plot-modes: '{spec.name}' has no mode shapes (finite elements)")
+    report = Report(spec, latex=args.latex)
+    sys.stdout.write(report.render(sections))
+    if args.plot_modes:
+        from .inspect_model import plot_modes
+
+        plot_modes(report.der, Path(args.plot_modes))
+        print(f"mode shapes: {args.plot_modes}")
     if scene is not None:
         from .inspect_model import savings
 
@@ -399,6 +424,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "(rho, E, A, I, L, ws, ts); repeatable")
     p.add_argument("--out", help="CSV file for the results (its directory must exist)")
     p.add_argument("--plot", help="PNG/PDF/SVG file for a plot of v_tip(t) (its directory must exist)")
+    p.add_argument("--model", help="with a scene file: replace its model by this variant (m1, m2, "
+                   "m3, prestress, ef, ...; a body's modes are computed from its data)")
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("export-fmu", help="export a variant or scene as an FMI 3.0 Co-Simulation FMU")
@@ -419,9 +446,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--repeat", type=int, default=21, help="runs after a warm-up (default 21)")
     p.set_defaults(func=cmd_bench_fmu, out=None)
 
+    p = sub.add_parser("fe-export", help="write a scene's body as finite-element data (body.toml + "
+                       "Matrix Market M, K, KG)")
+    p.add_argument("scene", help="scene file (.toml) with a [body] table")
+    p.add_argument("--out", required=True, help="new folder to write")
+    p.set_defaults(func=cmd_fe_export)
+
     p = sub.add_parser("inspect", help="show the derivation of a variant")
     _variant_args(p)
     p.add_argument("--latex", action="store_true", help="print expressions as LaTeX")
+    p.add_argument("--plot-modes", dest="plot_modes", help="PNG file for a plot of the mode shapes")
+    p.add_argument("--model", help="with a scene file: inspect this variant on the scene's body")
     p.add_argument("--section", help="comma-separated subset of: modes, energy, integrals, mass, "
                    "stiffness, equations, ops")
     p.set_defaults(func=cmd_inspect)

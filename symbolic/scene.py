@@ -2,6 +2,9 @@
 simulation, turned into exactly the variant that scene needs.
 
     [beam]      length, density, youngs_modulus, area, inertia            (SI units)
+    [body]      instead of [beam]: a body from finite-element data: segments (length and
+                section each), point_masses, elements (for its modes), ef_elements, or
+                folder (an imported one; fedata.scene_body, feimport)
     [maneuver]  kind = "spin-up" (omega, duration) | "constant" (omega) | "expression" (theta)
     [model]     variant = "m3"  or  strain + axial + bending (mode lists); optional stress,
                 axial_force, elements (ef), keep_axial, name
@@ -31,8 +34,9 @@ from .options import OPTIONS, RunOptions, Where, validate
 _RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene}
 TABLES = {
     "beam": {"length", "density", "youngs_modulus", "area", "inertia"},
+    "body": {"segments", "point_masses", "elements", "ef_elements", "folder"},
     "maneuver": {"kind", "theta"},
-    "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "elements",
+    "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "moment", "elements",
               "keep_axial", "name"},
     "solver": set(),
     "output": {"file", "quantities", "positions"},
@@ -123,7 +127,8 @@ class _Reader:
         return val
 
 
-def load_scene(path) -> Scene:
+def load_scene(path, model: str | None = None) -> Scene:
+    """model: a variant name that replaces the scene's [model] (flexsym run --model)."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -137,10 +142,34 @@ def load_scene(path) -> Scene:
     unknown = sorted(set(data) - set(TABLES))
     if unknown:
         r.fail(unknown[0], f"unknown table (known: {', '.join(TABLES)})")
-    for name in TABLES:
-        r.table(name, required=name in ("beam", "maneuver", "model", "solver"))
+    if model is not None:
+        if not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model):
+            r.fail("--model", f"'{model}' is not a variant name")
+        data["model"] = {"variant": model, "name": f"{_default_name(path)}_{model}"[:48]}
+        from .outputs import axial_force_available
+        from .spec import builtin
 
-    beam = {BEAM_KEYS[k]: r.number("beam", k, positive=True) for k in BEAM_KEYS}
+        try:
+            base = builtin(model)
+        except SpecError as exc:
+            r.fail("--model", str(exc))
+        if base.kind == "modal" and not axial_force_available(base):
+            data["model"]["axial_force"] = "equilibrium"  # its only way to give the scene's N
+    for name in TABLES:
+        r.table(name, required=name in ("maneuver", "model", "solver"))
+
+    body = None
+    if "body" in data:
+        if "beam" in data:
+            r.fail("[body]", "give either [beam] (a uniform beam) or [body] (finite-element data), not both")
+        from .fedata import scene_body
+
+        body = scene_body(r)
+        ref = body.reference
+        beam = {"rho": ref.rho, "E": ref.E, "A": ref.A, "I": ref.I, "L": body.length}
+    else:
+        r.table("beam")
+        beam = {BEAM_KEYS[k]: r.number("beam", k, positive=True) for k in BEAM_KEYS}
     maneuver = _maneuver(r)
     for key in ("solver.dt", "solver.t_end"):
         table, name = key.split(".")
@@ -154,7 +183,7 @@ def load_scene(path) -> Scene:
     if quantities is not None and not quantities:
         r.fail("[output] quantities", "is empty (leave the key out for v_tip only)")
     points, outputs, columns = _outputs(r, quantities or ["v_tip"], beam["L"])
-    spec, full = _spec(r, maneuver, outputs, points)
+    spec, full = _spec(r, maneuver, outputs, points, body)
     options = validate(given | {"params": beam}, Where("scene", path), spec)
     return Scene(path, spec, options, Path(output_file) if output_file else None, columns, full)
 
@@ -239,7 +268,7 @@ def _outputs(r: _Reader, quantities: list[str], length: float):
     return tuple((k, v) for k, v in points.items() if k in used), tuple(outputs), columns
 
 
-def _spec(r: _Reader, maneuver: str, outputs, points):
+def _spec(r: _Reader, maneuver: str, outputs, points, body=None):
     from .spec import VariantSpec, _refs, builtin, customize
 
     tab = r.data["model"]
@@ -263,13 +292,22 @@ def _spec(r: _Reader, maneuver: str, outputs, points):
                 r.fail("[model] elements", f"must be an integer (got {elements!r})")
         stress = r.string("model", "stress", required=False)
         axial_force = r.string("model", "axial_force", required=False)
+        moment = r.string("model", "moment", required=False)
         keep_axial = tab.get("keep_axial", False)
         if not isinstance(keep_axial, bool):
             r.fail("[model] keep_axial", f"must be true or false (got {keep_axial!r})")
         name = name or _default_name(r.path)
+        if body is not None:  # the body replaces the uniform beam of every model
+            if base.kind == "fe":
+                n = elements if elements is not None else r.data["body"].get("ef_elements", 32)
+                base, elements = replace(base, body=body.remeshed(n), elements=None), None
+                base = replace(base, elements=base.body.elements)
+            else:
+                base = replace(base, body=body)
         spec = customize(base, name=name, outputs=list(outputs), maneuver=maneuver, stress=stress,
-                         axial_force=axial_force, elements=elements, points=points)
+                         axial_force=axial_force, elements=elements, points=points, moment=moment)
         full = customize(base, name=name, maneuver="spin_up", stress=stress, axial_force=axial_force,
+                         moment=moment,
                          elements=elements)
     except _SceneError:
         raise

@@ -64,14 +64,18 @@ def candidates(scene, max_bending: int = 4) -> list[VariantSpec]:
                 spec = VariantSpec(name, strain, _refs("axial", list(axial)), _refs("bending", list(BENDING[:k])),
                                    maneuver=base.maneuver, outputs=base.outputs, points=base.points,
                                    axial_force="equilibrium" if wants_n and strain == "foreshortening"
-                                   else "constitutive")
+                                   else "constitutive", body=getattr(base, "body", None))
                 out.append(spec.validate())
     return out
 
 
 def reference_spec(scene):
     ef = next(b for b in BUILTIN if b.kind == "fe")
-    return replace(ef, name=f"sel_ref_ef{REFERENCE_ELEMENTS}", elements=REFERENCE_ELEMENTS,
+    body = getattr(scene.spec, "body", None)  # a body from finite-element data: the same beam
+    if body is not None:
+        body = body.remeshed(REFERENCE_ELEMENTS)
+    return replace(ef, name=f"sel_ref_ef{REFERENCE_ELEMENTS}", body=body,
+                   elements=body.elements if body is not None else REFERENCE_ELEMENTS,
                    outputs=scene.spec.outputs, points=scene.spec.points, maneuver=scene.spec.maneuver,
                    aliases=()).validate()
 
