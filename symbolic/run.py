@@ -12,7 +12,7 @@ import numpy as np
 from .build import Built
 from .errors import FlexsymError, SimulationError, SpecError
 
-INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5")
+INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5", "ali3p", "genalpha3")
 NEWTON = ("modified", "full")
 
 

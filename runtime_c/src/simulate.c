@@ -152,6 +152,7 @@ void fsr_default_options(fsr_options* o)
     o->tol = 1e-6;
     o->max_steps = 1000000;
     o->blowup = 10.0;
+    o->penalty = 1e5;
 }
 
 const char* fsr_method_name(fsr_method m)
@@ -162,6 +163,8 @@ const char* fsr_method_name(fsr_method m)
     case FSR_NEWMARK: return "newmark";
     case FSR_DOPRI5: return "dopri5";
     case FSR_RADAU5: return "radau5";
+    case FSR_ALI3P: return "ali3p";
+    case FSR_GENALPHA3: return "genalpha3";
     }
     return "?";
 }
@@ -1116,10 +1119,20 @@ static void sim_close(sim* s)
     s->piv = NULL;
 }
 
+static int constrained_method(fsr_method m)
+{
+    return m == FSR_ALI3P || m == FSR_GENALPHA3;
+}
+
 fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
 {
+    /* the constrained integrators take the model as a struct (constrained.c, system.h) */
+    if (constrained_method(o->method)) return fsr_simulate_system(fsm_system_model(), o, r);
     sim s;
     fsr_status st = sim_open(&s, o, r, 0);
+    if (!st && fsm_system_model()->nc > 0)
+        st = fail(&s, FSR_BAD_OPTIONS, "%s: this model has %d constraint equations: use ali3p or genalpha3",
+                  fsr_method_name(o->method), fsm_system_model()->nc);
     if (!st) st = store(&s, 0.0, s.state, s.state + s.n, NULL);
     if (!st) st = sim_begin(&s);
     while (!st && !s.done) st = sim_step(&s);
@@ -1144,6 +1157,9 @@ fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
     p->o = *o;
     p->o.out_every = 1;  /* any grid point may be asked for */
     fsr_status st = sim_open(s, &p->o, &p->r, 1);
+    if (!st && constrained_method(o->method))
+        st = fail(s, FSR_BAD_OPTIONS, "%s: not available step by step yet (use fsr_simulate)",
+                  fsr_method_name(o->method));
     if (!st && !(o->method == FSR_GENALPHA || o->method == FSR_NEWMARK || o->method == FSR_RK4
                  || (o->method == FSR_DOPRI5 && o->tol == 0.0)
                  || (o->method == FSR_RADAU5 && (o->step == 0.0 || o->step == o->dt))))

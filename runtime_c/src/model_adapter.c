@@ -1,0 +1,64 @@
+/* A one-beam model generated before systems (model.h: global kernels, drive = [theta',
+ * theta'']) seen through the system interface (system.h): d = [t, theta, theta', theta''],
+ * so the old kernels read d + 2; no constraints; length scale = the default beam length.
+ * Compiled into every model built by flexsym_add_model (flexsym_runtime.cmake) unless the
+ * model defines fsm_system_model itself (flexsym_add_model(NAME SYSTEM ...)). */
+#include "flexsym/model.h"
+#include "flexsym/system.h"
+
+static void drive(const double* t, const double* mp, double* d)
+{
+    d[0] = *t;
+    fsm_maneuver(t, mp, d + 1);
+}
+
+static void force(const double* q, const double* qd, const double* d, const double* p, double* f)
+{
+    fsm_force(q, qd, d + 2, p, f);
+}
+
+static void residual_jac(const double* q, const double* qd, const double* qdd, const double* d,
+                         const double* p, double* dr_dq, double* dr_dqd)
+{
+    fsm_residual_jac(q, qd, qdd, d + 2, p, dr_dq, dr_dqd);
+}
+
+static void outputs(const double* q, const double* qd, const double* qdd, const double* lambda,
+                    const double* d, const double* p, double* y)
+{
+    (void)lambda;
+    fsm_outputs(q, qd, qdd, d + 2, p, y);
+}
+
+static void energy(const double* q, const double* qd, const double* d, const double* p, double* e)
+{
+    fsm_energy(q, qd, d + 2, p, e);
+}
+
+const fsm_system* fsm_system_model(void)
+{
+    static fsm_system s;
+    static int ready = 0;
+    if (!ready) {
+        const fsm_model_info* m = fsm_model();
+        s.name = m->variant;
+        s.nq = m->nq;
+        s.nd = 4;
+        s.nc = 0;
+        s.ny = m->ny;
+        s.np = m->np;
+        s.nmp = m->nmp;
+        s.length_scale = m->param_defaults[m->length_param];
+        s.mass_constant = m->mass_constant;
+        s.coord_names = m->coord_names;
+        s.output_names = m->output_names;
+        s.drive = drive;
+        s.mass = fsm_mass;
+        s.force = force;
+        s.residual_jac = residual_jac;
+        s.outputs = outputs;
+        s.energy = energy;
+        ready = 1;
+    }
+    return &s;
+}
