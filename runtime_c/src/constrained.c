@@ -182,7 +182,7 @@ fsr_status cs_consistent_start(csim* s)
         cs_kkt(s, NULL, s->w1, s->lam, s->lam1);
         for (int i = 0; i < n; ++i) v[i] += s->w1[i];
     }
-    m->mass(q, s->o->p, s->M);
+    m->mass(q, s->d, s->o->p, s->M);
     memcpy(s->S, s->M, sizeof(double) * (size_t)n * (size_t)n);
     if (fsr_lu_factor(s->S, n, s->piv))
         return cs_fail(s, FSR_SINGULAR, "mass matrix singular at t = 0");
@@ -192,6 +192,8 @@ fsr_status cs_consistent_start(csim* s)
     if (nc > 0) m->constraint_acc(q, v, s->d, s->o->p, s->gam);
     memset(s->lam, 0, sizeof(double) * (size_t)nc);
     cs_kkt(s, s->S, s->a, s->gam, s->lam);
+    memcpy(s->mult, s->lam, sizeof(double) * (size_t)nc);
+    memcpy(s->vout, s->v, sizeof(double) * (size_t)n);
     return FSR_OK;
 }
 
@@ -204,14 +206,14 @@ static fsr_status store(csim* s, double t)
     int c = 1 + m->ny;
     cs_drive(s, t);
     row[0] = t;
-    m->outputs(s->q, s->v, s->a, s->nc ? s->lam : s->zero, s->d, s->o->p, s->y);
+    m->outputs(s->q, s->vout, s->a, s->nc ? s->mult : s->zero, s->d, s->o->p, s->y);
     memcpy(row + 1, s->y, sizeof(double) * (size_t)m->ny);
     if (s->nc) {
         m->constraints(s->q, s->d, s->o->p, s->phi);
         row[c++] = cs_max_abs(s->phi, s->nc) / s->L;
     }
     memcpy(row + c, s->q, sizeof(double) * (size_t)s->n);
-    if (s->o->energy) m->energy(s->q, s->v, s->d, s->o->p, row + c + s->n);
+    if (s->o->energy) m->energy(s->q, s->vout, s->d, s->o->p, row + c + s->n);
     r->nrows++;
     return FSR_OK;
 }
@@ -266,9 +268,11 @@ static fsr_status check_options(csim* s)
     if (!(m->length_scale > 0.0) || !isfinite(m->length_scale))
         return cs_fail(s, FSR_BAD_OPTIONS, "model %s: length_scale must be > 0", m->name);
     for (int i = 0; i < m->np; ++i)
-        if (!isfinite(o->p[i])) return cs_fail(s, FSR_BAD_OPTIONS, "parameter %d must be finite", i);
+        if (!isfinite(o->p[i]))
+            return cs_fail(s, FSR_BAD_OPTIONS, "parameter %s must be finite", m->param_names[i]);
     for (int i = 0; i < m->nmp; ++i)
-        if (!isfinite(o->mp[i])) return cs_fail(s, FSR_BAD_OPTIONS, "drive parameter %d must be finite", i);
+        if (!isfinite(o->mp[i]))
+            return cs_fail(s, FSR_BAD_OPTIONS, "drive parameter %s must be finite", m->drive_param_names[i]);
     return FSR_OK;
 }
 
@@ -293,7 +297,7 @@ static fsr_status open_run(csim* s, const fsm_system* m, const fsr_options* o, f
     s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
     s->capacity = s->nsteps / o->out_every + 2;
     size_t nz = n > nc ? n : nc;
-    size_t doubles = 12 * n + 4 * nc + (size_t)m->nd + (size_t)m->ny + 4 * nn + 2 * nc * n + nc * nc
+    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + 2 * nc * n + nc * nc
                      + 2 * nc + nz + 1;
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
     double* x = calloc(doubles, sizeof(double));
@@ -309,6 +313,7 @@ static fsr_status open_run(csim* s, const fsm_system* m, const fsr_options* o, f
     s->S = x; x += nn;
     s->Jq = x; x += nn;
     s->Jv = x; x += nn;
+    s->P = x; x += nn;
     s->q = x; x += n;
     s->v = x; x += n;
     s->a = x; x += n;
@@ -320,9 +325,10 @@ static fsr_status open_run(csim* s, const fsm_system* m, const fsr_options* o, f
     s->f = x; x += n;
     s->w1 = x; x += n;
     s->w2 = x; x += n;
-    x += n;  /* spare */
+    s->vout = x; x += n;
     s->lam = x; x += nc;
     s->lam1 = x; x += nc;
+    s->mult = x; x += nc;
     s->phi = x; x += nc;
     s->phit = x; x += nc;
     s->gam = x; x += nc;

@@ -20,11 +20,14 @@ typedef struct {
     long k;          /* steps taken */
     /* state at t_k: q, q', q'', multipliers (ali3p: lambda*), the algorithmic acceleration */
     double *q, *v, *a, *lam, *ab;
+    double* mult;    /* the multipliers the outputs see (genalpha3: lam; ali3p: from q'') */
+    double* vout;    /* the velocities the rows see (ali3p: v; genalpha3: v projected) */
     /* iterates at t_k+1 */
     double *q1, *v1, *a1, *lam1;
     double* d;       /* drive (nd) */
     double* y;       /* outputs */
     double *M, *S, *Jq, *Jv;  /* n x n; S: the LU-factored iteration matrix (ali3p: W) */
+    double* P;       /* ali3p: M + (h/2) C + (h^2/4) K, W without the penalty term */
     int* piv;
     double *Pq, *phi, *phit, *gam;  /* Phi_q (nc x n), Phi, Phi_t, gamma */
     double *Z, *G;   /* n x nc: S^-1 Phi_q^T; nc x nc: Phi_q Z */

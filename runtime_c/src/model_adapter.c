@@ -17,6 +17,12 @@ static void force(const double* q, const double* qd, const double* d, const doub
     fsm_force(q, qd, d + 2, p, f);
 }
 
+static void mass(const double* q, const double* d, const double* p, double* M)
+{
+    (void)d;
+    fsm_mass(q, p, M);
+}
+
 static void residual_jac(const double* q, const double* qd, const double* qdd, const double* d,
                          const double* p, double* dr_dq, double* dr_dqd)
 {
@@ -52,8 +58,12 @@ const fsm_system* fsm_system_model(void)
         s.mass_constant = m->mass_constant;
         s.coord_names = m->coord_names;
         s.output_names = m->output_names;
+        s.param_names = m->param_names;
+        s.param_defaults = m->param_defaults;
+        s.drive_param_names = m->maneuver_param_names;
+        s.drive_param_defaults = m->maneuver_param_defaults;
         s.drive = drive;
-        s.mass = fsm_mass;
+        s.mass = mass;
         s.force = force;
         s.residual_jac = residual_jac;
         s.outputs = outputs;

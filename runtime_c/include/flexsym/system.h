@@ -22,14 +22,20 @@ typedef struct fsm_system {
     int nmp;                     /* drive parameters (read by drive only) */
     double length_scale;         /* m: the mechanism's size. Newton tolerances (newton_tol x it),
                                     blow-up and the violation column are relative to it. */
-    int mass_constant;           /* 1 when M does not depend on q */
+    int mass_constant;           /* 1 when M does not depend on q and d (not used yet) */
     const char* const* coord_names;       /* nq */
     const char* const* constraint_names;  /* nc, e.g. "slider.x": named in messages */
     const char* const* output_names;      /* ny */
+    const char* const* param_names;       /* np */
+    const double* param_defaults;         /* np */
+    const char* const* drive_param_names; /* nmp */
+    const double* drive_param_defaults;   /* nmp */
 
     /* d at time *t from the drive parameters mp */
     void (*drive)(const double* t, const double* mp, double* d);
-    void (*mass)(const double* q, const double* p, double* M);
+    /* M depends on d when a guided joint sits between coordinates (a prismatic joint on ground
+     * carrying a guided arm carrying a revolute one); a one-beam model ignores d */
+    void (*mass)(const double* q, const double* d, const double* p, double* M);
     void (*force)(const double* q, const double* qd, const double* d, const double* p, double* f);
     /* dr/dq, dr/dq' of r = M(q) q'' - f(q, q', d, p) (without the constraint forces) */
     void (*residual_jac)(const double* q, const double* qd, const double* qdd, const double* d,
