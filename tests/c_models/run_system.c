@@ -66,7 +66,7 @@ int main(int argc, char** argv)
     }
     fsr_result r;
     fsr_status st = fsr_simulate_system(m, &o, &r);
-    if (out && r.rows) {
+    if (out && r.nrows > 0) {
         FILE* f = fopen(out, "w");
         if (!f) { fprintf(stderr, "cannot write %s\n", out); return 4; }
         fputs("t", f);
