@@ -70,7 +70,8 @@ def _run_args(p: argparse.ArgumentParser, defaults: bool = True) -> None:
                         "with --step")
     p.add_argument("--integrator", choices=INTEGRATORS, default=d["integrator"],
                    help="rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark, "
-                        "radau5 (implicit, order 5, large steps)")
+                        "radau5 (implicit, order 5, large steps), ali3p, genalpha3 (constrained "
+                        "systems; without constraints: the trapezoidal rule, generalized-alpha)")
 
 
 def cmd_generate(args) -> int:

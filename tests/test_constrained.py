@@ -81,8 +81,9 @@ def test_slider_crank_follows_the_closed_form(runners, tmp_path, method):
     force = 0.0334 * a_exact(t)
     peak = np.abs(force).max()
     assert peak == pytest.approx(169.0, rel=0.01)
-    # measured at dt = 0.1 ms: ali3p 2.5e-9, genalpha3 7.4e-5 of the peak
-    tol = {"ali3p": 1e-7, "genalpha3": 3e-4}[method]
+    # measured at dt = 0.1 ms: ali3p 2.5e-11 (the projection's 1/kappa), genalpha3 7.4e-5 of
+    # the peak (integration error)
+    tol = {"ali3p": 1e-9, "genalpha3": 3e-4}[method]
     assert np.abs(d["lambda_x"] - force)[1:].max() < tol * peak
 
 

@@ -37,9 +37,12 @@
  * the integration error).
  *
  * Penalty: alpha = kappa (4 / dt^2) tr M / |Phi_q|_F^2 at t = 0, so that the penalty term of W
- * weighs kappa times the mass term (kappa = --penalty, default 1e5): the lambda* iteration then
- * removes a factor of about 1 + kappa of the violation per iteration; W's condition number grows
- * like kappa (1e5: 11 digits left).
+ * weighs kappa times the mass term (kappa = --penalty, default 1e7): the lambda* iteration then
+ * removes a factor of about 1 + kappa of the violation per iteration, and the projections leave
+ * a residual of order 1/kappa (slider-crank fixture: the slider force from the projected q''
+ * off by 4e-4, 4e-5, 4e-7, 4e-9 N at kappa = 1e2, 1e3, 1e5, 1e7; four-bar crank angle 1e-4 rad
+ * apart between kappa = 1e2 and 1e5, 2e-8 rad between 1e5 and 1e9); W's condition number grows
+ * like kappa (1e7: 9 digits left for the Newton update, which the next residual corrects).
  */
 #include <math.h>
 #include <string.h>

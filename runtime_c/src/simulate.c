@@ -152,7 +152,7 @@ void fsr_default_options(fsr_options* o)
     o->tol = 1e-6;
     o->max_steps = 1000000;
     o->blowup = 10.0;
-    o->penalty = 1e5;
+    o->penalty = 1e7;
 }
 
 const char* fsr_method_name(fsr_method m)

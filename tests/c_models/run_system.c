@@ -39,7 +39,7 @@ int main(int argc, char** argv)
     o.rho_inf = 0.9;
     o.newton_tol = 1e-12;
     o.newton_max = 25;
-    o.penalty = 1e5;
+    o.penalty = 1e7;
     o.p = p;
     o.mp = mp;
     const char* out = NULL;
