@@ -1,7 +1,8 @@
 """Constrained integrators ali3p and genalpha3 (runtime_c/src/ali3p.c, genalpha3.c) on
 hand-written planar models in relative coordinates with cut joints (tests/c_models: a rigid
-slider-crank, a four-bar under gravity, a parallelogram with a redundant bar), and on a
-generated one-beam model without constraints (nc = 0)."""
+slider-crank, a four-bar under gravity, a parallelogram with a redundant bar), built with the
+runtime's driver as models that provide fsm_system_model() themselves, and on a generated
+one-beam model without constraints (nc = 0)."""
 from __future__ import annotations
 
 import json
@@ -31,8 +32,8 @@ def runners(tmp_path_factory):
 
 
 def run(runners, fixture, out, **opts):
-    """Run a fixture; returns (exit code, summary, stderr, rows as a structured array or None)."""
-    cmd = [str(runners / f"run_{fixture}"), "--out", str(out)]
+    """Run a fixture's driver; returns (exit code, JSON summary, stderr, rows or None)."""
+    cmd = [str(runners / f"flexsym_{fixture}"), "--out", str(out)]
     for key, value in opts.items():
         if key == "energy":
             cmd.append("--energy")
@@ -91,16 +92,27 @@ def test_assembly_that_cannot_close_is_refused(runners, tmp_path):
     """Crank at 90 degrees and a rod shorter than the crank: the rod's end cannot reach the
     slider's guide. One line naming the constraint, exit 2, no rows."""
     code, summary, err, d = run(runners, "slider_crank", tmp_path / "bad.csv",
-                                param={"l": 0.1, "phi0": np.pi / 2})
+                                param={"l": 0.1, "phi0": np.pi / 2}, integrator="ali3p")
     assert code == 2
     lines = err.strip().splitlines()
     assert len(lines) == 1
-    assert lines[0].startswith("assembly cannot close at t = 0: constraint slider_pin.y has |Phi| = ")
-    assert summary["rows"] == 0
+    # the rod's end stays 0.05 m (r - l) from the guide at best
+    assert lines[0] == ("flexsym runtime: assembly cannot close at t = 0: constraint slider_pin.y is "
+                        "off by 0.0503 at best (0.112 x the length scale 0.45 m) after 50 Newton "
+                        "iterations")
+    assert summary == {} and d is None  # refused before any work: no summary, no file
     # the same rod at phi0 = 0 closes
-    code, _, err, d = run(runners, "slider_crank", tmp_path / "ok.csv", param={"l": 0.1}, t_end=0.01)
+    code, _, err, d = run(runners, "slider_crank", tmp_path / "ok.csv", param={"l": 0.1}, t_end=0.01,
+                          integrator="ali3p")
     assert code == 0, err
     assert d["x_s"][0] == pytest.approx(0.25, abs=1e-13)
+
+
+def test_todays_integrators_refuse_a_model_with_constraints(runners, tmp_path):
+    code, summary, err, d = run(runners, "fourbar", tmp_path / "x.csv", integrator="genalpha", t_end=0.1)
+    assert code == 2 and d is None
+    assert err.strip() == ("flexsym runtime: genalpha: this model has 2 constraint equations: use ali3p "
+                           "or genalpha3")
 
 
 @pytest.mark.parametrize("method", METHODS)

@@ -144,7 +144,8 @@ static int worst_constraint(const csim* s)
 }
 
 /* Positions: Newton on Phi(q, 0) = 0 with minimum-norm corrections (Gauss-Newton; redundant
- * rows dropped); velocities: the minimum-norm change with Phi_q q' = -Phi_t; accelerations and
+ * rows dropped), refused after ASSEMBLY_MAX_ITER iterations naming the largest residual of
+ * the best iterate; velocities: the minimum-norm change with Phi_q q' = -Phi_t; accelerations and
  * multipliers from [M Phi_q^T; Phi_q 0] [q''; lambda] = [f; gamma]. */
 fsr_status cs_consistent_start(csim* s)
 {
@@ -154,19 +155,21 @@ fsr_status cs_consistent_start(csim* s)
     if (m->initial_state) m->initial_state(s->o->p, s->o->mp, q, v);
     cs_drive(s, 0.0);
     if (nc > 0) {
-        int it = 0;
+        int it = 0, w_best = 0;
+        double best = INFINITY;  /* the smallest max |Phi| met, for the message */
         for (;; ++it) {
             cs_constraints(s, q);
             double err = cs_max_abs(s->phi, nc);
             if (err <= s->tol) break;
-            if (it == ASSEMBLY_MAX_ITER || !isfinite(err) || !isfinite(cs_max_abs(q, n))) {
-                int w = worst_constraint(s);
-                return cs_fail(s, FSR_ASSEMBLY,
-                               "assembly cannot close at t = 0: constraint %s has |Phi| = %.3g "
-                               "(%.3g x the length scale %g m) after %d Newton iterations",
-                               m->constraint_names[w], fabs(s->phi[w]), fabs(s->phi[w]) / s->L,
-                               s->L, it);
+            if (err < best) {
+                best = err;
+                w_best = worst_constraint(s);
             }
+            if (it == ASSEMBLY_MAX_ITER || !isfinite(err) || !isfinite(cs_max_abs(q, n)))
+                return cs_fail(s, FSR_ASSEMBLY,
+                               "assembly cannot close at t = 0: constraint %s is off by %.3g at "
+                               "best (%.3g x the length scale %g m) after %d Newton iterations",
+                               m->constraint_names[w_best], best, best / s->L, s->L, it);
             for (int i = 0; i < nc; ++i) s->lam[i] = -s->phi[i];
             memset(s->w1, 0, sizeof(double) * (size_t)n);
             cs_kkt(s, NULL, s->w1, s->lam, s->lam1);

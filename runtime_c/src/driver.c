@@ -28,7 +28,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "flexsym/model.h"
 #include "flexsym/runtime.h"
 #include "flexsym/system.h"
 
@@ -88,10 +87,10 @@ static void json_names(FILE* f, const char* key, const char* const* names, int n
     fputs("]", f);
 }
 
-static void print_info(const fsm_model_info* m)
+static void print_info(const fsm_system* m)
 {
     printf("{\"variant\": ");
-    json_string(stdout, m->variant);
+    json_string(stdout, m->name);
     printf(", \"fingerprint\": ");
     json_string(stdout, m->fingerprint);
     printf(", \"generator\": ");
@@ -103,11 +102,11 @@ static void print_info(const fsm_model_info* m)
     printf(", ");
     json_names(stdout, "params", m->param_names, m->np);
     printf(", ");
-    json_names(stdout, "maneuver_params", m->maneuver_param_names, m->nmp);
+    json_names(stdout, "maneuver_params", m->drive_param_names, m->nmp);
     printf("}\n");
 }
 
-static int set_param(const fsm_model_info* m, double* p, double* mp, const char* arg)
+static int set_param(const fsm_system* m, double* p, double* mp, const char* arg)
 {
     const char* eq = strchr(arg, '=');
     if (!eq) return 0;
@@ -117,14 +116,14 @@ static int set_param(const fsm_model_info* m, double* p, double* mp, const char*
     for (int i = 0; i < m->np; ++i)
         if (strlen(m->param_names[i]) == len && !strncmp(arg, m->param_names[i], len)) { p[i] = v; return 1; }
     for (int i = 0; i < m->nmp; ++i)
-        if (strlen(m->maneuver_param_names[i]) == len && !strncmp(arg, m->maneuver_param_names[i], len)) {
+        if (strlen(m->drive_param_names[i]) == len && !strncmp(arg, m->drive_param_names[i], len)) {
             mp[i] = v;
             return 1;
         }
     return 0;
 }
 
-static int write_csv(const char* path, const fsm_model_info* m, const fsr_result* r)
+static int write_csv(const char* path, const fsm_system* m, const fsr_result* r)
 {
     char tmp[4096];
     if (snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid()) >= (int)sizeof tmp) {
@@ -137,7 +136,7 @@ static int write_csv(const char* path, const fsm_model_info* m, const fsr_result
         return 0;
     }
     fputs("t", f);
-    int violation = fsm_system_model()->nc > 0;
+    int violation = m->nc > 0;
     for (int i = 0; i < m->ny; ++i) fprintf(f, ",%s", m->output_names[i]);
     if (violation) fputs(",violation", f);
     for (int i = 0; i < m->nq; ++i) fprintf(f, ",%s", m->coord_names[i]);
@@ -166,13 +165,13 @@ static int cmp_double(const void* a, const void* b)
 
 int main(int argc, char** argv)
 {
-    const fsm_model_info* m = fsm_model();
+    const fsm_system* m = fsm_system_model();
     fsr_options o;
     fsr_default_options(&o);
     double p[64], mp[64];
     if (m->np > 64 || m->nmp > 64) return usage("model has too many parameters", NULL);
     memcpy(p, m->param_defaults, sizeof(double) * (size_t)m->np);
-    memcpy(mp, m->maneuver_param_defaults, sizeof(double) * (size_t)m->nmp);
+    memcpy(mp, m->drive_param_defaults, sizeof(double) * (size_t)m->nmp);
     o.p = p;
     o.mp = mp;
     const char* out = NULL;

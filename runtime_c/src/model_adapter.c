@@ -48,6 +48,8 @@ const fsm_system* fsm_system_model(void)
     if (!ready) {
         const fsm_model_info* m = fsm_model();
         s.name = m->variant;
+        s.fingerprint = m->fingerprint;
+        s.generator = m->generator;
         s.nq = m->nq;
         s.nd = 4;
         s.nc = 0;
@@ -55,7 +57,11 @@ const fsm_system* fsm_system_model(void)
         s.np = m->np;
         s.nmp = m->nmp;
         s.length_scale = m->param_defaults[m->length_param];
+        s.length_param = m->length_param;
         s.mass_constant = m->mass_constant;
+        s.bandwidth = m->bandwidth;
+        s.outputs_use_acceleration = m->outputs_use_acceleration;
+        s.outputs_use_drive = m->outputs_use_drive;
         s.coord_names = m->coord_names;
         s.output_names = m->output_names;
         s.param_names = m->param_names;

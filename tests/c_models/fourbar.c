@@ -96,10 +96,17 @@ static void initial_state(const double* p, const double* mp, double* q, double* 
 }
 
 static const fsm_system model = {
-    "fourbar", 3, 1, 2, 4, 5, 1, 0.3, 0, coord_names, constraint_names, output_names,
-    param_names, param_defaults, drive_param_names, drive_param_defaults,
-    drive, pl_mass, pl_force, pl_residual_jac, pl_constraints, pl_constraint_jac,
-    pl_constraint_rate, pl_constraint_acc, outputs, pl_energy, initial_state};
+    .name = "fourbar", .fingerprint = "hand-written", .generator = "tests/c_models",
+    .nq = 3, .nd = 1, .nc = 2, .ny = 4, .np = 5, .nmp = 1,
+    .length_scale = 0.3, .length_param = -1, .mass_constant = 0, .bandwidth = -1,
+    .outputs_use_acceleration = 1, .outputs_use_drive = 1,
+    .coord_names = coord_names, .constraint_names = constraint_names, .output_names = output_names,
+    .param_names = param_names, .param_defaults = param_defaults,
+    .drive_param_names = drive_param_names, .drive_param_defaults = drive_param_defaults,
+    .drive = drive, .mass = pl_mass, .force = pl_force, .residual_jac = pl_residual_jac,
+    .constraints = pl_constraints, .constraint_jac = pl_constraint_jac,
+    .constraint_rate = pl_constraint_rate, .constraint_acc = pl_constraint_acc,
+    .outputs = outputs, .energy = pl_energy, .initial_state = initial_state};
 
 const fsm_system* fsm_system_model(void)
 {

@@ -94,10 +94,17 @@ static void initial_state(const double* p, const double* mp, double* q, double* 
 }
 
 static const fsm_system model = {
-    "parallelogram", 4, 1, 4, 3, 3, 1, 0.4, 0, coord_names, constraint_names, output_names,
-    param_names, param_defaults, drive_param_names, drive_param_defaults,
-    drive, pl_mass, pl_force, pl_residual_jac, pl_constraints, pl_constraint_jac,
-    pl_constraint_rate, pl_constraint_acc, outputs, pl_energy, initial_state};
+    .name = "parallelogram", .fingerprint = "hand-written", .generator = "tests/c_models",
+    .nq = 4, .nd = 1, .nc = 4, .ny = 3, .np = 3, .nmp = 1,
+    .length_scale = 0.4, .length_param = -1, .mass_constant = 0, .bandwidth = -1,
+    .outputs_use_acceleration = 1, .outputs_use_drive = 1,
+    .coord_names = coord_names, .constraint_names = constraint_names, .output_names = output_names,
+    .param_names = param_names, .param_defaults = param_defaults,
+    .drive_param_names = drive_param_names, .drive_param_defaults = drive_param_defaults,
+    .drive = drive, .mass = pl_mass, .force = pl_force, .residual_jac = pl_residual_jac,
+    .constraints = pl_constraints, .constraint_jac = pl_constraint_jac,
+    .constraint_rate = pl_constraint_rate, .constraint_acc = pl_constraint_acc,
+    .outputs = outputs, .energy = pl_energy, .initial_state = initial_state};
 
 const fsm_system* fsm_system_model(void)
 {

@@ -14,6 +14,8 @@
 
 typedef struct fsm_system {
     const char* name;
+    const char* fingerprint;     /* spec fingerprint recorded in the manifest */
+    const char* generator;       /* "flexsym X.Y.Z" */
     int nq;                      /* unknown coordinates q */
     int nd;                      /* drive vector d: 1 + 3 x (guided joints) */
     int nc;                      /* constraint equations (cut joints); 0: none */
@@ -22,7 +24,12 @@ typedef struct fsm_system {
     int nmp;                     /* drive parameters (read by drive only) */
     double length_scale;         /* m: the mechanism's size. Newton tolerances (newton_tol x it),
                                     blow-up and the violation column are relative to it. */
-    int mass_constant;           /* 1 when M does not depend on q and d (not used yet) */
+    int length_param;            /* index in p of a parameter that is the length scale (a one-beam
+                                    model's L, so that it follows --param L=...), or -1 */
+    int mass_constant;           /* 1 when M depends on neither q nor d: factored once */
+    int bandwidth;               /* half-bandwidth of M and the Jacobians; -1 when dense */
+    int outputs_use_acceleration;/* 1 when outputs read q'' (else it may be anything) */
+    int outputs_use_drive;       /* 1 when outputs read d (else it may be anything) */
     const char* const* coord_names;       /* nq */
     const char* const* constraint_names;  /* nc, e.g. "slider.x": named in messages */
     const char* const* output_names;      /* ny */
