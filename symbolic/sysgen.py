@@ -180,3 +180,12 @@ def prepare_system(system: System) -> Built:
             if not _current(folder, fp):
                 write_folder(generate_system_files(system), folder)
     return build(folder)
+
+
+def run_system(system: System, out: Path | None = None, **options):
+    """Generate, build and run a system: run.run_built's options (t_end, dt, integrator,
+    params, ...), checked against the option table before any work."""
+    from .run import check_options, run_built
+
+    opts = check_options(**options)
+    return run_built(prepare_system(system), opts, out=out)
