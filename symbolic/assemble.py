@@ -110,6 +110,7 @@ class SystemDerivation:
     M: sp.Matrix = None
     f: sp.Matrix = None
     outputs: dict[str, sp.Expr] = field(default_factory=dict)
+    constraints: list[tuple[str, sp.Expr]] = field(default_factory=list)  # Phi(q, theta) rows
     dropped: list[dict] = field(default_factory=list)
 
     @property
@@ -146,9 +147,6 @@ class SystemDerivation:
 
 def _unsupported(system: System, tree) -> None:
     where = f"system '{system.name}'"
-    if tree.cut:
-        raise SpecError(f"{where}: cut joint(s) {', '.join(tree.cut)} close a loop; constraint "
-                        "equations are not derived yet (tree systems only)")
     for b in system.bodies:
         if b.flexible and b.model.kind != "modal":
             raise SpecError(f"{where}: body '{b.name}': '{b.model.name}' (finite elements) in a "
@@ -344,8 +342,33 @@ def derive_system(system: System) -> SystemDerivation:
         th, thd, thdd = gd.symbols
         f -= pvec.diff(th) * thd + pvec.diff(thd) * thdd
     der.f = f.applyfunc(sp.expand)
+    der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
     return der
+
+
+def _side(der: SystemDerivation, joint, side: str) -> tuple[sp.Matrix, sp.Expr]:
+    ref = getattr(joint, side)
+    if ref == GROUND:
+        return sp.Matrix([sp.nsimplify(c) for c in joint.point]), sp.Integer(0)
+    return marker_pose(der, ref)
+
+
+def cut_joint_rows(der: SystemDerivation, joint) -> list[tuple[str, sp.Expr]]:
+    """Phi = 0 of a cut joint: revolute (pin: the two points coincide), clamp (and the angles
+    differ by the offset), prismatic (the child point on the parent's axis line, angles differ
+    by the offset). On a beam, a point's angle is its tangent's."""
+    (pp, ap), (pc, ac) = _side(der, joint, "parent"), _side(der, joint, "child")
+    off = sp.nsimplify(joint.offset)
+    n = joint.name
+    if joint.kind == "prismatic":
+        ax = sp.Matrix([sp.nsimplify(a) for a in joint.axis])
+        normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
+        return [(f"{n}.normal", (pc - pp).dot(normal)), (f"{n}.angle", ac - ap - off)]
+    rows = [(f"{n}.x", pc[0] - pp[0]), (f"{n}.y", pc[1] - pp[1])]
+    if joint.kind == "clamp":
+        rows.append((f"{n}.angle", ac - ap - off))
+    return rows
 
 
 def _applied_forces(der: SystemDerivation) -> sp.Matrix:

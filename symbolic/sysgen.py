@@ -75,7 +75,28 @@ def build_system_kernels(der: SystemDerivation) -> list:
         drive += [dtr(g.theta), dtr(sp.diff(g.theta, t_sym)), dtr(sp.diff(g.theta, t_sym, 2))]
     r = ca.mtimes(M, x["qdd"]) - f
     q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
-    return make_kernels([
+    constraint_kernels = []
+    if der.constraints:
+        # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d', with
+        # d' = [1, then theta_k', theta_k'', 0 per guided joint] (Phi does not read theta_k')
+        phi = _matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
+        ddot = [ca.SX(1.0)]
+        for k in range(len(der.guided)):
+            ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
+        ddot = ca.vertcat(*ddot)
+        phi_q = ca.jacobian(phi, q)
+        phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
+        phi_dot = ca.mtimes(phi_q, qd) + phi_t
+        gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
+        constraint_kernels = [
+            ("constraints", "Phi of the cut joints", [("q", q), ("d", d), ("p", p)], [("phi", phi)]),
+            ("constraint_jac", "Phi_q", [("q", q), ("d", d), ("p", p)], [("phi_q", phi_q)]),
+            ("constraint_rate", "Phi_t (Phi_q q' + Phi_t = 0)", [("q", q), ("d", d), ("p", p)],
+             [("phi_t", phi_t)]),
+            ("constraint_acc", "gamma (Phi_q q'' = gamma), casadi AD",
+             [("q", q), ("qd", qd), ("d", d), ("p", p)], [("gamma", gamma)]),
+        ]
+    return make_kernels(constraint_kernels + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
@@ -108,7 +129,8 @@ def generate_system_files(system: System) -> dict[str, str]:
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
         "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
         "summary": f"{len(system.bodies)} bodies, {len(der.q)} coordinates, "
-                   f"{len(der.guided)} guided joints, no cut joints.",
+                   f"{len(der.guided)} guided joints, {len(der.constraints)} constraint equations.",
+        "constraints": [n for n, _ in der.constraints],
         "banner": "system/banner.j2", "kernels": emitted,
         "guided": [g.joint for g in der.guided], "coords": [c.name for c in der.coords],
         "outputs": list(der.outputs), "nd": len(der.drive_symbols),
@@ -137,6 +159,7 @@ def generate_system_files(system: System) -> dict[str, str]:
         "drive_params": [{"name": p.name, "default": p.default, "unit": p.unit}
                          for p in der.drive_params],
         "params": [{"name": n, "default": v} for n, _, v in der.params],
+        "constraints": [{"name": n, "phi": str(e)} for n, e in der.constraints],
         "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
                          for b, term, wrt, _, _ in der.terms],
         "outputs": dict(zip(der.outputs, (o.quantity for o in system.outputs))),
