@@ -180,6 +180,16 @@ def test_orders_and_agreement(runners, tmp_path):
     assert np.abs(refs["ali3p"] - refs["genalpha3"]).max() < 2e-7
 
 
+@pytest.mark.parametrize("method", METHODS)
+def test_stepper_rows_equal_the_run(runners, method):
+    """fsr_stepper (an FMU's doStep) gives fsr_simulate's rows bit for bit, advanced one grid
+    point at a time and three at a time (tests/c_models/stepper_check.c)."""
+    proc = subprocess.run([str(runners / "stepper_check_fourbar"), method, "0.001", "0.5"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert json.loads(proc.stdout) == {"rows": 501, "compared": 668, "differ": 0}
+
+
 @pytest.mark.parametrize("method,plain", [("ali3p", "newmark"), ("genalpha3", "genalpha")])
 def test_without_constraints_the_methods_are_the_plain_ones(simulate, method, plain):
     """On a generated one-beam model (nc = 0, through the runtime's adapter) ali3p is the

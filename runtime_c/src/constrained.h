@@ -61,6 +61,14 @@ fsr_status cs_consistent_start(csim* s);
 fsr_status cs_accept(csim* s, double t1);
 fsr_status cs_newton_failed(csim* s, double t1, double dq, int it);
 
+/* A run resumable step by step (fsr_simulate_system, fsr_stepper): cs_open with room for
+ * `capacity` rows (0: every row of the run), cs_start (consistent initial state, the row at
+ * t = 0, the method's start), cs_step until s->k == s->nsteps, cs_close. */
+fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r, long capacity);
+fsr_status cs_start(csim* s);
+fsr_status cs_step(csim* s);
+void cs_close(csim* s);
+
 fsr_status ali3p_begin(csim* s);
 fsr_status ali3p_step(csim* s);
 fsr_status genalpha3_begin(csim* s);
