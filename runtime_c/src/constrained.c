@@ -266,6 +266,10 @@ static fsr_status check_options(csim* s)
     if (o->step != 0.0)
         return cs_fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)",
                        o->method == FSR_ALI3P ? "ali3p" : "genalpha3");
+    if (!m->drive || !m->mass || !m->force || !m->residual_jac || !m->outputs
+        || (m->nc > 0 && (!m->constraints || !m->constraint_jac || !m->constraint_rate
+                          || !m->constraint_acc || !m->constraint_names)))
+        return cs_fail(s, FSR_BAD_OPTIONS, "model %s lacks a kernel its sizes need (system.h)", m->name);
     if (o->energy && !m->energy)
         return cs_fail(s, FSR_BAD_OPTIONS, "model %s has no energy kernel", m->name);
     if (!(m->length_scale > 0.0) || !isfinite(m->length_scale))
