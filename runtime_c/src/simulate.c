@@ -1065,7 +1065,7 @@ static fsr_status sim_step(sim* s)
 }
 
 /* Check the options and allocate a run with room for `capacity` rows (0: every row of the
- * run); the state starts at rest. sim_close releases it. */
+ * run); the state starts at the model's initial_state, or at rest. sim_close releases it. */
 static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long capacity)
 {
     const fsm_system* m = fsm_system_model();
@@ -1128,6 +1128,7 @@ static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long cap
     memset(s->dw, 0, sizeof(double) * drives);
     memset(s->qdd, 0, sizeof(double) * (size_t)(4 * n));
     memset(s->S, 0, sizeof(double) * NN);
+    if (m->initial_state) m->initial_state(o->p, o->mp, s->state, s->state + n);  /* else at rest */
     return FSR_OK;
 }
 
