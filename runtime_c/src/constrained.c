@@ -308,7 +308,7 @@ fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_resul
                      + 2 * nc + nz + 1;
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
     double* x = calloc(doubles, sizeof(double));
-    s->piv = malloc(sizeof(int) * (n + 2 * nc + 1));
+    s->piv = malloc(sizeof(int) * (n + nc + 1));
     if (!r->rows || !x || !s->piv) {
         free(x);
         free(s->piv);
@@ -347,8 +347,7 @@ fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_resul
     s->Z = x; x += nc * n;
     s->G = x; x += nc * nc;
     s->zero = x;
-    s->rp = s->piv + n;
-    s->cp = s->rp + nc;
+    s->cp = s->piv + n;
     return FSR_OK;
 }
 
