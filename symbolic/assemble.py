@@ -111,6 +111,8 @@ class SystemDerivation:
     f: sp.Matrix = None
     outputs: dict[str, sp.Expr] = field(default_factory=dict)
     constraints: list[tuple[str, sp.Expr]] = field(default_factory=list)  # Phi(q, theta) rows
+    lam: sp.Matrix = None  # their multipliers (outputs read them)
+    V_grav: sp.Expr = sp.Integer(0)
     dropped: list[dict] = field(default_factory=list)
 
     @property
@@ -331,8 +333,9 @@ def derive_system(system: System) -> SystemDerivation:
             der.V += V
             Q += Qk
     der.V += V_grav
+    der.V_grav = V_grav
     Q += sp.Matrix([-sp.diff(V_grav, x) for x in q])
-    Q += _applied_forces(der)
+    Q += _applied_forces(der, list(q))
     der.Q = Q.applyfunc(sp.expand)
 
     pvec = sp.Matrix([sp.diff(der.T, x) for x in qd])
@@ -343,6 +346,7 @@ def derive_system(system: System) -> SystemDerivation:
         f -= pvec.diff(th) * thd + pvec.diff(thd) * thdd
     der.f = f.applyfunc(sp.expand)
     der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
+    der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
     return der
 
@@ -371,22 +375,24 @@ def cut_joint_rows(der: SystemDerivation, joint) -> list[tuple[str, sp.Expr]]:
     return rows
 
 
-def _applied_forces(der: SystemDerivation) -> sp.Matrix:
-    system, q = der.system, der.q
-    Q = sp.zeros(len(q), 1)
+def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
+    """Generalised forces of the motors, point forces and torques on the coordinates `wrt`
+    (symbols: unknowns, or a guided theta_k for the torque it needs)."""
+    system = der.system
+    Q = sp.zeros(len(wrt), 1)
     env = [("t", t)]
+    coordinate_of = {}
     for c, x, xd in zip(der.coords, der.q, der.qd):
         if c.group == "joint":
             env += [(c.joint, x), (f"{c.joint}_rate", xd)]
+            coordinate_of[c.joint] = x
     for gd in der.guided:
         env += [(gd.joint, gd.symbols[0]), (f"{gd.joint}_rate", gd.symbols[1])]
     env = tuple(env)
-    index = {c.joint: i for i, c in enumerate(der.coords) if c.group == "joint"}
     for d in system.drivers:
-        if d.kind != "motor":
-            continue
-        tau = parse_expression(d.expression, env, f"motor '{d.name}' force")
-        Q[index[d.joint]] += tau
+        if d.kind == "motor" and coordinate_of[d.joint] in wrt:
+            tau = parse_expression(d.expression, env, f"motor '{d.name}' force")
+            Q[list(wrt).index(coordinate_of[d.joint])] += tau
     for load in system.loads:
         if isinstance(load, PointForce):
             body, _ = system.marker(load.marker)
@@ -394,12 +400,27 @@ def _applied_forces(der: SystemDerivation) -> sp.Matrix:
             F = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
             if load.frame == "body":
                 F = _rot(der.poses[body].angle) * F
-            Q += sp.Matrix([F.dot(r.diff(x)) for x in q])
+            Q += sp.Matrix([F.dot(r.diff(x)) for x in wrt])
         elif isinstance(load, Torque):
             tau = parse_expression(load.expression, env, f"torque on '{load.body}'")
             phi = der.poses[load.body].angle
-            Q += sp.Matrix([tau * sp.diff(phi, x) for x in q])
+            Q += sp.Matrix([tau * sp.diff(phi, x) for x in wrt])
     return Q
+
+
+def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
+    """torque(D): a motor's force as given; for a guided joint the generalised force that
+    keeps it on theta(t): d/dt dT/dtheta' - dT/dtheta + dV_g/dtheta - Q_theta + Phi_theta^T
+    lambda (lambda: the cut joints' multipliers, M q'' = f - Phi_q^T lambda)."""
+    if driver.kind == "motor":
+        j = next(c for c in der.coords if c.joint == driver.joint)
+        return _applied_forces(der, [der.q[der.coords.index(j)]])[0]
+    th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
+    p = sp.diff(der.T, thd)
+    tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
+    for (_, phi), lam in zip(der.constraints, der.lam):
+        tau += sp.diff(phi, th) * lam
+    return sp.expand(tau)
 
 
 def marker_pose(der: SystemDerivation, ref: str) -> tuple[sp.Matrix, sp.Expr]:
@@ -451,6 +472,8 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
         return der.V
     if fn == "momentum":
         return der.momentum
+    if fn == "torque":
+        return motor_torque(der, next(d for d in system.drivers if d.name == args[0]))
     if fn in ("v", "u", "w", "N", "M"):
         beam = system.body(args[0])
         x = beam_station(system, beam, args[1], where)

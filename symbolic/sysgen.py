@@ -3,7 +3,7 @@
 Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = parameters):
   mass(q, d, p) -> M        force(q, qd, d, p) -> f          M q'' = f
   residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f
-  outputs(q, qd, qdd, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
+  outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
 and templates) and this module, assemble.py, system.py and templates/system/.
@@ -53,12 +53,14 @@ def build_system_kernels(der: SystemDerivation) -> list:
     n, nd = len(der.q), len(der.drive_symbols)
     x = {"q": ca.SX.sym("q", n), "qd": ca.SX.sym("qd", n), "qdd": ca.SX.sym("qdd", n),
          "d": ca.SX.sym("d", nd), "p": ca.SX.sym("p", len(der.params)), "t": ca.SX.sym("t"),
-         "mp": ca.SX.sym("mp", len(der.drive_params))}
+         "mp": ca.SX.sym("mp", len(der.drive_params)), "lam": ca.SX.sym("lam", len(der.lam))}
     symbols, priority = {}, {}
     for i, (_, sym, _) in enumerate(der.params):
         symbols[sym], priority[sym] = x["p"][i], 0
     for i, sym in enumerate(der.drive_symbols):
         symbols[sym], priority[sym] = x["d"][i], 1
+    for i, sym in enumerate(der.lam):
+        symbols[sym], priority[sym] = x["lam"][i], 2
     for i in range(n):
         for key, syms in (("q", der.q), ("qd", der.qd), ("qdd", der.qdd)):
             symbols[syms[i]], priority[syms[i]] = x[key][i], 2
@@ -104,7 +106,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
          [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)],
          [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
         ("outputs", "outputs " + ", ".join(der.outputs),
-         [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)], [("y", y)]),
+         [("q", q), ("qd", qd), ("qdd", qdd), ("lambda", x["lam"]), ("d", d), ("p", p)],
+         [("y", y)]),
         ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
          [("q", q), ("qd", qd), ("d", d), ("p", p)], [("e", en)]),
         ("drive", "d = [t, theta_k, theta_k', theta_k''] of the guided joints",

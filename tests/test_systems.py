@@ -166,8 +166,9 @@ def test_system_kernels_c_casadi_sympy(hub_built):
     sym = dict(zip(der.q, q)) | dict(zip(der.qd, qd)) | dict(zip(der.qdd, qdd))
     sym |= {s_: v for (_, s_, v) in der.params} | {der.drive_symbols[0]: d[0]}
     ptr = ctypes.POINTER(ctypes.c_double)
+    lam = np.zeros(0)  # no cut joints
     for name, args, expr in (("mass", (q, d, p), der.M), ("force", (q, qd, d, p), der.f),
-                             ("outputs", (q, qd, qdd, d, p), sp.Matrix(list(der.outputs.values())))):
+                             ("outputs", (q, qd, qdd, lam, d, p), sp.Matrix(list(der.outputs.values())))):
         ref = np.array(expr.xreplace(sym).evalf(30), dtype=float).reshape(-1)
         cas = np.array(kernels[name](*args)).reshape(-1)  # a dense matrix, read row by row
         out = np.zeros(ref.size)
@@ -192,7 +193,10 @@ def slider_crank_built():
     from flexsym.sysgen import prepare_system
     from flexsym.systems_library import slider_crank_system
 
-    return prepare_system(slider_crank_system(builtin("m3")))
+    system = slider_crank_system(builtin("m3"))
+    extra = (Output("T", "T"), Output("V", "V"), Output("tau", "torque(crank_drive)"),
+             Output("omega", "rate(crank_joint)"))
+    return prepare_system(replace(system, outputs=system.outputs + extra))
 
 
 def test_s2_constrained_integrators_agree_and_hold_the_loop(slider_crank_built):
@@ -222,3 +226,20 @@ def test_s2_rigid_limit_is_the_closed_form(slider_crank_built):
     r = run_built(slider_crank_built, t_end=0.3, dt=1e-4, integrator="ali3p", params={"E": 2e13})
     assert r.ok
     assert np.abs(r["x_s"] - _x_rigid(r.t)).max() < 1e-7
+
+
+def test_s2_energy_balance_with_the_drivers_work(slider_crank_built):
+    """T + V - (T + V)(0) = int tau theta' dt, tau = torque(crank_drive): the generalised force
+    the guided crank needs (with the cut joint's multipliers). The mismatch is the step's and
+    the trapezoidal quadrature's: measured 4.3e-5 of max(T + V) at 0.1 ms, 4x less at 0.05 ms."""
+    from flexsym.run import run_built
+
+    errs = []
+    for dt in (1e-4, 5e-5):
+        r = run_built(slider_crank_built, t_end=0.3, dt=dt, integrator="ali3p", interval=dt)
+        assert r.ok
+        energy, power = r["T"] + r["V"], r["tau"] * r["omega"]
+        work = np.concatenate([[0.0], np.cumsum((power[1:] + power[:-1]) / 2 * np.diff(r.t))])
+        errs.append(np.abs(energy - energy[0] - work).max() / np.abs(energy).max())
+    assert errs[0] < 1e-4
+    assert 3.0 < errs[0] / errs[1] < 5.0
