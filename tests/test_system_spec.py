@@ -72,3 +72,12 @@ def test_spanning_tree_prefers_root_of_flexible_body():
     reordered = replace(sys, joints=(j[0], j[2], j[3], j[1]))
     tree = spanning_tree(reordered)
     assert tree.joint_of("rod") == "crank_pin" and tree.cut == ("slider_pin",)
+
+
+def test_describe_shows_tree_coordinates_terms_and_ops():
+    from flexsym.sysgen import describe
+
+    text = describe(pendulum_system(builtin("m1")))
+    assert "tree beam <- pin" in text and "pin (joint)" in text and "beam_u_static (axial)" in text
+    assert "body beam: cubic acts on bending" in text  # #1: the cubic term on bending only
+    assert "kernel fsm_force:" in text and "constraint" not in text
