@@ -16,7 +16,8 @@ from .run import RunResult, check_options, run_built
 from .scene import Scene, load_scene
 from .spec import builtin
 
-__all__ = ["load_scene", "variant", "generate", "build", "run", "simulate", "inspect", "kernels"]
+__all__ = ["load_scene", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
+           "inprocess"]
 
 
 def variant(name_or_spec, **overrides):
@@ -80,3 +81,11 @@ def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,op
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
     return Report(_spec_of(target), latex=latex).render(chosen)
+
+
+def inprocess(target):
+    """The built model's library loaded in this process (InProcessModel): model.batch(runs, ...)
+    runs many parameter sets per call and returns arrays (see flexsym.inprocess)."""
+    from .inprocess import load
+
+    return load(_spec_of(target))

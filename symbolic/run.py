@@ -50,6 +50,11 @@ class RunResult:
         return self[col] - ref[col][idx]
 
 
+def default_out_every(dt: float) -> int:
+    """Steps between rows when not given: about 100 rows per second of simulated time."""
+    return max(1, int(round(0.01 / dt)))
+
+
 def _positive(name: str, value) -> None:
     if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0
             and np.isfinite(value)):
@@ -105,8 +110,8 @@ def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator
     newton: 'modified' (default, reuses the iteration matrix) or 'full'."""
     check_options(t_end=t_end, dt=dt, integrator=integrator, params=params or {}, tol=tol,
                   newton=newton, step=step)
-    if out_every is None:  # about 100 rows per second of simulated time
-        out_every = max(1, int(round(0.01 / dt)))
+    if out_every is None:
+        out_every = default_out_every(dt)
     cmd = [str(built.executable), "--t-end", repr(float(t_end)), "--dt", repr(float(dt)),
            "--integrator", integrator, "--out-every", str(out_every), "--repeat", str(repeat)]
     for name, value in (params or {}).items():

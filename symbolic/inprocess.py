@@ -1,0 +1,233 @@
+"""Run a built model in this process: many parameter sets per call through the C runtime's
+batch entry point (fsr_batch in runtime_c/src/batch.c), results as numpy arrays.
+
+Each run goes through the same fsr_simulate, with the options set as the driver sets them,
+so its rows are bit for bit those of `flexsym run` on the same inputs (tests/test_inprocess.py).
+Summaries (min, max, their times, time of the peak |y|, final value, values at chosen times)
+are computed in C over the rows of the output grid (every out_every * dt), so a sweep need
+not move the rows; keep them with rows=True. A run that fails (divergence, Newton failure)
+has its own status and message and does not affect the others.
+
+    from flexsym import api
+    model = api.inprocess("m3")
+    b = model.batch({"ws": [2.0, 4.0, 6.0]}, integrator="radau5", dt=0.01, step=0.25, at=[15.0])
+    b.summary("v_tip", "min")      # one value per run
+    b.result(0)                    # a RunResult, with rows=True
+"""
+from __future__ import annotations
+
+import ctypes
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .build import Built
+from .errors import SpecError
+from .generate import read_manifest
+from .run import INTEGRATORS, NEWTON, RunResult, check_options, default_out_every
+from .validity import VALIDITY_LIMIT, deflection_weights
+
+# fsr_method codes (runtime.h) and the driver's status words
+METHOD_CODES = {"rk4": 0, "genalpha": 1, "newmark": 2, "dopri5": 3, "radau5": 4}
+STATUS_WORDS = {0: "ok", 1: "diverged"}  # any other fsr_status: "failed"
+SUMMARY_FIELDS = ("min", "max", "t_min", "t_max", "t_peak", "final")  # FSR_SUM_*, then `at`
+STAT_FIELDS = ("t_stop", "steps", "rejected_steps", "newton_iterations", "jacobian_evaluations",
+               "force_evaluations", "omega_max", "rows", "ncols", "cpu_s", "bound_peak",
+               "bound_t")  # FSR_STAT_*
+MESSAGE = 512  # FSR_BATCH_MESSAGE
+RUN_OPTIONS = ("t_end", "dt", "integrator", "out_every", "tol", "step", "newton", "rho_inf",
+               "newmark", "blowup", "newton_tol", "max_steps")
+assert set(METHOD_CODES) == set(INTEGRATORS)
+
+_dptr = ctypes.POINTER(ctypes.c_double)
+
+
+def option_inputs(*, t_end: float = 20.0, dt: float = 1e-3, integrator: str = "genalpha",
+                  out_every: int | None = None, tol: float | None = None, step: float | None = None,
+                  newton: str | None = None, rho_inf: float | None = None, newmark: tuple | None = None,
+                  blowup: float | None = None, newton_tol: float | None = None,
+                  max_steps: int | None = None) -> dict[str, float]:
+    """The runtime inputs (fsr_batch names) that run_built passes as driver flags; options left
+    at None keep the runtime's defaults, as the driver does."""
+    if integrator not in METHOD_CODES:
+        raise SpecError(f"unknown integrator '{integrator}' (known: {', '.join(INTEGRATORS)})")
+    if newton is not None and newton not in NEWTON:
+        raise SpecError(f"unknown newton '{newton}' (known: {', '.join(NEWTON)})")
+    out = {"method": METHOD_CODES[integrator], "t_end": float(t_end), "dt": float(dt),
+           "out_every": default_out_every(dt) if out_every is None else int(out_every)}
+    optional = {"tol": tol, "step": step, "rho_inf": rho_inf, "blowup": blowup,
+                "newton_tol": newton_tol, "max_steps": max_steps,
+                "newton_full": None if newton is None else float(newton == "full")}
+    if newmark is not None:
+        optional |= {"nm_gamma": newmark[0], "nm_beta": newmark[1]}
+    out |= {k: float(v) for k, v in optional.items() if v is not None}
+    return out
+
+
+@dataclass
+class BatchResult:
+    """Results of n runs: per-run status, messages, statistics, summaries over each column
+    (the outputs, then the coordinates), and the rows when kept."""
+    variant: str
+    inputs: dict  # name -> array of n values (the run-time inputs, as given)
+    options: dict  # the options shared by every run (integrator, dt, ...)
+    columns: list  # summarized columns: outputs, then coordinates
+    outputs: list  # the output quantities (a prefix of columns)
+    at: np.ndarray  # times of the `at` values
+    codes: np.ndarray  # fsr_status per run
+    messages: list
+    stats: dict  # STAT_FIELDS -> array
+    values: np.ndarray  # n x len(columns) x (len(SUMMARY_FIELDS) + len(at))
+    valid: np.ndarray  # bool: ok and inside the modal model's range of validity
+    validity_notes: list  # per run: "" or why not valid
+    rows: list | None = None  # per run: rows x (t, outputs, coordinates) arrays
+    row_columns: list | None = None
+
+    def __len__(self) -> int:
+        return len(self.codes)
+
+    @property
+    def status(self) -> list[str]:
+        return [STATUS_WORDS.get(int(c), "failed") for c in self.codes]
+
+    def summary(self, column: str, field: str = "max") -> np.ndarray:
+        """One value per run: field in SUMMARY_FIELDS, or "at:T" for the value at time T."""
+        if column not in self.columns:
+            raise KeyError(f"no column '{column}' (columns: {', '.join(self.columns)})")
+        if field.startswith("at:"):
+            hits = np.flatnonzero(self.at == float(field[3:]))
+            if not len(hits):
+                raise KeyError(f"no values at t = {field[3:]} (at: {', '.join(map(repr, self.at))})")
+            f = len(SUMMARY_FIELDS) + int(hits[0])
+        else:
+            f = SUMMARY_FIELDS.index(field)
+        return self.values[:, self.columns.index(column), f]
+
+    def result(self, i: int) -> RunResult:
+        """Run i as a RunResult (needs rows=True); its summary has the driver's keys."""
+        if self.rows is None:
+            raise ValueError("rows were not kept: call batch(..., rows=True)")
+        st = {k: self.stats[k][i] for k in STAT_FIELDS}
+        summary = {"status": self.status[i], "message": self.messages[i], "t_stop": st["t_stop"],
+                   "steps": int(st["steps"]), "rejected_steps": int(st["rejected_steps"]),
+                   "newton_iterations": int(st["newton_iterations"]),
+                   "jacobian_evaluations": int(st["jacobian_evaluations"]),
+                   "force_evaluations": int(st["force_evaluations"]), "omega_max": st["omega_max"],
+                   "rows": int(st["rows"]), "cpu_median": st["cpu_s"]}
+        params = {k: float(v[i]) for k, v in self.inputs.items()}
+        return RunResult(self.variant, self.status[i], self.messages[i], summary, list(self.row_columns),
+                         self.rows[i], None, self.options | {"params": params})
+
+
+class InProcessModel:
+    """A built variant's shared library, loaded once; batch() runs parameter sets through it."""
+
+    def __init__(self, built: Built, gen_dir: Path, spec=None):
+        self.built, self.spec = built, spec
+        self.manifest = read_manifest(gen_dir)
+        self.outputs = list(self.manifest["outputs"])
+        self.coordinates = [c["name"] for c in self.manifest["coordinates"]]
+        self.columns = self.outputs + self.coordinates
+        self.params = {p["name"]: p["default"] for p in self.manifest["params"]}
+        self.maneuver_params = {p["name"]: p["default"] for p in self.manifest["maneuver"]["params"]}
+        self.lib = ctypes.CDLL(str(built.library))
+        fn = self.lib.fsr_batch
+        fn.restype = ctypes.c_int
+        fn.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_char_p), ctypes.c_int, _dptr, ctypes.c_int,
+                       _dptr, _dptr, ctypes.c_double, _dptr, _dptr, ctypes.POINTER(ctypes.c_int),
+                       ctypes.c_char_p, ctypes.POINTER(_dptr)]
+        self.lib.fsr_batch_free.restype = None
+        self.lib.fsr_batch_free.argtypes = [ctypes.POINTER(_dptr), ctypes.c_int]
+        self._weights = deflection_weights(spec, self.columns) if spec is not None else None
+
+    @property
+    def run_time_names(self) -> list[str]:
+        """The names batch() varies per run: beam and manoeuvre parameters."""
+        return list(self.params) + list(self.maneuver_params)
+
+    def batch(self, runs: dict, *, at=(), rows: bool = False, **options) -> BatchResult:
+        """Run every parameter set in `runs` (name -> sequence of n values; beam parameters rho,
+        E, A, I, L, manoeuvre parameters such as ws, ts; the others keep the model's defaults),
+        with the run options of run_built (t_end, dt, integrator, out_every, tol, step, newton,
+        ...) shared by all. at: times at which to report each column's value."""
+        unknown = [k for k in options if k not in RUN_OPTIONS]
+        if unknown:
+            raise TypeError(f"batch() got an unknown option '{unknown[0]}'")
+        names = list(runs)
+        for name in names:
+            if name not in self.run_time_names:
+                raise SpecError(f"unknown parameter '{name}' of {self.built.name} "
+                                f"(run-time parameters: {', '.join(self.run_time_names)})")
+        cols = [np.asarray(runs[k], dtype=float).ravel() for k in names]
+        n = len(cols[0]) if cols else 1
+        if any(len(c) != n for c in cols):
+            raise SpecError("every parameter needs the same number of values (one per run)")
+        table = np.array(cols).T.reshape(n, len(names))
+        base = {k: options.get(k) for k in ("t_end", "dt", "integrator") if options.get(k) is not None}
+        check_options(**({"t_end": 20.0, "dt": 1e-3, "integrator": "genalpha"} | base),
+                      params={}, tol=options.get("tol"), newton=options.get("newton"),
+                      step=options.get("step"))
+        opts = option_inputs(**options)
+        all_names = list(opts) + names
+        inputs = np.ascontiguousarray(np.hstack([np.tile(list(opts.values()), (n, 1)), table]))
+        at = np.ascontiguousarray(np.atleast_1d(np.asarray(at, dtype=float)))
+        ncs, nf = len(self.columns), len(SUMMARY_FIELDS) + len(at)
+        values = np.zeros((n, ncs, nf))
+        stats = np.zeros((n, len(STAT_FIELDS)))
+        codes = np.zeros(n, dtype=np.intc)
+        messages = ctypes.create_string_buffer(MESSAGE * n)
+        c_names = (ctypes.c_char_p * len(all_names))(*[s.encode() for s in all_names])
+        weights = None if self._weights is None else np.ascontiguousarray(self._weights, dtype=float)
+        row_ptrs = (_dptr * n)() if rows else None
+        ret = self.lib.fsr_batch(len(all_names), c_names, n, _ptr(inputs), len(at), _ptr(at),
+                                 None if weights is None else _ptr(weights), VALIDITY_LIMIT,
+                                 _ptr(values), _ptr(stats),
+                                 codes.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), messages, row_ptrs)
+        msgs = [messages.raw[i * MESSAGE:(i + 1) * MESSAGE].split(b"\0", 1)[0].decode() for i in range(n)]
+        if ret < 0:
+            raise SpecError(f"{self.built.name}: {msgs[0]}")
+        stat = {k: stats[:, i].copy() for i, k in enumerate(STAT_FIELDS)}
+        kept = None
+        if rows:
+            kept = []
+            for i in range(n):
+                nr, nc = int(stat["rows"][i]), int(stat["ncols"][i])
+                kept.append(np.ctypeslib.as_array(row_ptrs[i], shape=(nr, nc)).copy() if nr else
+                            np.zeros((0, nc)))
+            self.lib.fsr_batch_free(row_ptrs, n)
+        valid, notes = self._validity(codes, msgs, stat)
+        used = {"t_end": 20.0, "dt": 1e-3, "integrator": "genalpha"} | {k: v for k, v in options.items()
+                                                                         if v is not None}
+        return BatchResult(self.built.name, {k: table[:, j].copy() for j, k in enumerate(names)}, used,
+                           self.columns, self.outputs, at, codes, msgs, stat, values, valid, notes, kept,
+                           ["t"] + self.columns if rows else None)
+
+    def _validity(self, codes, messages, stat):
+        """Per run: ok and |v| <= 0.1 L over the rows (validity.assess on the summary)."""
+        valid, notes = [], []
+        for i, code in enumerate(codes):
+            note = []
+            t_over = stat["bound_t"][i]
+            if not np.isnan(t_over):
+                what = "|v_tip|" if "v_tip" in self.columns else "a bound on |v|"
+                note.append(f"deformation left the range of validity of the modal model at t = "
+                            f"{t_over:.3g} s: {what} > {VALIDITY_LIMIT:g} L (peak {stat['bound_peak'][i]:.3g} m)")
+            if code != 0:
+                note.append(messages[i])
+            valid.append(not note)
+            notes.append("; ".join(note))
+        return np.array(valid, dtype=bool), notes
+
+
+def _ptr(a: np.ndarray):
+    return a.ctypes.data_as(_dptr)
+
+
+def load(spec) -> InProcessModel:
+    """Generate and build spec when needed, and load its library."""
+    from .pipeline import generated_folder
+    from .build import build
+
+    folder = generated_folder(spec)
+    return InProcessModel(build(folder), folder, spec)
