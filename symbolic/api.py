@@ -17,7 +17,7 @@ from .scene import Scene, load_scene
 from .spec import builtin
 
 __all__ = ["load_scene", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
-           "inprocess"]
+           "inprocess", "sweep"]
 
 
 def variant(name_or_spec, **overrides):
@@ -89,3 +89,40 @@ def inprocess(target):
     from .inprocess import load
 
     return load(_spec_of(target))
+
+
+def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), resume=False,
+          workers=None, dask=None, progress=None, on_chunk=None, ws=6.0, ts=15.0, params=None,
+          **run_options) -> dict:
+    """`flexsym sweep` from Python: vary is a list of "NAME=START:STOP:COUNT" / "NAME=a,b,c" /
+    "NAME=LO:HI" strings, or a dict NAME -> list of values or such a string. Runs a scene with its
+    own settings, or a variant on the spin-up (ws, ts, params, t_end, dt, integrator, tol, step,
+    out_every as in simulate()). dask: a scheduler address or a distributed.Client. Writes the
+    table to out and returns it as column -> numpy array (see flexsym.sweep)."""
+    from .sweep import check_partial, make_plan, prepare_plan, read_table, run_sweep
+
+    if isinstance(vary, dict):
+        vary = [f"{k}={v}" if isinstance(v, str) else f"{k}={','.join(repr(float(x)) for x in v)}"
+                for k, v in vary.items()]
+    if isinstance(target, Scene) or (isinstance(target, (str, Path)) and str(target).endswith(".toml")):
+        scene = target if isinstance(target, Scene) else load_scene(target)
+        if run_options or params:
+            raise SpecError(f"{scene.path}: run options do not combine with a scene: set them in the scene")
+        spec, base = scene.spec, dict(scene.params)
+        settings = dict(t_end=scene.t_end, dt=scene.dt, integrator=scene.integrator,
+                        out_every=scene.out_every, tol=scene.tol, step=scene.step)
+    else:
+        spec = _spec_of(target)
+        base = {} if spec.maneuver.startswith("expression:") else \
+            {"ws": ws} | ({"ts": ts} if spec.maneuver == "spin_up" else {})
+        base |= params or {}
+        settings = dict(t_end=20.0, dt=1e-3, integrator="genalpha", out_every=None, tol=None,
+                        step=None) | run_options
+    check_options(**{k: v for k, v in settings.items() if k != "out_every"}, params=base, spec=spec)
+    plan = make_plan(spec, settings, base, list(vary), samples=samples, seed=seed, sampling=sampling,
+                     at=at)
+    check_partial(Path(out), resume)
+    prepare_plan(plan)
+    run_sweep(plan, Path(out), resume=resume, workers=workers, dask=dask, progress=progress,
+              on_chunk=on_chunk)
+    return read_table(out)

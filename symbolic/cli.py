@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -236,6 +237,63 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    import numpy as np
+
+    from .run import check_options
+    from .sweep import check_partial, make_plan, partial_path, plot, prepare_plan, read_table, run_sweep
+
+    spec, scene = resolve(args)
+    settings, _ = _run_settings(args, spec, scene)
+    if scene is None:
+        settings["out_every"] = None  # run_built's default: a row about every 0.01 s
+    base = settings.pop("params")
+    check_options(**{k: v for k, v in settings.items() if k != "out_every"}, params=base, spec=spec)
+    at = []
+    for item in (args.at or "").split(",") if args.at else []:
+        try:
+            at.append(float(item))
+        except ValueError:
+            raise SpecError(f"--at '{item}' is not a number") from None
+    if args.workers is not None and args.workers < 1:
+        raise SpecError(f"--workers must be >= 1 (got {args.workers})")
+    plan = make_plan(spec, settings, base, args.vary or [], samples=args.samples, seed=args.seed,
+                     sampling=args.sampling, at=at)
+    out = Path(args.out)
+    check_partial(out, args.resume)
+    plot_x = args.plot_x.split(",") if args.plot_x else list(plan.names[:2])
+    for name in plot_x:
+        if name not in plan.names:
+            raise SpecError(f"--plot-x {name}: not a varied input ({', '.join(plan.names)})")
+    if len(plot_x) > 2:
+        raise SpecError("--plot-x: one or two varied inputs")
+    prepare_plan(plan)
+    plot_y = args.plot_y or (f"{plan.outputs[0]}_min" if plan.outputs else None)
+    if args.plot and plot_y not in plan.header():
+        raise SpecError(f"--plot-y {plot_y}: not a column of the table")
+    where = f"dask at {args.dask}" if args.dask else f"{args.workers or os.cpu_count()} local processes"
+    print(f"sweep {spec.name}: {len(plan)} runs ({plan.sampling}"
+          + (f", seed {plan.seed}" if plan.seed is not None else "") + f") on {where}")
+    try:
+        run_sweep(plan, out, resume=args.resume, workers=args.workers, dask=args.dask,
+                  progress=True if args.progress else None)
+    except KeyboardInterrupt:
+        print(f"flexsym: sweep interrupted; finished runs kept in {partial_path(out)}: "
+              "run the same command with --resume to continue", file=sys.stderr)
+        return 130
+    table = read_table(out)
+    status = table["status"]
+    ok = int(np.sum(status == "ok"))
+    valid = int(np.sum(table["valid"] == "True"))
+    print(f"table: {out} ({len(status)} runs: {ok} ok, {len(status) - ok} stopped, "
+          f"{valid} valid)")
+    if args.plot:
+        plot(table, plot_x, plot_y, Path(args.plot), f"{spec.name}: {plot_y}",
+             others=[n for n in plan.names if n not in plot_x])
+        print(f"plot: {args.plot}")
+    return 0
+
+
 def cmd_variants(args) -> int:
     from .energy import STRAIN_MODELS
     from .modes import FAMILIES
@@ -321,6 +379,31 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-end-to-end", action="store_true",
                    help="skip timing generation + compilation from scratch")
     p.set_defaults(func=cmd_paper)
+
+    p = sub.add_parser("sweep", help="many runs of a scene or variant over run-time parameters: "
+                       "a table with one row per run (local processes or a Dask cluster)")
+    _variant_args(p)
+    _run_args(p, defaults=False)
+    p.add_argument("--param", action="append", help="fixed beam or manoeuvre parameter NAME=VALUE")
+    p.add_argument("--tol", type=float, help="dopri5 error tolerance")
+    p.add_argument("--step", type=float, help="radau5 step [s]")
+    p.add_argument("--vary", action="append", metavar="NAME=SPEC",
+                   help="START:STOP:COUNT (grid), a,b,c (list) or LO:HI (with --samples); repeatable; "
+                        "names: rho, E, A, I, L, ws, ts")
+    p.add_argument("--samples", type=int, help="N random or Latin-hypercube samples of the LO:HI ranges")
+    p.add_argument("--seed", type=int, help="seed of the samples (default 0)")
+    p.add_argument("--sampling", choices=("random", "lhs"), help="with --samples (default lhs)")
+    p.add_argument("--at", help="comma-separated times [s]: also report every output's value there")
+    p.add_argument("--out", required=True, help="the table (CSV); finished runs go to OUT.partial first")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted sweep from OUT.partial")
+    p.add_argument("--workers", type=int, help="local processes (default: all cores)")
+    p.add_argument("--dask", metavar="ADDRESS", help="run on an existing dask.distributed scheduler "
+                   "(e.g. tcp://host:8786)")
+    p.add_argument("--plot", help="PNG: a summary column against one or two varied inputs")
+    p.add_argument("--plot-y", help="column to plot (default: <first output>_min)")
+    p.add_argument("--plot-x", help="one or two varied inputs, comma-separated (default: the first two)")
+    p.add_argument("--progress", action="store_true", help="progress bar on stderr even when not a terminal")
+    p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("variants", help="list built-in variants, strain models and mode families")
     p.set_defaults(func=cmd_variants)
