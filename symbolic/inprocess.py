@@ -184,7 +184,8 @@ class InProcessModel:
                                  None if weights is None else _ptr(weights), VALIDITY_LIMIT,
                                  _ptr(values), _ptr(stats),
                                  codes.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), messages, row_ptrs)
-        msgs = [messages.raw[i * MESSAGE:(i + 1) * MESSAGE].split(b"\0", 1)[0].decode() for i in range(n)]
+        raw = messages.raw
+        msgs = [raw[i * MESSAGE:(i + 1) * MESSAGE].split(b"\0", 1)[0].decode() for i in range(n)]
         if ret < 0:
             raise SpecError(f"{self.built.name}: {msgs[0]}")
         stat = {k: stats[:, i].copy() for i, k in enumerate(STAT_FIELDS)}

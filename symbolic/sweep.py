@@ -237,17 +237,14 @@ def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int,
     runs |= {k: table[:, j] for j, k in enumerate(names)}
     options = {k: v for k, v in settings.items() if v is not None}
     b = model.batch(runs, at=at, **options)
-    status = b.status
-    rows = []
-    for i in range(len(b)):
-        row = [start + i, *table[i].tolist(), status[i], bool(b.valid[i]), b.validity_notes[i]]
-        for o in outputs:
-            row += [b.summary(o, f)[i] for f in ("min", "max", "final", "t_peak")]
-            row += [b.summary(o, f"at:{t!r}")[i] for t in at]
-        row += [b.stats["t_stop"][i], int(b.stats["steps"][i]), int(b.stats["newton_iterations"][i]),
-                b.stats["cpu_s"][i]]
-        rows.append([float(x) if isinstance(x, np.floating) else x for x in row])
-    return rows
+    cols = [np.arange(start, start + len(b)), *table.T, b.status, b.valid, b.validity_notes]
+    for o in outputs:
+        cols += [b.summary(o, f) for f in ("min", "max", "final", "t_peak")]
+        cols += [b.summary(o, f"at:{t!r}") for t in at]
+    cols += [b.stats["t_stop"], b.stats["steps"].astype(int), b.stats["newton_iterations"].astype(int),
+             b.stats["cpu_s"]]
+    return [list(row) for row in zip(*(np.asarray(c).tolist() if isinstance(c, np.ndarray) else c
+                                       for c in cols))]
 
 
 def _init_local_worker(spec) -> None:
