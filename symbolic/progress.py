@@ -28,13 +28,13 @@ class Progress:
         self.enabled = wanted(enabled, self.stream)
         self.done = 0
         self.start = time.perf_counter()
-        self._drawn = 0.0
+        self._last = 0.0  # time of the last draw
+        self._shown = False  # the bar is on the screen (drawn, not closed)
 
     def update(self, n: int = 1, note: str = "") -> None:
         self.done += n
         now = time.perf_counter()
-        if self.enabled and (now - self._drawn >= 0.1 or self.done >= self.total):
-            self._drawn = now
+        if self.enabled and (now - self._last >= 0.1 or self.done >= self.total):
             self._draw(now, note)
 
     def _draw(self, now: float, note: str) -> None:
@@ -46,12 +46,26 @@ class Progress:
                 f"{elapsed:.0f} s, {eta:.0f} s left {note}")
         self.stream.write(line[:160].ljust(80))
         self.stream.flush()
+        self._last, self._shown = now, True
+
+    def wrap(self, log):
+        """log(msg) that clears the bar first and draws it again after (both on one terminal)."""
+        def logged(*args, **kwargs):
+            shown = self._shown
+            if shown:
+                self.stream.write("\r\033[K")
+                self.stream.flush()
+            log(*args, **kwargs)
+            if shown:
+                self._draw(time.perf_counter(), "")
+        return logged
 
     def close(self) -> None:
-        if self.enabled:
+        if self._shown:
             self._draw(time.perf_counter(), "")
             self.stream.write("\n")
             self.stream.flush()
+            self._shown = False
 
     def __enter__(self):
         return self
