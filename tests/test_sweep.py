@@ -191,3 +191,30 @@ def test_progress_bar_only_on_a_terminal_or_when_asked(monkeypatch):
     with Progress(2, "x", stream=forced) as bar:
         bar.update(2)
     assert "2/2" in forced.getvalue()
+
+
+def test_ctrl_c_keeps_finished_runs_and_resume_completes(isolated_cache, tmp_path):
+    """A real SIGINT to `flexsym sweep`: exit 130, the finished runs stay in the partial file,
+    and the same command with --resume completes the table without running them again."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out, part = tmp_path / "t.csv", tmp_path / "t.csv.partial"
+    cmd = [sys.executable, "-m", "flexsym.cli", "sweep", "m3", "--integrator", "radau5", "--dt", "0.01",
+           "--step", "0.25", "--vary", "ws=2:8:4000", "--out", str(out), "--workers", "2"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not (part.exists() and len(part.read_text().splitlines()) > 200) and time.time() < deadline:
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "--resume" in err and not out.exists()
+    kept = {int(r.split(",")[0]): r for r in part.read_text().splitlines()[2:]}
+    assert 200 < len(kept) < 4000
+    done = subprocess.run(cmd + ["--resume"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    rows = out.read_text().splitlines()
+    assert len(rows) == 4001 and not part.exists()
+    assert all(rows[i + 1] == r for i, r in kept.items())  # kept runs were not run again
