@@ -270,16 +270,24 @@ def _local_results(plan, chunks, workers):
         pool.shutdown(wait=False, cancel_futures=True)
 
 
-def _dask_results(plan, chunks, dask):
+def dask_client(dask):
+    """(client, own): a distributed.Client connected to the scheduler at address `dask`, or
+    `dask` itself when it is a Client; connected before anything is written."""
+    if hasattr(dask, "submit"):
+        return dask, False
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError:
         raise ToolchainError("--dask needs dask.distributed: pip install 'flexsym[sweep]'") from None
-    own = not hasattr(dask, "submit")
     try:
-        client = Client(dask, timeout="10s") if own else dask
-    except (OSError, TimeoutError) as exc:
+        return Client(dask, timeout="10s"), True
+    except (OSError, TimeoutError, ValueError) as exc:
         raise FlexsymError(f"--dask {dask}: cannot connect to the scheduler: {exc}") from None
+
+
+def _dask_results(plan, chunks, client, own: bool):
+    from distributed import as_completed
+
     try:
         futures = [client.submit(run_chunk, plan.spec, plan.settings, plan.base_params, plan.names, s,
                                  plan.table[s:e], plan.at, plan.outputs, pure=False) for s, e in chunks]
@@ -345,15 +353,38 @@ def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int 
     for _, grp in itertools.groupby(enumerate(todo), key=lambda p: p[1] - p[0]):
         idx = [i for _, i in grp]
         chunks += [(idx[k], idx[min(k + size, len(idx)) - 1] + 1) for k in range(0, len(idx), size)]
+    if dask is not None:
+        client, own = dask_client(dask)
+        results = _dask_results(plan, chunks, client, own)
+    else:
+        results = _local_results(plan, chunks, workers)
     out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        _collect(plan, part, done, results, progress, on_chunk)
+    except BaseException:
+        if not done:  # nothing finished: leave no partial file behind
+            part.unlink(missing_ok=True)
+        raise
+    tmp = out.with_name(f".{out.name}.tmp.{os.getpid()}")
+    with open(tmp, "w", encoding="utf-8", newline="") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(header)
+        for i in range(len(plan)):
+            writer.writerow(done[i])
+    os.replace(tmp, out)
+    part.unlink()
+    return out
+
+
+def _collect(plan: SweepPlan, part: Path, done: dict, results, progress, on_chunk) -> None:
+    """Append finished rows to the partial file (and to done) as the chunks arrive."""
     with open(part, "a" if done else "w", encoding="utf-8", newline="") as fh:
         if not done:
             fh.write(f"# flexsym sweep {plan.key()}\n")
-            csv.writer(fh, lineterminator="\n").writerow(header)
+            csv.writer(fh, lineterminator="\n").writerow(plan.header())
         else:
             _drop_truncated_tail(fh, part)
         writer = csv.writer(fh, lineterminator="\n")
-        results = _dask_results(plan, chunks, dask) if dask is not None else _local_results(plan, chunks, workers)
         with Progress(len(plan), f"sweep {plan.spec.name}", progress) as bar:
             bar.update(len(done))
             try:
@@ -368,15 +399,6 @@ def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int 
                         on_chunk(len(done), len(plan))
             finally:
                 results.close()
-    tmp = out.with_name(f".{out.name}.tmp.{os.getpid()}")
-    with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(header)
-        for i in range(len(plan)):
-            writer.writerow(done[i])
-    os.replace(tmp, out)
-    part.unlink()
-    return out
 
 
 def _drop_truncated_tail(fh, path: Path) -> None:
