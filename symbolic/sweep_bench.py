@@ -17,6 +17,7 @@ Prints a Markdown table. Numbers are wall-clock and depend on the machine and it
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import tempfile
 import time
@@ -86,8 +87,6 @@ def main(argv=None) -> int:
         if args.no_dask:
             pool += [timed("pool") for _ in range(args.repeat - 1)]
         else:
-            import logging
-
             from distributed import LocalCluster
 
             dask = {}
@@ -107,6 +106,7 @@ def main(argv=None) -> int:
                          f"{best / min(pool):.2f} x the pool |")
             strip = lambda name: [r.rsplit(",", 1)[0] for r in (Path(tmp) / name).read_text().splitlines()]
             lines.append(f"| Dask table = pool table (cpu_s aside) | {strip('pool.csv') == strip('dask.csv')} |")
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)  # shutdown chatter
     print("\n".join(lines))
     return 0
 
