@@ -12,7 +12,8 @@ case at integration error <= 1e-4 m), omega_s spread over [2, 8] rad/s:
   3. a sweep of --runs runs (table written) on the local process pool (all cores) and on a
      Dask LocalCluster on loopback with one single-threaded worker process per core: a first
      sweep (workers import flexsym and load the model) and a second one.
-Prints a Markdown table. Numbers are wall-clock and depend on the machine and its load.
+Prints a Markdown table. Rates are wall-clock and depend on the machine and its load; the CPU
+times per run (this process and its children) depend less on the load.
 """
 from __future__ import annotations
 
@@ -32,6 +33,14 @@ from .spec import builtin
 from .sweep import make_plan, prepare_plan, run_sweep
 
 CASE = dict(integrator="radau5", dt=0.01, step=0.25, t_end=20.0)
+
+
+def _cpu() -> float:
+    """CPU seconds of this process and its finished children (the drivers of run_built)."""
+    import resource
+
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def _rate(n: int, seconds: float) -> str:
@@ -59,19 +68,21 @@ def main(argv=None) -> int:
     wsv = np.linspace(2.0, 8.0, args.batch)
     model.batch({"ws": wsv[:50]}, **CASE)  # warm-up
     for label, opts in (("rows every 10 ms", CASE), ("rows at the 80 steps", CASE | {"dt": 0.25})):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), _cpu()
         b = model.batch({"ws": wsv}, **opts)
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, _cpu() - c0
         assert all(s == "ok" for s in b.status)
-        lines.append(f"| in-process batch, 1 process, {label} | {_rate(args.batch, wall)}; "
-                     f"integration {np.median(b.stats['cpu_s']) * 1e3:.3f} ms/run (median) |")
+        lines.append(f"| in-process batch, 1 process, {label} | {_rate(args.batch, wall)}; CPU "
+                     f"{cpu / args.batch * 1e3:.3f} ms/run, of which integration "
+                     f"{np.median(b.stats['cpu_s']) * 1e3:.3f} (median) |")
 
     built = prepare(spec)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu()
     for w in np.linspace(2.0, 8.0, args.subprocess_runs):
         run_built(built, params={"ws": float(w)}, **CASE)
-    wall = time.perf_counter() - t0
-    lines.append(f"| one process per run (`run_built`, CSV), 1 at a time | {_rate(args.subprocess_runs, wall)} |")
+    wall, cpu = time.perf_counter() - t0, _cpu() - c0
+    lines.append(f"| one process per run (`run_built`, CSV), 1 at a time | {_rate(args.subprocess_runs, wall)}; "
+                 f"CPU {cpu / args.subprocess_runs * 1e3:.3f} ms/run (driver process and Python) |")
 
     settings = dict(CASE, out_every=None, tol=None)
     plan = prepare_plan(make_plan(spec, settings, {"ws": 6.0, "ts": 15.0},
