@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import itertools
 import json
 import math
@@ -247,8 +248,9 @@ def _restore_malloc_thresholds() -> None:
 
 
 def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int, table: np.ndarray,
-              at: tuple, outputs: list) -> list[list]:
-    """Runs start, start + 1, ... (rows of table): one table row each (values, not text)."""
+              at: tuple, outputs: list) -> list[tuple[int, str]]:
+    """Runs start, start + 1, ... (rows of table): (run, its table line) each. Lines are made
+    here, in the workers, so that the collecting process only appends them."""
     model = _model(spec)
     runs = {k: np.full(len(table), v) for k, v in base_params.items()}
     runs |= {k: table[:, j] for j, k in enumerate(names)}
@@ -260,8 +262,11 @@ def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int,
         cols += [b.summary(o, f"at:{t!r}") for t in at]
     cols += [b.stats["t_stop"], b.stats["steps"].astype(int), b.stats["newton_iterations"].astype(int),
              b.stats["cpu_s"]]
-    return [list(row) for row in zip(*(np.asarray(c).tolist() if isinstance(c, np.ndarray) else c
-                                       for c in cols))]
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    for row in zip(*(np.asarray(c).tolist() if isinstance(c, np.ndarray) else c for c in cols)):
+        writer.writerow([_cell(x) for x in row])
+    return list(zip(range(start, start + len(b)), buf.getvalue().splitlines(keepends=True)))
 
 
 def _init_local_worker(spec) -> None:
@@ -339,7 +344,7 @@ def check_partial(out: Path, resume: bool) -> None:
                         "continue it, or delete it")
 
 
-def _read_partial(path: Path, plan: SweepPlan) -> dict[int, list[str]]:
+def _read_partial(path: Path, plan: SweepPlan) -> dict[int, str]:
     """Finished rows of an interrupted sweep (a truncated last line is dropped)."""
     text = path.read_text(encoding="utf-8")
     lines = text.splitlines(keepends=True)
@@ -348,9 +353,10 @@ def _read_partial(path: Path, plan: SweepPlan) -> dict[int, list[str]]:
                         "delete it to start again")
     header = plan.header()
     done = {}
-    for row in csv.reader([ln for ln in lines[2:] if ln.endswith("\n")]):
-        if len(row) == len(header):
-            done[int(row[0])] = row
+    for line in lines[2:]:
+        row = next(csv.reader([line]), [])
+        if line.endswith("\n") and len(row) == len(header):
+            done[int(row[0])] = line
     return done
 
 
@@ -387,10 +393,8 @@ def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int 
         raise
     tmp = out.with_name(f".{out.name}.tmp.{os.getpid()}")
     with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(header)
-        for i in range(len(plan)):
-            writer.writerow(done[i])
+        csv.writer(fh, lineterminator="\n").writerow(header)
+        fh.writelines(done[i] for i in range(len(plan)))
     os.replace(tmp, out)
     part.unlink()
     return out
@@ -404,15 +408,12 @@ def _collect(plan: SweepPlan, part: Path, done: dict, results, progress, on_chun
             csv.writer(fh, lineterminator="\n").writerow(plan.header())
         else:
             _drop_truncated_tail(fh, part)
-        writer = csv.writer(fh, lineterminator="\n")
         with Progress(len(plan), f"sweep {plan.spec.name}", progress) as bar:
             bar.update(len(done))
             try:
                 for rows in results:
-                    for row in rows:
-                        cells = [_cell(x) for x in row]
-                        writer.writerow(cells)
-                        done[int(row[0])] = cells
+                    fh.writelines(line for _, line in rows)
+                    done.update(rows)
                     fh.flush()
                     bar.update(len(rows))
                     if on_chunk:
