@@ -267,10 +267,10 @@ def cmd_sweep(args) -> int:
             raise SpecError(f"--plot-x {name}: not a varied input ({', '.join(plan.names)})")
     if len(plot_x) > 2:
         raise SpecError("--plot-x: one or two varied inputs")
-    prepare_plan(plan)
-    plot_y = args.plot_y or (f"{plan.outputs[0]}_min" if plan.outputs else None)
+    plot_y = args.plot_y or f"{plan.outputs[0]}_min"
     if args.plot and plot_y not in plan.header():
-        raise SpecError(f"--plot-y {plot_y}: not a column of the table")
+        raise SpecError(f"--plot-y {plot_y}: not a column of the table ({', '.join(plan.header())})")
+    prepare_plan(plan)
     where = f"dask at {args.dask}" if args.dask else f"{args.workers or os.cpu_count()} local processes"
     print(f"sweep {spec.name}: {len(plan)} runs ({plan.sampling}"
           + (f", seed {plan.seed}" if plan.seed is not None else "") + f") on {where}")

@@ -111,7 +111,7 @@ class SweepPlan:
     base_params: dict  # run-time parameters every run starts from
     names: tuple  # varied inputs
     table: np.ndarray  # runs x len(names)
-    outputs: list  # summarized quantities (filled in by prepare_plan)
+    outputs: list  # summarized quantities: the model's outputs
     at: tuple = ()
     sampling: str = "grid"
     seed: int | None = None
@@ -199,8 +199,8 @@ def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, sam
             raise SpecError(f"--at {t:g}: not a time in [0, t_end = {settings['t_end']:g}]")
     if len(set(at)) != len(at):
         raise SpecError("--at: duplicate times")
-    return SweepPlan(spec, dict(settings), dict(base_params), tuple(v.name for v in vs), table, [],
-                     at, sampling, seed)
+    return SweepPlan(spec, dict(settings), dict(base_params), tuple(v.name for v in vs), table,
+                     list(spec.outputs), at, sampling, seed)
 
 
 def _unit_samples(n: int, k: int, seed: int, sampling: str) -> np.ndarray:
@@ -445,12 +445,11 @@ def read_table(path) -> dict[str, np.ndarray]:
 
 
 def prepare_plan(plan: SweepPlan) -> SweepPlan:
-    """Build (or find) the model, note its fingerprint and the quantities to summarize."""
+    """Build (or find) and load the model; note its fingerprint."""
     from .generate import fingerprint
 
-    model = _model(plan.spec)
+    _model(plan.spec)
     plan.fingerprint = fingerprint(plan.spec)
-    plan.outputs = list(model.outputs)
     return plan
 
 
