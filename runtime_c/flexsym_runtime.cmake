@@ -32,3 +32,19 @@ function(flexsym_add_model name)
   set_target_properties(flexsym_${name}_shared PROPERTIES OUTPUT_NAME flexsym_${name})
   target_link_libraries(flexsym_${name}_shared PRIVATE m)
 endfunction()
+
+# flexsym_add_fmu(ID CONFIG_DIR sources...) builds ID.so, the binary of an FMI 3.0 Co-Simulation
+# FMU (runtime_c/fmi3, symbolic/fmu.py): the model's sources, this runtime and the fmi3 wrapper,
+# compiled with the flags of flexsym_add_model (so its rows equal the driver's bit for bit);
+# only the fmi3* functions are exported.
+function(flexsym_add_fmu id config_dir)
+  add_library(${id} MODULE ${ARGN} "${FLEXSYM_RUNTIME_DIR}/src/simulate.c"
+              "${FLEXSYM_RUNTIME_DIR}/src/linalg.c" "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
+  set_target_properties(${id} PROPERTIES PREFIX "" C_STANDARD 99 C_STANDARD_REQUIRED ON
+                        C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden)
+  target_include_directories(${id} PRIVATE "${FLEXSYM_RUNTIME_DIR}/include" "${FLEXSYM_RUNTIME_DIR}/fmi3"
+                             "${config_dir}")
+  target_compile_options(${id} PRIVATE -Wall -Wextra -Werror -pedantic
+                         $<$<C_COMPILER_ID:GNU,Clang,AppleClang>:-fno-tree-vectorize>)
+  target_link_libraries(${id} PRIVATE m)
+endfunction()

@@ -157,6 +157,53 @@ def cmd_run(args) -> int:
     return 0 if verdict.valid else 4
 
 
+def _fmu_request(args, out: Path | None):
+    """(spec, FmuOptions) for export-fmu and bench-fmu, checked before any work."""
+    from .fmu import FmuOptions, check_request
+    from .run import check_options
+
+    spec, scene = resolve(args)
+    settings, _ = _run_settings(args, spec, scene)
+    check_options(**{k: v for k, v in settings.items() if k != "out_every"}, spec=spec)
+    dt = settings["dt"]
+    every = settings.get("out_every") or max(1, int(round(0.01 / dt)))  # the rows of flexsym run
+    opts = FmuOptions(integrator=settings["integrator"], dt=dt, step=settings["step"], tol=settings["tol"],
+                      t_end=settings["t_end"], interval=every * dt, params=settings["params"],
+                      input=getattr(args, "input", "none"))
+    check_request(opts, out, spec)
+    return spec, opts
+
+
+def cmd_export_fmu(args) -> int:
+    from .fmu import export_fmu
+    from .pipeline import generated_folder
+
+    out = Path(args.out)
+    spec, opts = _fmu_request(args, out)
+    export_fmu(generated_folder(spec), opts, out)
+    print(f"wrote {out}: FMI 3.0 Co-Simulation, {opts.integrator} at dt = {opts.dt:g} s"
+          f"{', drive from the inputs theta_dot, theta_ddot' if opts.input == 'drive' else ''}")
+    return 0
+
+
+def cmd_bench_fmu(args) -> int:
+    from .fmu import bench
+    from .pipeline import generated_folder, prepare
+
+    if not 1 <= args.repeat <= 1000:
+        raise SpecError(f"--repeat must be in 1..1000 (got {args.repeat})")
+    spec, opts = _fmu_request(args, None)
+    r = bench(generated_folder(spec), prepare(spec), opts, repeat=args.repeat)
+    print(f"{spec.name}, {opts.integrator} at dt = {opts.dt:g} s, {r['steps']} steps, doStep every "
+          f"{opts.interval:g} s ({r['communication_steps']} calls, every output read after each), "
+          f"median of {args.repeat} runs:")
+    print(f"  FMU doStep loop   {r['fmu'] * 1e3:8.3f} ms  (min {r['fmu_min'] * 1e3:.3f}, max {r['fmu_max'] * 1e3:.3f})")
+    print(f"  native runtime    {r['native'] * 1e3:8.3f} ms  (min {r['native_min'] * 1e3:.3f}, "
+          f"max {r['native_max'] * 1e3:.3f})")
+    print(f"  ratio FMU / native: {r['ratio']:.3f}")
+    return 0
+
+
 def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
@@ -337,6 +384,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="CSV file for the results")
     p.add_argument("--plot", help="PNG file for a plot of v_tip(t)")
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("export-fmu", help="export a variant or scene as an FMI 3.0 Co-Simulation FMU")
+    _variant_args(p)
+    _run_args(p, defaults=False)
+    p.add_argument("--param", action="append", help="start value of a beam or manoeuvre parameter "
+                   "NAME=VALUE; repeatable")
+    p.add_argument("--tol", type=float, help="dopri5: only 0 (fixed steps of dt)")
+    p.add_argument("--step", type=float, help="radau5: only equal to --dt")
+    p.add_argument("--input", default="none", help="none (default): the built-in manoeuvre, its "
+                   "parameters tunable; drive: theta_dot, theta_ddot are inputs from the importer")
+    p.add_argument("--out", required=True, help="the FMU file (NAME.fmu)")
+    p.set_defaults(func=cmd_export_fmu)
+
+    p = sub.add_parser("bench-fmu", help="CPU time of an exported FMU's doStep loop against the native "
+                       "runtime on the same steps")
+    _variant_args(p)
+    _run_args(p, defaults=False)
+    p.add_argument("--param", action="append", help="beam or manoeuvre parameter NAME=VALUE; repeatable")
+    p.add_argument("--tol", type=float, help="dopri5: only 0 (fixed steps of dt)")
+    p.add_argument("--step", type=float, help="radau5: only equal to --dt")
+    p.add_argument("--repeat", type=int, default=21, help="runs after a warm-up (default 21)")
+    p.set_defaults(func=cmd_bench_fmu, out=None)
 
     p = sub.add_parser("inspect", help="show the derivation of a variant")
     _variant_args(p)

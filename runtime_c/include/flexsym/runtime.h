@@ -59,6 +59,26 @@ fsr_status fsr_simulate(const fsr_options* o, fsr_result* r);
 void fsr_free(fsr_result* r);
 const char* fsr_method_name(fsr_method m);
 
+/* The same run advanced by the caller, step by step (an FMU's doStep): fsr_simulate is this
+ * loop run to t_end, so the rows at grid points are identical bit for bit. Fixed steps of dt
+ * only (genalpha, newmark, rk4, dopri5 with tol = 0, radau5 with step 0 or dt).
+ * drive: NULL to take theta', theta'' from the model's manoeuvre (o->mp), or [theta',
+ * theta''] at t = 0 given by the caller, then by fsr_stepper_set_drive (implicit methods).
+ * Returns NULL only when out of memory; check fsr_stepper_result(p)->status. */
+typedef struct fsr_stepper fsr_stepper;
+fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive);
+/* Integrate to grid point t (a multiple of dt after the current time, or t_end). The row at t
+ * is then fsr_stepper_result(p)->rows (ncols values). A stopped run stays stopped; a refused
+ * request (t off the grid) returns FSR_BAD_OPTIONS with a message and changes nothing. */
+fsr_status fsr_stepper_advance(fsr_stepper* p, double t);
+/* From the current time on: theta' = theta_d + theta_dd (t - now), theta'' = theta_dd. */
+fsr_status fsr_stepper_set_drive(fsr_stepper* p, double theta_d, double theta_dd);
+/* After the caller changed values in o->p or o->mp: caches dropped, options checked again. */
+fsr_status fsr_stepper_retune(fsr_stepper* p);
+const fsr_result* fsr_stepper_result(const fsr_stepper* p);
+double fsr_stepper_time(const fsr_stepper* p);
+void fsr_stepper_free(fsr_stepper* p);
+
 /* ---- Batch: many runs in one call (batch.c; in-process runs and sweeps from Python) ----
  * Run r takes fsr_default_options and the model's default parameters, then sets the named
  * inputs to inputs[r * ninputs + i]: option names method (an fsr_method), t_end, dt,
