@@ -143,12 +143,15 @@ class InProcessModel:
 
     @property
     def run_time_names(self) -> list[str]:
-        """The names batch() varies per run: beam and manoeuvre parameters."""
-        return list(self.params) + list(self.maneuver_params)
+        """The names batch() varies per run: beam and manoeuvre parameters, and the initial
+        state q0_<coordinate>, qd0_<coordinate> (coordinates not named start at rest)."""
+        return (list(self.params) + list(self.maneuver_params) + [f"q0_{c}" for c in self.coordinates]
+                + [f"qd0_{c}" for c in self.coordinates])
 
     def batch(self, runs: dict, *, at=(), rows: bool = False, **options) -> BatchResult:
         """Run every parameter set in `runs` (name -> sequence of n values; beam parameters rho,
-        E, A, I, L, manoeuvre parameters such as ws, ts; the others keep the model's defaults),
+        E, A, I, L, manoeuvre parameters such as ws, ts, initial values q0_<coordinate> and
+        qd0_<coordinate>; the others keep the model's defaults, or rest),
         with the run options of run_built (t_end, dt, integrator, out_every, tol, step, newton,
         ...) shared by all. at: times at which to report each column's value."""
         unknown = [k for k in options if k not in RUN_OPTIONS]

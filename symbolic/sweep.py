@@ -6,8 +6,9 @@
 --vary NAME=START:STOP:COUNT is a grid (COUNT values, ends included), NAME=a,b,c a list; the
 runs are the Cartesian product of all --vary, in the order given (the last varies fastest).
 With --samples N every --vary is a range NAME=LO:HI sampled uniformly (random) or by Latin
-hypercube, reproducibly from --seed. NAME is a run-time parameter: beam (rho, E, A, I, L)
-or manoeuvre (ws, ts for the spin-up); anything else (mode sets, dt) is structural or shared.
+hypercube, reproducibly from --seed. NAME is a run-time parameter: beam (rho, E, A, I, L),
+manoeuvre (ws, ts for the spin-up) or an initial value (q0_<coordinate>, qd0_<coordinate>);
+anything else (mode sets, dt) is structural or shared by the runs.
 
 Table (CSV, one row per run, in run order): run, the varied inputs, status (ok | diverged |
 failed), valid (ok and |v| <= 0.1 L for modal models), message, then per output quantity
@@ -145,7 +146,12 @@ def sweepable(spec) -> list[str]:
     from .maneuver import maneuver_of
 
     man = [] if spec.maneuver.startswith("expression:") else [p.name for p in maneuver_of(spec.maneuver).params]
-    return [p.name for p in BEAM_PARAMS] + man
+    return [p.name for p in BEAM_PARAMS] + man + initial_state_names(spec)
+
+
+def initial_state_names(spec) -> list[str]:
+    """Initial values of the coordinates (the runtime starts the others at rest)."""
+    return [f"{k}_{c}" for k in ("q0", "qd0") for c in spec.coordinates]
 
 
 def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, samples: int | None = None,
@@ -154,16 +160,20 @@ def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, sam
     if not varies:
         raise SpecError("give at least one --vary NAME=...")
     vs = [parse_vary(v) for v in varies]
-    known = sweepable(spec)
+    known, initial = sweepable(spec), initial_state_names(spec)
     seen = set()
     for v in vs:
         if v.name not in known:
-            raise SpecError(f"--vary {v.name}: unknown parameter (run-time parameters of "
-                            f"{spec.name}: {', '.join(known)}; mode sets and solver options are not swept)")
+            coords = list(spec.coordinates)
+            shown = ", ".join(coords[:4]) + (", ..." if len(coords) > 4 else "")
+            raise SpecError(f"--vary {v.name}: unknown parameter (run-time parameters of {spec.name}: "
+                            f"{', '.join(n for n in known if n not in initial)}, and initial values "
+                            f"q0_<coordinate>, qd0_<coordinate> of {shown}; mode sets and solver "
+                            "options are not swept)")
         if v.name in seen:
             raise SpecError(f"--vary {v.name}: given twice")
         seen.add(v.name)
-        for value in (v.values if v.values is not None else (v.low, v.high)):
+        for value in () if v.name in initial else (v.values if v.values is not None else (v.low, v.high)):
             check_options(t_end=settings["t_end"], dt=settings["dt"], integrator=settings["integrator"],
                           params={v.name: value}, spec=spec)
     if seed is not None and samples is None:

@@ -112,3 +112,37 @@ def test_unknown_parameter_and_mismatched_lengths_are_refused(isolated_cache):
         m.batch({"ws": [1.0, 2.0], "ts": [3.0]})
     with pytest.raises(SpecError, match="unknown integrator"):
         m.batch({"ws": [1.0]}, integrator="euler")
+
+
+@pytest.mark.parametrize("integrator,dt", [("rk4", 1e-3), ("radau5", 0.01)])
+def test_initial_state_gives_free_vibration_in_one_mode(isolated_cache, integrator, dt):
+    """q0_*/qd0_* start a run away from rest. #0 without rotation (ws = 0) is a linear system
+    M q'' + K q = 0: started on an eigenvector of (K, M) it stays in that mode, so
+    v_tip(t) = v0 cos(w t) from a displacement, and (vd0 / w) sin(w t) from a velocity."""
+    spec = builtin("m0")
+    k = api.kernels(spec)
+    n = k.nq
+    z = np.zeros(n)
+    M = k.mass(z)
+    K = k.residual_jac(z, z, z, 0.0)[0]  # dr/dq of r = M q'' - f at rest, no rotation
+    w2, vecs = np.linalg.eig(np.linalg.solve(M, K))
+    j = int(np.argmin(w2.real))
+    omega, phi = float(np.sqrt(w2[j].real)), vecs[:, j].real
+    assert 3.7 < omega < 3.9  # the first bending frequency, 3.80 rad/s
+    phi *= 0.05 / k.outputs(phi)["v_tip"]  # tip amplitude 5 cm
+    coords = [c["name"] for c in k.manifest["coordinates"]]
+    runs = {"ws": [0.0, 0.0]}
+    runs |= {f"q0_{c}": [phi[i], 0.0] for i, c in enumerate(coords)}
+    runs |= {f"qd0_{c}": [0.0, phi[i]] for i, c in enumerate(coords)}
+    b = api.inprocess(spec).batch(runs, rows=True, integrator=integrator, dt=dt, t_end=5.0)
+    assert b.status == ["ok", "ok"]
+    shifted, kicked = b.result(0), b.result(1)
+    assert np.array_equal(shifted.data[0, -n:], phi) and np.all(kicked.data[0, -n:] == 0)
+    t = shifted.t
+    assert np.max(np.abs(shifted["v_tip"] - 0.05 * np.cos(omega * t))) < 1e-7
+    assert np.max(np.abs(kicked["v_tip"] - 0.05 / omega * np.sin(omega * t))) < 1e-7
+
+
+def test_non_finite_initial_state_fails_its_run(isolated_cache):
+    b = api.inprocess("m3").batch({"q0_v_cp1": [0.0, np.inf]}, integrator="rk4", dt=0.02, t_end=1.0)
+    assert b.status == ["ok", "failed"] and "initial value of v_cp1 is not finite" in b.messages[1]

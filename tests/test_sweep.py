@@ -157,6 +157,7 @@ BAD = [
     (["--vary", "ws=1:2:3", "--at", "x"], "--at 'x' is not a number"),
     ([], "at least one --vary"),
     (["--vary", "ws 1:2:3"], "expected NAME="),
+    (["--vary", "q0_v_tip=0,0.1"], "--vary q0_v_tip: unknown parameter"),
     (["--vary", "ws=1,2", "--plot", "p.png", "--plot-y", "v_tip_mean"], "--plot-y v_tip_mean: not a column"),
     (["--vary", "ws=1,2", "--plot-x", "L"], "--plot-x L: not a varied input"),
 ]

@@ -3,6 +3,8 @@
  * Every run goes through fsr_simulate with options built exactly as the driver builds them
  * (fsr_default_options, the model's default parameters, then the named inputs), so a run
  * here gives the same rows, bit for bit, as `flexsym_<variant>` with the same options.
+ * Initial values q0_<coordinate>, qd0_<coordinate> (not a driver option) start a run away
+ * from rest; the coordinates not named start at 0.
  * Summaries are taken over the stored rows (the output grid), so a sweep need not move them.
  * A run that fails keeps its status, message and the summaries of the rows it computed;
  * the other runs are not affected.
@@ -19,10 +21,10 @@
 #include "flexsym/runtime.h"
 
 /* How a named input reaches the options: a field of fsr_options, or a model parameter. */
-typedef enum { IN_DOUBLE, IN_INT, IN_LONG, IN_METHOD, IN_P, IN_MP } input_kind;
+typedef enum { IN_DOUBLE, IN_INT, IN_LONG, IN_METHOD, IN_P, IN_MP, IN_Y0 } input_kind;
 typedef struct {
     input_kind kind;
-    size_t offset;  /* IN_DOUBLE/IN_INT/IN_LONG: offset in fsr_options; IN_P/IN_MP: index */
+    size_t offset;  /* IN_DOUBLE/IN_INT/IN_LONG: offset in fsr_options; IN_P/IN_MP/IN_Y0: index */
 } input_slot;
 
 typedef struct { const char* name; input_kind kind; size_t offset; } option_name;
@@ -55,10 +57,18 @@ static int find_input(const fsm_model_info* m, const char* name, input_slot* slo
         if (!strcmp(name, m->param_names[i])) { slot->kind = IN_P; slot->offset = (size_t)i; return 1; }
     for (int i = 0; i < m->nmp; ++i)
         if (!strcmp(name, m->maneuver_param_names[i])) { slot->kind = IN_MP; slot->offset = (size_t)i; return 1; }
+    int rate = !strncmp(name, "qd0_", 4);
+    if (rate || !strncmp(name, "q0_", 3))
+        for (int i = 0; i < m->nq; ++i)
+            if (!strcmp(name + (rate ? 4 : 3), m->coord_names[i])) {
+                slot->kind = IN_Y0;
+                slot->offset = (size_t)(rate ? m->nq + i : i);
+                return 1;
+            }
     return 0;
 }
 
-static void set_input(const input_slot* s, double v, fsr_options* o, double* p, double* mp)
+static void set_input(const input_slot* s, double v, fsr_options* o, double* p, double* mp, double* y0)
 {
     char* base = (char*)o;
     switch (s->kind) {
@@ -68,6 +78,7 @@ static void set_input(const input_slot* s, double v, fsr_options* o, double* p, 
     case IN_METHOD: o->method = (fsr_method)(int)v; break;
     case IN_P: p[s->offset] = v; break;
     case IN_MP: mp[s->offset] = v; break;
+    case IN_Y0: y0[s->offset] = v; o->y0 = y0; break;
     }
 }
 
@@ -149,6 +160,11 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
             return -1;
         }
     int ncs = m->ny + m->nq;
+    double* y0 = calloc((size_t)(2 * m->nq), sizeof(double));
+    if (!y0) {
+        snprintf(messages, FSR_BATCH_MESSAGE, "out of memory");
+        return -1;
+    }
     size_t per_run = (size_t)ncs * (size_t)(FSR_SUM_FIELDS + nat);
     int failed = 0;
     for (int i = 0; i < nruns; ++i) {
@@ -158,7 +174,7 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
         memcpy(p, m->param_defaults, sizeof(double) * (size_t)m->np);
         memcpy(mp, m->maneuver_param_defaults, sizeof(double) * (size_t)m->nmp);
         for (int j = 0; j < ninputs; ++j)
-            set_input(&slots[j], inputs[(size_t)i * (size_t)ninputs + (size_t)j], &o, p, mp);
+            set_input(&slots[j], inputs[(size_t)i * (size_t)ninputs + (size_t)j], &o, p, mp, y0);
         o.p = p;
         o.mp = mp;
         fsr_result r;
@@ -192,6 +208,7 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
         }
         fsr_free(&r);
     }
+    free(y0);
     return failed;
 }
 

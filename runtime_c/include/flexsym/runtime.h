@@ -35,6 +35,7 @@ typedef struct {
     int energy;              /* 1: rows end with T, V and the Jacobi integral h (fsm_energy) */
     const double* p;         /* beam parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
+    const double* y0;        /* initial state [q, q'] (2 nq values); NULL: at rest */
 } fsr_options;
 
 typedef struct {
@@ -83,8 +84,9 @@ void fsr_stepper_free(fsr_stepper* p);
  * Run r takes fsr_default_options and the model's default parameters, then sets the named
  * inputs to inputs[r * ninputs + i]: option names method (an fsr_method), t_end, dt,
  * out_every, step, rho_inf, nm_gamma, nm_beta, newton_tol, newton_max, newton_full, tol,
- * max_steps, blowup, or a beam/manoeuvre parameter name of the model. Each run goes
- * through fsr_simulate. Outputs, per run r:
+ * max_steps, blowup, a beam/manoeuvre parameter name of the model, or q0_<coordinate> /
+ * qd0_<coordinate> for the initial state (the others start at rest). Each run goes through
+ * fsr_simulate. Outputs, per run r:
  *   summary[r][j][f]  over the stored rows, column j = 0 .. ny + nq - 1 (outputs, then
  *                     coordinates), f = FSR_SUM_* then the values at the nat times `at`
  *                     (linear between rows, exact at a row, NaN past the last row);
