@@ -36,6 +36,7 @@ STAT_FIELDS = ("t_stop", "steps", "rejected_steps", "newton_iterations", "jacobi
                "force_evaluations", "omega_max", "rows", "ncols", "cpu_s", "bound_peak",
                "bound_t")  # FSR_STAT_*
 MESSAGE = 512  # FSR_BATCH_MESSAGE
+PER_RUN_OPTIONS = ("t_end", "dt", "step", "out_every")  # options batch() also takes per run
 RUN_OPTIONS = ("t_end", "dt", "integrator", "out_every", "tol", "step", "newton", "rho_inf",
                "newmark", "blowup", "newton_tol", "max_steps")
 assert set(METHOD_CODES) == set(INTEGRATORS)
@@ -153,15 +154,21 @@ class InProcessModel:
         E, A, I, L, manoeuvre parameters such as ws, ts, initial values q0_<coordinate> and
         qd0_<coordinate>; the others keep the model's defaults, or rest),
         with the run options of run_built (t_end, dt, integrator, out_every, tol, step, newton,
-        ...) shared by all. at: times at which to report each column's value."""
+        ...) shared by all, except those of PER_RUN_OPTIONS given in `runs` (with dt per run
+        and no out_every, each run has run_built's default rows, about every 0.01 s).
+        at: times at which to report each column's value."""
         unknown = [k for k in options if k not in RUN_OPTIONS]
         if unknown:
             raise TypeError(f"batch() got an unknown option '{unknown[0]}'")
-        names = list(runs)
-        for name in names:
-            if name not in self.run_time_names:
+        runs = dict(runs)
+        for name in runs:
+            if name not in self.run_time_names and name not in PER_RUN_OPTIONS:
                 raise SpecError(f"unknown parameter '{name}' of {self.built.name} "
-                                f"(run-time parameters: {', '.join(self.run_time_names)})")
+                                f"(run-time parameters: {', '.join(self.run_time_names)}; "
+                                f"options: {', '.join(PER_RUN_OPTIONS)})")
+        if "dt" in runs and "out_every" not in runs and options.get("out_every") is None:
+            runs["out_every"] = [default_out_every(dt) for dt in np.asarray(runs["dt"], dtype=float).ravel()]
+        names = list(runs)
         cols = [np.asarray(runs[k], dtype=float).ravel() for k in names]
         n = len(cols[0]) if cols else 1
         if any(len(c) != n for c in cols):
@@ -171,7 +178,7 @@ class InProcessModel:
         check_options(**({"t_end": 20.0, "dt": 1e-3, "integrator": "genalpha"} | base),
                       params={}, tol=options.get("tol"), newton=options.get("newton"),
                       step=options.get("step"))
-        opts = option_inputs(**options)
+        opts = {k: v for k, v in option_inputs(**options).items() if k not in runs}
         all_names = list(opts) + names
         inputs = np.ascontiguousarray(np.hstack([np.tile(list(opts.values()), (n, 1)), table]))
         at = np.ascontiguousarray(np.atleast_1d(np.asarray(at, dtype=float)))

@@ -7,8 +7,8 @@
 runs are the Cartesian product of all --vary, in the order given (the last varies fastest).
 With --samples N every --vary is a range NAME=LO:HI sampled uniformly (random) or by Latin
 hypercube, reproducibly from --seed. NAME is a run-time parameter: beam (rho, E, A, I, L),
-manoeuvre (ws, ts for the spin-up) or an initial value (q0_<coordinate>, qd0_<coordinate>);
-anything else (mode sets, dt) is structural or shared by the runs.
+manoeuvre (ws, ts for the spin-up), an initial value (q0_<coordinate>, qd0_<coordinate>) or
+a solver option t_end, dt, step (radau5); mode sets are structural (one model each).
 
 Table (CSV, one row per run, in run order): run, the varied inputs, status (ok | diverged |
 failed), valid (ok and |v| <= 0.1 L for modal models), message, then per output quantity
@@ -149,6 +149,35 @@ def sweepable(spec) -> list[str]:
     return [p.name for p in BEAM_PARAMS] + man + initial_state_names(spec)
 
 
+def sweepable_options(settings: dict) -> list[str]:
+    """Solver options a sweep may vary per run (the others are shared by a batch)."""
+    return ["t_end", "dt"] + (["step"] if settings["integrator"] == "radau5" else [])
+
+
+def _check_values(spec, settings: dict, v: Vary, initial) -> None:
+    values = v.values if v.values is not None else (v.low, v.high)
+    if v.name in initial:
+        return  # any finite number (parse_vary)
+    if v.name not in sweepable_options(settings):
+        for value in values:
+            check_options(t_end=settings["t_end"], dt=settings["dt"], integrator=settings["integrator"],
+                          params={v.name: value}, spec=spec)
+        return
+    shared = {k: settings[k] for k in ("t_end", "dt", "integrator", "tol", "step")}
+    for value in values:
+        check_options(**(shared | {v.name: value}), params={}, spec=spec)
+    if v.name == "dt" and settings.get("out_every") is not None:  # a scene: rows every `interval`
+        interval = settings["out_every"] * settings["dt"]
+        if v.values is None:
+            raise SpecError(f"--vary dt: the scene's rows are every {interval:g} s: give dt values that "
+                            "divide it (a list or grid), not a range to sample")
+        for value in values:
+            k = round(interval / value)
+            if k < 1 or abs(k * value - interval) > 1e-9 * interval:
+                raise SpecError(f"--vary dt={value:g}: the scene's output interval {interval:g} s is not "
+                                "a whole number of steps")
+
+
 def initial_state_names(spec) -> list[str]:
     """Initial values of the coordinates (the runtime starts the others at rest)."""
     return [f"{k}_{c}" for k in ("q0", "qd0") for c in spec.coordinates]
@@ -160,7 +189,7 @@ def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, sam
     if not varies:
         raise SpecError("give at least one --vary NAME=...")
     vs = [parse_vary(v) for v in varies]
-    known, initial = sweepable(spec), initial_state_names(spec)
+    known, initial = sweepable(spec) + sweepable_options(settings), initial_state_names(spec)
     seen = set()
     for v in vs:
         if v.name not in known:
@@ -168,14 +197,11 @@ def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, sam
             shown = ", ".join(coords[:4]) + (", ..." if len(coords) > 4 else "")
             raise SpecError(f"--vary {v.name}: unknown parameter (run-time parameters of {spec.name}: "
                             f"{', '.join(n for n in known if n not in initial)}, and initial values "
-                            f"q0_<coordinate>, qd0_<coordinate> of {shown}; mode sets and solver "
-                            "options are not swept)")
+                            f"q0_<coordinate>, qd0_<coordinate> of {shown}; mode sets are not swept)")
         if v.name in seen:
             raise SpecError(f"--vary {v.name}: given twice")
         seen.add(v.name)
-        for value in () if v.name in initial else (v.values if v.values is not None else (v.low, v.high)):
-            check_options(t_end=settings["t_end"], dt=settings["dt"], integrator=settings["integrator"],
-                          params={v.name: value}, spec=spec)
+        _check_values(spec, settings, v, initial)
     if seed is not None and samples is None:
         raise SpecError("--seed is for --samples N (random or Latin-hypercube sampling)")
     if sampling is not None and samples is None:
@@ -204,9 +230,11 @@ def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, sam
         table = np.array(list(itertools.product(*(v.values for v in vs))), dtype=float).reshape(n, len(vs))
         sampling = "grid"
     at = tuple(float(t) for t in at)
+    names = [v.name for v in vs]
+    t_end = float(np.max(table[:, names.index("t_end")])) if "t_end" in names else settings["t_end"]
     for t in at:
-        if not (math.isfinite(t) and 0 <= t <= settings["t_end"]):
-            raise SpecError(f"--at {t:g}: not a time in [0, t_end = {settings['t_end']:g}]")
+        if not (math.isfinite(t) and 0 <= t <= t_end):
+            raise SpecError(f"--at {t:g}: not a time in [0, t_end = {t_end:g}]")
     if len(set(at)) != len(at):
         raise SpecError("--at: duplicate times")
     return SweepPlan(spec, dict(settings), dict(base_params), tuple(v.name for v in vs), table,
@@ -264,7 +292,10 @@ def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int,
     model = _model(spec)
     runs = {k: np.full(len(table), v) for k, v in base_params.items()}
     runs |= {k: table[:, j] for j, k in enumerate(names)}
-    options = {k: v for k, v in settings.items() if v is not None}
+    options = {k: v for k, v in settings.items() if v is not None and k not in runs}
+    if "dt" in runs and settings.get("out_every") is not None:  # a scene: keep its row interval
+        runs["out_every"] = np.round(settings["out_every"] * settings["dt"] / runs["dt"])
+        del options["out_every"]
     b = model.batch(runs, at=at, **options)
     cols = [np.arange(start, start + len(b)), *table.T, b.status, b.valid, b.validity_notes]
     for o in outputs:

@@ -134,7 +134,9 @@ def test_cli_sweep_writes_table_and_plot(isolated_cache, tmp_path, capsys):
 BAD = [
     (["--vary", "omega=1:2:3"], "--vary omega: unknown parameter"),
     (["--vary", "bending=1,2"], "--vary bending: unknown parameter"),
-    (["--vary", "dt=0.01,0.02"], "--vary dt: unknown parameter"),
+    (["--vary", "step=0.1,0.2"], "--vary step: unknown parameter"),  # genalpha: no step
+    (["--vary", "dt=-0.01,0.02"], "dt must be a positive number"),
+    (["--vary", "t_end=0,10"], "t_end must be a positive number"),
     (["--vary", "ws=2:2:5"], "empty range"),
     (["--vary", "ws=3:2", "--samples", "4"], "empty range"),
     (["--vary", "ws=a:b:3"], "'a' is not a number"),
@@ -221,3 +223,26 @@ def test_ctrl_c_keeps_finished_runs_and_resume_completes(isolated_cache, tmp_pat
     rows = out.read_text().splitlines()
     assert len(rows) == 4001 and not part.exists()
     assert all(rows[i + 1] == r for i, r in kept.items())  # kept runs were not run again
+
+
+def test_solver_options_per_run(isolated_cache, tmp_path, capsys):
+    """step, dt and t_end vary per run like parameters: each row is `flexsym run` with that
+    option; radau5's error falls steeply with its step; a scene keeps its row interval."""
+    out = tmp_path / "t.csv"
+    steps = [0.05, 0.1, 0.2, 0.4]
+    table = api.sweep("m3", {"step": steps}, out, integrator="radau5", dt=0.01)
+    built = prepare(builtin("m3"))
+    for i, h in enumerate(steps):
+        r = run_built(built, integrator="radau5", dt=0.01, step=h, params={"ws": 6.0, "ts": 15.0})
+        assert table["v_tip_min"][i] == r["v_tip"].min() and table["steps"][i] == r.summary["steps"]
+    err = np.abs(table["v_tip_min"][1:] - table["v_tip_min"][0])
+    assert err[0] < err[1] < err[2] and err[1] / err[0] > 8  # high order: at least 2^3 per halving
+    table = api.sweep("m3", {"dt": [0.01, 0.02], "t_end": [5.0, 10.0]}, tmp_path / "u.csv",
+                      integrator="rk4")
+    assert list(table["steps"]) == [500, 1000, 250, 500] and list(table["t_stop"]) == [5, 10, 5, 10]
+    scene = os.path.join(os.path.dirname(__file__), "..", "scenes", "constant_speed.toml")
+    table = api.sweep(scene, {"dt": [5e-5, 1e-4]}, tmp_path / "s.csv")
+    r = api.run(api.load_scene(scene), out=tmp_path / "ref.csv")  # dt = 1e-4, rows every 1e-4 s
+    assert table["N_A_max"][1] == r["N_A"].max() and table["steps"][0] == 2 * table["steps"][1]
+    assert main(["sweep", scene, "--vary", "dt=3e-5,1e-4", "--out", str(tmp_path / "v.csv")]) == 2
+    assert "not a whole number of steps" in capsys.readouterr().err
