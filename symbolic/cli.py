@@ -458,7 +458,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--step", type=float, help="radau5 step [s]")
     p.add_argument("--vary", action="append", metavar="NAME=SPEC",
                    help="START:STOP:COUNT (grid), a,b,c (list) or LO:HI (with --samples); repeatable; "
-                        "names: rho, E, A, I, L, ws, ts")
+                        "names: rho, E, A, I, L, ws, ts, q0_<coordinate>, qd0_<coordinate>, t_end, dt, "
+                        "step (radau5)")
     p.add_argument("--samples", type=int, help="N random or Latin-hypercube samples of the LO:HI ranges")
     p.add_argument("--seed", type=int, help="seed of the samples (default 0)")
     p.add_argument("--sampling", choices=("random", "lhs"), help="with --samples (default lhs)")
