@@ -116,9 +116,11 @@ class BatchResult:
                    "jacobian_evaluations": int(st["jacobian_evaluations"]),
                    "force_evaluations": int(st["force_evaluations"]), "omega_max": st["omega_max"],
                    "rows": int(st["rows"]), "cpu_median": st["cpu_s"]}
-        params = {k: float(v[i]) for k, v in self.inputs.items()}
+        given = {k: float(v[i]) for k, v in self.inputs.items()}
+        params = {k: v for k, v in given.items() if k not in PER_RUN_OPTIONS}
+        per_run = {k: v for k, v in given.items() if k in PER_RUN_OPTIONS}
         return RunResult(self.variant, self.status[i], self.messages[i], summary, list(self.row_columns),
-                         self.rows[i], None, self.options | {"params": params})
+                         self.rows[i], None, self.options | per_run | {"params": params})
 
 
 class InProcessModel:
