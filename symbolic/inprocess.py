@@ -25,7 +25,8 @@ import numpy as np
 from .build import Built
 from .errors import SpecError
 from .generate import read_manifest
-from .run import INTEGRATORS, NEWTON, RunResult, check_options, default_out_every
+from .options import API, BY_NAME, INTEGRATORS, RunOptions, validate
+from .run import RunResult
 from .validity import VALIDITY_LIMIT, deflection_weights
 
 # fsr_method codes (runtime.h) and the driver's status words
@@ -37,33 +38,28 @@ STAT_FIELDS = ("t_stop", "steps", "rejected_steps", "newton_iterations", "jacobi
                "bound_t")  # FSR_STAT_*
 MESSAGE = 512  # FSR_BATCH_MESSAGE
 PER_RUN_OPTIONS = ("t_end", "dt", "step", "out_every")  # options batch() also takes per run
-RUN_OPTIONS = ("t_end", "dt", "integrator", "out_every", "tol", "step", "newton", "rho_inf",
-               "newmark", "blowup", "newton_tol", "max_steps")
+# batch() options: the option table's (options.py) but the timing, the energy columns and the
+# manoeuvre values (parameters of a run, given in `runs`), plus out_every
+RUN_OPTIONS = tuple(n for n in BY_NAME if n not in ("repeat", "energy", "ws", "ts")) + ("out_every",)
+# option -> fsr_batch input (batch.c), for those whose names differ
+INPUT_NAMES = {"newmark_gamma": "nm_gamma", "newmark_beta": "nm_beta"}
 assert set(METHOD_CODES) == set(INTEGRATORS)
 
 _dptr = ctypes.POINTER(ctypes.c_double)
 
 
-def option_inputs(*, t_end: float = 20.0, dt: float = 1e-3, integrator: str = "genalpha",
-                  out_every: int | None = None, tol: float | None = None, step: float | None = None,
-                  newton: str | None = None, rho_inf: float | None = None, newmark: tuple | None = None,
-                  blowup: float | None = None, newton_tol: float | None = None,
-                  max_steps: int | None = None) -> dict[str, float]:
-    """The runtime inputs (fsr_batch names) that run_built passes as driver flags; options left
-    at None keep the runtime's defaults, as the driver does."""
-    if integrator not in METHOD_CODES:
-        raise SpecError(f"unknown integrator '{integrator}' (known: {', '.join(INTEGRATORS)})")
-    if newton is not None and newton not in NEWTON:
-        raise SpecError(f"unknown newton '{newton}' (known: {', '.join(NEWTON)})")
-    out = {"method": METHOD_CODES[integrator], "t_end": float(t_end), "dt": float(dt),
-           "out_every": default_out_every(dt) if out_every is None else int(out_every)}
-    optional = {"tol": tol, "step": step, "rho_inf": rho_inf, "blowup": blowup,
-                "newton_tol": newton_tol, "max_steps": max_steps,
-                "newton_full": None if newton is None else float(newton == "full")}
-    if newmark is not None:
-        optional |= {"nm_gamma": newmark[0], "nm_beta": newmark[1]}
-    out |= {k: float(v) for k, v in optional.items() if v is not None}
-    return out
+def option_inputs(o: RunOptions) -> dict[str, float]:
+    """The runtime inputs (fsr_batch names) of validated options, as the driver gets them from
+    RunOptions.driver_args(); options left at None keep the runtime's defaults."""
+    out = {"method": METHOD_CODES[o.integrator], "t_end": o.t_end, "dt": o.dt,
+           "out_every": o.out_every}
+    for name in ("tol", "step", "rho_inf", "blowup", "newton_tol", "max_steps", "newmark_gamma",
+                 "newmark_beta"):
+        if getattr(o, name) is not None:
+            out[INPUT_NAMES.get(name, name)] = getattr(o, name)
+    if o.newton is not None:
+        out["newton_full"] = float(o.newton == "full")
+    return {k: float(v) for k, v in out.items()}
 
 
 @dataclass
@@ -155,9 +151,9 @@ class InProcessModel:
         """Run every parameter set in `runs` (name -> sequence of n values; beam parameters rho,
         E, A, I, L, manoeuvre parameters such as ws, ts, initial values q0_<coordinate> and
         qd0_<coordinate>; the others keep the model's defaults, or rest),
-        with the run options of run_built (t_end, dt, integrator, out_every, tol, step, newton,
-        ...) shared by all, except those of PER_RUN_OPTIONS given in `runs` (with dt per run
-        and no out_every, each run has run_built's default rows, about every 0.01 s).
+        with the run options of run_built (t_end, dt, integrator, out_every or interval, tol,
+        step, newton, ...; checked against the option table) shared by all, except those of
+        PER_RUN_OPTIONS given in `runs` (each run then has the rows run_built gives it).
         at: times at which to report each column's value."""
         unknown = [k for k in options if k not in RUN_OPTIONS]
         if unknown:
@@ -168,19 +164,14 @@ class InProcessModel:
                 raise SpecError(f"unknown parameter '{name}' of {self.built.name} "
                                 f"(run-time parameters: {', '.join(self.run_time_names)}; "
                                 f"options: {', '.join(PER_RUN_OPTIONS)})")
-        if "dt" in runs and "out_every" not in runs and options.get("out_every") is None:
-            runs["out_every"] = [default_out_every(dt) for dt in np.asarray(runs["dt"], dtype=float).ravel()]
-        names = list(runs)
-        cols = [np.asarray(runs[k], dtype=float).ravel() for k in names]
-        n = len(cols[0]) if cols else 1
-        if any(len(c) != n for c in cols):
+        cols = {k: np.asarray(runs[k], dtype=float).ravel() for k in runs}
+        n = len(next(iter(cols.values()))) if cols else 1
+        if any(len(c) != n for c in cols.values()):
             raise SpecError("every parameter needs the same number of values (one per run)")
-        table = np.array(cols).T.reshape(n, len(names))
-        base = {k: options.get(k) for k in ("t_end", "dt", "integrator") if options.get(k) is not None}
-        check_options(**({"t_end": 20.0, "dt": 1e-3, "integrator": "genalpha"} | base),
-                      params={}, tol=options.get("tol"), newton=options.get("newton"),
-                      step=options.get("step"))
-        opts = {k: v for k, v in option_inputs(**options).items() if k not in runs}
+        o = self._options(options, cols, n)
+        names = list(cols)
+        table = np.array(list(cols.values())).T.reshape(n, len(names))
+        opts = {k: v for k, v in option_inputs(o).items() if k not in cols}
         all_names = list(opts) + names
         inputs = np.ascontiguousarray(np.hstack([np.tile(list(opts.values()), (n, 1)), table]))
         at = np.ascontiguousarray(np.atleast_1d(np.asarray(at, dtype=float)))
@@ -210,11 +201,23 @@ class InProcessModel:
                             np.zeros((0, nc)))
             self.lib.fsr_batch_free(row_ptrs, n)
         valid, notes = self._validity(codes, msgs, stat)
-        used = {"t_end": 20.0, "dt": 1e-3, "integrator": "genalpha"} | {k: v for k, v in options.items()
-                                                                         if v is not None}
+        used = {"t_end": o.t_end, "dt": o.dt, "integrator": o.integrator, "tol": o.tol, "newton": o.newton,
+                "step": o.step}  # as run_built's RunResult.options
         return BatchResult(self.built.name, {k: table[:, j].copy() for j, k in enumerate(names)}, used,
                            self.columns, self.outputs, at, codes, msgs, stat, values, valid, notes, kept,
                            ["t"] + self.columns if rows else None)
+
+    def _options(self, options: dict, cols: dict, n: int) -> RunOptions:
+        """The shared options, validated by the option table with each run's own t_end, dt and
+        step (one check per distinct combination); a run's rows are those run_built gives it:
+        cols gets each run's out_every when these vary and it was not given per run."""
+        shared = {k: v for k, v in options.items() if v is not None}
+        varied = [k for k in ("t_end", "dt", "step") if k in cols]
+        combos = list(zip(*(cols[k].tolist() for k in varied))) if varied else [()] * n
+        checked = {c: validate(shared | dict(zip(varied, c)), API, self.spec) for c in dict.fromkeys(combos)}
+        if varied and "out_every" not in cols:
+            cols["out_every"] = np.array([float(checked[c].out_every) for c in combos])
+        return checked[combos[0]] if combos else validate(shared, API, self.spec)
 
     def _validity(self, codes, messages, stat):
         """Per run: ok and |v| <= 0.1 L over the rows (validity.assess on the summary)."""

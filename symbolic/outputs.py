@@ -44,7 +44,7 @@ class OutputInfo:
 def canonical_output(token: str) -> str:
     """'N@0.25' -> 'N_s0p25'; names already canonical are returned unchanged."""
     token = token.strip()
-    m = _AT_RE.match(token)
+    m = _AT_RE.fullmatch(token)
     if m:
         frac = sp.nsimplify(m.group(2))
         if not 0 <= frac <= 1:
@@ -66,7 +66,7 @@ def point_of(name: str, points=()):
         for label, frac in points:
             if name[2:] == label:
                 return name[0], sp.Rational(frac)
-    m = _POINT_RE.match(name)
+    m = _POINT_RE.fullmatch(name)
     if not m:
         return None
     where = m.group(2)
@@ -88,7 +88,7 @@ def info(name: str, points=()) -> OutputInfo:
 
 def check_output_names(spec, extra=()) -> None:
     for label, frac in spec.points:
-        if not LABEL_RE.match(label) or label in POINTS or re.match(r"^s\d", label):
+        if not LABEL_RE.fullmatch(label) or label in POINTS or re.match(r"s\d", label):
             raise SpecError(f"variant '{spec.name}': position name '{label}' must be letters, digits "
                             "and _ (it reaches generated C), start with a letter, and not be A, B, C")
         try:
@@ -224,7 +224,7 @@ def _element_method(der, n: int, at, want_N: bool) -> sp.Expr:
 def stress_method(spec) -> tuple[str, int]:
     if spec.stress == "continuum":
         return "continuum", 0
-    m = re.match(r"^element:(\d+)$", spec.stress)
+    m = re.fullmatch(r"element:(\d+)", spec.stress)
     if not m or not 1 <= int(m.group(1)) <= 1000:
         raise SpecError(f"variant '{spec.name}': stress method '{spec.stress}' must be "
                         "'continuum' or 'element:N' with 1 <= N <= 1000 elements")

@@ -14,7 +14,7 @@ from .errors import SpecError
 from .fe import FESpec
 from .modes import ModeRef, mode, parse_mode_token
 
-NAME_RE = re.compile(r"^[a-z][a-z0-9_]{0,47}$")
+NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")  # used with match: \Z, not $ (a trailing newline)
 
 
 @dataclass(frozen=True)
@@ -61,8 +61,8 @@ class VariantSpec:
     def validate(self) -> "VariantSpec":
         from .energy import STRAIN_MODELS  # the physics owns the list of strain models
 
-        if not NAME_RE.match(self.name):
-            raise SpecError(f"variant name '{self.name}': use lower-case letters, digits and _ "
+        if not isinstance(self.name, str) or not NAME_RE.match(self.name):
+            raise SpecError(f"variant name {self.name!r}: use lower-case letters, digits and _ "
                             "(it becomes a C identifier), starting with a letter")
         model = STRAIN_MODELS.get(self.strain)
         if model is None:
@@ -104,8 +104,10 @@ class VariantSpec:
 
 
 def _refs(axis: str, tokens) -> tuple[ModeRef, ...]:
-    if isinstance(tokens, str):
-        tokens = [t for t in tokens.split(",") if t.strip()]
+    if isinstance(tokens, str):  # "" is the empty set; an empty name inside a list is a mistake
+        tokens = [t.strip() for t in tokens.split(",")] if tokens.strip() else []
+        if not all(tokens):
+            raise SpecError(f"{axis} modes: empty name in the list")
     return tuple(parse_mode_token(axis, t) for t in tokens)
 
 
@@ -143,7 +145,7 @@ def builtin(name: str) -> VariantSpec:
     for v in BUILTIN:
         if name == v.name or name in v.aliases:
             return v
-    known = ", ".join(f"{v.name} ({'/'.join(v.aliases)})" for v in BUILTIN)
+    known = ", ".join(f"{v.name} ({'/'.join(v.aliases)})" if v.aliases else v.name for v in BUILTIN)
     raise SpecError(f"unknown variant '{name}' (built-in: {known})")
 
 
@@ -154,7 +156,13 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
     from .outputs import canonical_output
 
     if isinstance(outputs, str):
-        outputs = [o for o in outputs.split(",") if o.strip()]
+        outputs = [o.strip() for o in outputs.split(",")]
+    if outputs is not None and (not outputs or not all(outputs)):
+        raise SpecError(f"outputs {','.join(outputs)!r}: empty name in the list (give at least one "
+                        "output, e.g. v_tip)")
+    if elements is not None and (isinstance(elements, bool) or not isinstance(elements, int)
+                                 or not 1 <= elements <= 512):
+        raise SpecError(f"elements must be a whole number in 1..512 (got {elements!r})")
     if base.kind == "fe":
         modal_only = {"strain": strain, "axial": axial, "bending": bending, "stress": stress,
                       "axial_force": axial_force}

@@ -39,7 +39,7 @@ import numpy as np
 
 from .errors import FlexsymError, SpecError, ToolchainError
 from .progress import Progress
-from .run import check_options
+from .options import API, RunOptions, Where, check_params, validate
 
 SAMPLINGS = ("random", "lhs")
 MAX_RUNS = 10_000_000
@@ -108,7 +108,7 @@ class SweepPlan:
     """Everything a sweep runs: the model, the options shared by all runs, and one row of
     inputs per run."""
     spec: object
-    settings: dict  # t_end, dt, integrator, out_every, tol, step
+    settings: dict  # run options shared by every run (validated; batch() keywords), see settings_of
     base_params: dict  # run-time parameters every run starts from
     names: tuple  # varied inputs
     table: np.ndarray  # runs x len(names)
@@ -154,28 +154,47 @@ def sweepable_options(settings: dict) -> list[str]:
     return ["t_end", "dt"] + (["step"] if settings["integrator"] == "radau5" else [])
 
 
-def _check_values(spec, settings: dict, v: Vary, initial) -> None:
-    values = v.values if v.values is not None else (v.low, v.high)
-    if v.name in initial:
-        return  # any finite number (parse_vary)
-    if v.name not in sweepable_options(settings):
-        for value in values:
-            check_options(t_end=settings["t_end"], dt=settings["dt"], integrator=settings["integrator"],
-                          params={v.name: value}, spec=spec)
-        return
-    shared = {k: settings[k] for k in ("t_end", "dt", "integrator", "tol", "step")}
-    for value in values:
-        check_options(**(shared | {v.name: value}), params={}, spec=spec)
-    if v.name == "dt" and settings.get("out_every") is not None:  # a scene: rows every `interval`
-        interval = settings["out_every"] * settings["dt"]
-        if v.values is None:
-            raise SpecError(f"--vary dt: the scene's rows are every {interval:g} s: give dt values that "
-                            "divide it (a list or grid), not a range to sample")
-        for value in values:
-            k = round(interval / value)
-            if k < 1 or abs(k * value - interval) > 1e-9 * interval:
-                raise SpecError(f"--vary dt={value:g}: the scene's output interval {interval:g} s is not "
-                                "a whole number of steps")
+SHARED_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "max_steps", "newton", "newton_tol",
+                  "rho_inf", "newmark_gamma", "newmark_beta", "blowup")
+
+
+def settings_of(o: RunOptions, keep_interval: bool) -> dict:
+    """A sweep's shared options from validated ones. keep_interval (a scene, or an interval
+    given): rows stay every out_every * dt when dt varies per run; else each run gets the
+    table's default rows for its dt."""
+    settings = {k: getattr(o, k) for k in SHARED_OPTIONS if getattr(o, k) is not None}
+    if keep_interval:
+        settings["interval"] = o.out_every * o.dt
+    return settings
+
+
+def _vary_error(name: str, value: float, exc: SpecError) -> SpecError:
+    return SpecError(f"--vary {name}={value:g}: {exc}")
+
+
+def _check_values(spec, v: Vary, initial, options: list[str], where: Where) -> None:
+    """Parameters against the option table's rules (options are checked per run in make_plan)."""
+    if v.name in initial or v.name in options:
+        return  # initial values: any finite number (parse_vary)
+    for value in (v.values if v.values is not None else (v.low, v.high)):
+        try:
+            check_params({v.name: value}, where, spec.maneuver)
+        except SpecError as exc:
+            raise _vary_error(v.name, value, exc) from None
+
+
+def _check_options(spec, settings: dict, names: list[str], table: np.ndarray, where: Where) -> None:
+    """Each distinct combination of varied options of the runs, with the shared ones, by
+    options.validate (as batch() checks them again in the workers)."""
+    cols = [j for j, n in enumerate(names) if n in sweepable_options(settings)]
+    for combo in dict.fromkeys(map(tuple, table[:, cols].tolist())) if cols else ():
+        given = dict(zip((names[j] for j in cols), combo))
+        try:
+            validate(settings | given, where, spec)
+        except SpecError as exc:
+            name, value = next(iter(given.items())) if len(given) == 1 else (None, None)
+            raise (_vary_error(name, value, exc) if name else
+                   SpecError(f"--vary {', '.join(f'{k}={x:g}' for k, x in given.items())}: {exc}")) from None
 
 
 def initial_state_names(spec) -> list[str]:
@@ -184,7 +203,7 @@ def initial_state_names(spec) -> list[str]:
 
 
 def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, samples: int | None = None,
-              seed: int | None = None, sampling: str | None = None, at=()) -> SweepPlan:
+              seed: int | None = None, sampling: str | None = None, at=(), where: Where = API) -> SweepPlan:
     """Check the sweep specification (one clear line and nothing run when wrong) and list the runs."""
     if not varies:
         raise SpecError("give at least one --vary NAME=...")
@@ -201,7 +220,7 @@ def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, sam
         if v.name in seen:
             raise SpecError(f"--vary {v.name}: given twice")
         seen.add(v.name)
-        _check_values(spec, settings, v, initial)
+        _check_values(spec, v, initial, sweepable_options(settings), where)
     if seed is not None and samples is None:
         raise SpecError("--seed is for --samples N (random or Latin-hypercube sampling)")
     if sampling is not None and samples is None:
@@ -229,8 +248,9 @@ def make_plan(spec, settings: dict, base_params: dict, varies: list[str], *, sam
             raise SpecError(f"the grid has {n} runs, more than {MAX_RUNS}")
         table = np.array(list(itertools.product(*(v.values for v in vs))), dtype=float).reshape(n, len(vs))
         sampling = "grid"
-    at = tuple(float(t) for t in at)
     names = [v.name for v in vs]
+    _check_options(spec, settings, names, table, where)
+    at = tuple(float(t) for t in at)
     t_end = float(np.max(table[:, names.index("t_end")])) if "t_end" in names else settings["t_end"]
     for t in at:
         if not (math.isfinite(t) and 0 <= t <= t_end):
@@ -292,10 +312,7 @@ def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int,
     model = _model(spec)
     runs = {k: np.full(len(table), v) for k, v in base_params.items()}
     runs |= {k: table[:, j] for j, k in enumerate(names)}
-    options = {k: v for k, v in settings.items() if v is not None and k not in runs}
-    if "dt" in runs and settings.get("out_every") is not None:  # a scene: keep its row interval
-        runs["out_every"] = np.round(settings["out_every"] * settings["dt"] / runs["dt"])
-        del options["out_every"]
+    options = {k: v for k, v in settings.items() if k not in runs}
     b = model.batch(runs, at=at, **options)
     cols = [np.arange(start, start + len(b)), *table.T, b.status, b.valid, b.validity_notes]
     for o in outputs:
@@ -324,13 +341,17 @@ def _local_results(plan, chunks, workers):
     ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
     pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_local_worker,
                                   initargs=(plan.spec,))
+    finished = False
     try:
         futures = [pool.submit(run_chunk, plan.spec, plan.settings, plan.base_params, plan.names, s,
                                plan.table[s:e], plan.at, plan.outputs) for s, e in chunks]
         for fut in cf.as_completed(futures):
             yield fut.result()
+        finished = True
     finally:
-        pool.shutdown(wait=False, cancel_futures=True)
+        # all done: wait for the pool's own thread, else it may still be closing its pipe when
+        # the interpreter exits ("Exception ignored ... Bad file descriptor"); interrupted: go now
+        pool.shutdown(wait=finished, cancel_futures=not finished)
 
 
 def dask_client(dask):
@@ -425,7 +446,6 @@ def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int 
         results = _dask_results(plan, chunks, client, own)
     else:
         results = _local_results(plan, chunks, workers)
-    out.parent.mkdir(parents=True, exist_ok=True)
     try:
         _collect(plan, part, done, results, progress, on_chunk)
     except BaseException:

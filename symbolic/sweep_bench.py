@@ -28,10 +28,11 @@ from pathlib import Path
 import numpy as np
 
 from .inprocess import load
+from .options import API, validate
 from .pipeline import prepare
 from .run import run_built
 from .spec import builtin
-from .sweep import make_plan, prepare_plan, run_sweep
+from .sweep import make_plan, prepare_plan, run_sweep, settings_of
 
 CASE = dict(integrator="radau5", dt=0.01, step=0.25, t_end=20.0)
 
@@ -85,8 +86,8 @@ def main(argv=None) -> int:
     lines.append(f"| one process per run (`run_built`, CSV), 1 at a time | {_rate(args.subprocess_runs, wall)}; "
                  f"CPU {cpu / args.subprocess_runs * 1e3:.3f} ms/run (driver process and Python) |")
 
-    settings = dict(CASE, out_every=None, tol=None)
-    plan = prepare_plan(make_plan(spec, settings, {"ws": 6.0, "ts": 15.0},
+    o = validate(CASE, API, spec)
+    plan = prepare_plan(make_plan(spec, settings_of(o, keep_interval=False), o.params,
                                   [f"ws=2:8:{args.runs // 2}", "L=9.5,10"]))
     cores = os.cpu_count() or 1
     with tempfile.TemporaryDirectory() as tmp:

@@ -17,7 +17,7 @@ CASES = [
     ("m1", dict(integrator="genalpha", dt=0.005, t_end=6.0), {"ws": [6.0, 3.0], "E": [7e10, 5e10]}),
     ("prestress", dict(integrator="rk4", dt=0.02, t_end=8.0, out_every=3), {"ws": [6.0, 5.0]}),
     ("m2", dict(integrator="dopri5", dt=0.01, tol=1e-7, t_end=3.0), {"ts": [15.0, 5.0]}),
-    ("ef", dict(integrator="newmark", dt=0.01, t_end=2.0, newmark=(0.5, 0.5625)), {"ws": [6.0, 8.0]}),
+    ("ef", dict(integrator="newmark", dt=0.01, t_end=2.0, newmark_gamma=0.5, newmark_beta=0.5625), {"ws": [6.0, 8.0]}),
 ]
 
 

@@ -135,8 +135,8 @@ BAD = [
     (["--vary", "omega=1:2:3"], "--vary omega: unknown parameter"),
     (["--vary", "bending=1,2"], "--vary bending: unknown parameter"),
     (["--vary", "step=0.1,0.2"], "--vary step: unknown parameter"),  # genalpha: no step
-    (["--vary", "dt=-0.01,0.02"], "dt must be a positive number"),
-    (["--vary", "t_end=0,10"], "t_end must be a positive number"),
+    (["--vary", "dt=-0.01,0.02"], "--vary dt=-0.01: --dt: must be > 0"),
+    (["--vary", "t_end=0,10"], "--vary t_end=0: --t-end: must be > 0"),
     (["--vary", "ws=2:2:5"], "empty range"),
     (["--vary", "ws=3:2", "--samples", "4"], "empty range"),
     (["--vary", "ws=a:b:3"], "'a' is not a number"),
@@ -149,8 +149,8 @@ BAD = [
     (["--vary", "ws="], "no values"),
     (["--vary", "ws=1,,2"], "empty value"),
     (["--vary", "ws=1e999,2"], "not finite"),
-    (["--vary", "L=-1,10"], "L must be a positive number"),
-    (["--vary", "ts=0,5"], "ts must be a positive number"),
+    (["--vary", "L=-1,10"], "--vary L=-1: --param L: must be > 0"),
+    (["--vary", "ts=0,5"], "--vary ts=0: --param ts: must be > 0"),
     (["--vary", "ws=1:2"], "needs --samples"),
     (["--vary", "ws=1:2:3", "--samples", "5"], "with --samples give a range"),
     (["--vary", "ws=1:2:3", "--seed", "1"], "--seed is for --samples"),
@@ -245,4 +245,5 @@ def test_solver_options_per_run(isolated_cache, tmp_path, capsys):
     r = api.run(api.load_scene(scene), out=tmp_path / "ref.csv")  # dt = 1e-4, rows every 1e-4 s
     assert table["N_A_max"][1] == r["N_A"].max() and table["steps"][0] == 2 * table["steps"][1]
     assert main(["sweep", scene, "--vary", "dt=3e-5,1e-4", "--out", str(tmp_path / "v.csv")]) == 2
-    assert "not a whole number of steps" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "--vary dt=3e-05: " in err and "[output] interval: must be a whole number of steps" in err

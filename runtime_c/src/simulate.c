@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "flexsym/limits.h"
 #include "flexsym/model.h"
 #include "linalg.h"
 
@@ -141,17 +142,17 @@ void fsr_default_options(fsr_options* o)
 {
     memset(o, 0, sizeof *o);
     o->method = FSR_GENALPHA;
-    o->t_end = 20.0;
-    o->dt = 1e-3;
+    o->t_end = FSR_DEFAULT_T_END;
+    o->dt = FSR_DEFAULT_DT;
     o->out_every = 1;
-    o->rho_inf = 0.9;
-    o->nm_gamma = 0.5;
-    o->nm_beta = 0.25;
-    o->newton_tol = 1e-12;
+    o->rho_inf = FSR_DEFAULT_RHO_INF;
+    o->nm_gamma = FSR_DEFAULT_NEWMARK_GAMMA;
+    o->nm_beta = FSR_DEFAULT_NEWMARK_BETA;
+    o->newton_tol = FSR_DEFAULT_NEWTON_TOL;
     o->newton_max = 25;
-    o->tol = 1e-6;
-    o->max_steps = 1000000;
-    o->blowup = 10.0;
+    o->tol = FSR_DEFAULT_TOL;
+    o->max_steps = FSR_DEFAULT_MAX_STEPS;
+    o->blowup = FSR_DEFAULT_BLOWUP;
 }
 
 const char* fsr_method_name(fsr_method m)
@@ -1020,6 +1021,17 @@ static fsr_status check_options(sim* s)
         return fail(s, FSR_BAD_OPTIONS, "step must be >= 0 (got %g; 0 = steps of dt)", o->step);
     if (o->step > 0.0 && o->method != FSR_RADAU5)
         return fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)", fsr_method_name(o->method));
+    /* Counts are checked as doubles before any conversion to long (no overflow, no UB). */
+    double grid = o->t_end / o->dt, radau = o->step > 0.0 ? o->t_end / o->step : grid;
+    if (!(grid <= (double)FSR_MAX_STEPS) || !(radau <= (double)FSR_MAX_STEPS))
+        return fail(s, FSR_BAD_OPTIONS, "t_end / dt = %.3g steps exceeds the limit of %ld",
+                    grid > radau ? grid : radau, FSR_MAX_STEPS);
+    if (o->max_steps > FSR_MAX_STEPS)
+        return fail(s, FSR_BAD_OPTIONS, "max_steps %ld exceeds the limit of %ld", o->max_steps, FSR_MAX_STEPS);
+    double rows = floor(grid / o->out_every) + 2.0;
+    if (rows > (double)FSR_MAX_ROWS || rows * s->r->ncols * 8.0 > (double)FSR_MAX_ROW_BYTES)
+        return fail(s, FSR_BAD_OPTIONS, "%.3g output rows of %d columns exceed the limits (%ld rows, "
+                    "%ld bytes)", rows, s->r->ncols, FSR_MAX_ROWS, FSR_MAX_ROW_BYTES);
     for (int i = 0; i < s->m->np; ++i)
         if (!(o->p[i] > 0.0) || !isfinite(o->p[i]))
             return fail(s, FSR_BAD_OPTIONS, "beam parameter %s must be a positive number (got %g)",
