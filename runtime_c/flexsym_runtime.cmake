@@ -1,7 +1,7 @@
 # Included by every generated variant's CMakeLists.txt (see templates/CMakeLists.txt.j2).
 # flexsym_add_model(NAME sources...) builds, from the generated sources plus this runtime:
 #   flexsym_NAME      the command-line driver (src/driver.c)
-#   libflexsym_NAME   a shared library exposing the kernels and fsr_simulate (tests, Python)
+#   libflexsym_NAME   a shared library exposing the kernels, fsr_simulate and fsr_batch (tests, Python)
 set(FLEXSYM_RUNTIME_DIR "${CMAKE_CURRENT_LIST_DIR}")
 
 if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
@@ -12,7 +12,8 @@ function(flexsym_add_model name)
   set(objs flexsym_${name}_objects)
   add_library(${objs} OBJECT ${ARGN}
               "${FLEXSYM_RUNTIME_DIR}/src/simulate.c"
-              "${FLEXSYM_RUNTIME_DIR}/src/linalg.c")
+              "${FLEXSYM_RUNTIME_DIR}/src/linalg.c"
+              "${FLEXSYM_RUNTIME_DIR}/src/batch.c")
   set_target_properties(${objs} PROPERTIES POSITION_INDEPENDENT_CODE ON C_STANDARD 99
                         C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
   target_include_directories(${objs} PUBLIC "${FLEXSYM_RUNTIME_DIR}/include"

@@ -1001,6 +1001,10 @@ static fsr_status check_options(sim* s)
     if (!(o->t_end > 0.0) || !isfinite(o->t_end))
         return fail(s, FSR_BAD_OPTIONS, "t_end must be > 0 (got %g)", o->t_end);
     if (o->out_every < 1) return fail(s, FSR_BAD_OPTIONS, "out_every must be >= 1 (got %d)", o->out_every);
+    for (int i = 0; o->y0 && i < 2 * s->n; ++i)
+        if (!isfinite(o->y0[i]))
+            return fail(s, FSR_BAD_OPTIONS, "initial %s of %s is not finite", i < s->n ? "value" : "rate",
+                        s->m->coord_names[i % s->n]);
     if (!(o->rho_inf >= 0.0 && o->rho_inf <= 1.0))
         return fail(s, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
     if (o->method == FSR_NEWMARK && !(o->nm_gamma >= 0.5 && o->nm_beta >= 0.25 * (0.5 + o->nm_gamma) * (0.5 + o->nm_gamma) - 1e-15))
@@ -1064,7 +1068,7 @@ static fsr_status sim_step(sim* s)
 }
 
 /* Check the options and allocate a run with room for `capacity` rows (0: every row of the
- * run); the state starts at rest. sim_close releases it. */
+ * run); the state starts at o->y0, or at rest. sim_close releases it. */
 static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long capacity)
 {
     const fsm_model_info* m = fsm_model();
@@ -1117,6 +1121,7 @@ static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long cap
     s->work = s->dense + 2 * n;
     memset(s->qdd, 0, sizeof(double) * (size_t)(4 * n));
     memset(s->S, 0, sizeof(double) * NN);
+    if (o->y0) memcpy(s->state, o->y0, sizeof(double) * (size_t)(2 * n));
     return FSR_OK;
 }
 
