@@ -46,6 +46,10 @@ class Fields:
     v_dot: sp.Expr
     v_s: sp.Expr
     v_ss: sp.Expr
+    v_dot_s: sp.Expr = sp.Integer(0)  # d/ds of the transverse velocity (rotary inertia)
+    v_ddot: sp.Expr = sp.Integer(0)  # transverse acceleration (moment from equilibrium)
+    v_ddot_s: sp.Expr = sp.Integer(0)
+    weights: dict = None  # section distributions mu, ea, ei, nhat, rot (IntegralTable.weight)
 
 
 def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
@@ -69,12 +73,22 @@ def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
                 u += -h * q[mi.name] * q[mj.name] / (2 * L)
                 u_dot += -h * q[mi.name] * qd[mj.name] / L
                 u_ddot += -h * (qd[mi.name] * qd[mj.name] + q[mi.name] * qdd[mj.name]) / L
-    return Fields(u, u_dot, u_ddot, u_stretch, u_s, v, v_dot, v_s, v_ss)
+    v_dot_s = sum((mv(m.name, 1) * qd[m.name] for m in bending), sp.Integer(0))
+    weights = {k: table.weight(k) for k in ("mu", "ea", "ei", "nhat", "rot")}
+    v_ddot = sum((mv(m.name) * qdd[m.name] for m in bending), sp.Integer(0))
+    v_ddot_s = sum((mv(m.name, 1) * qdd[m.name] for m in bending), sp.Integer(0))
+    return Fields(u, u_dot, u_ddot, u_stretch, u_s, v, v_dot, v_s, v_ss, v_dot_s, v_ddot, v_ddot_s,
+                  weights)
 
 
 def kinetic_density(f: Fields) -> sp.Expr:
-    """T per unit s: 1/2 rho A L [(u' - w v)^2 + (v' + w (x + u))^2], velocities in the moving frame."""
-    return rho * A * L / 2 * ((f.u_dot - w * f.v)**2 + (f.v_dot + w * (L * s + f.u))**2)
+    """T per unit s: 1/2 rho A L mu [(u' - w v)^2 + (v' + w (x + u))^2], velocities in the moving
+    frame (mu = 1 for the uniform beam), plus 1/2 J (w + v'_x)^2 of point rotary inertias."""
+    mu, rot = f.weights["mu"], f.weights["rot"]
+    T = rho * A * L / 2 * mu * ((f.u_dot - w * f.v)**2 + (f.v_dot + w * (L * s + f.u))**2)
+    if rot != 0:
+        T += rho * A * L**3 / 2 * rot * (w + f.v_dot_s / L)**2
+    return T
 
 
 @dataclass(frozen=True)
@@ -86,15 +100,16 @@ class EnergyTerm:
 
 ENERGY_TERMS: dict[str, EnergyTerm] = {t.name: t for t in (
     EnergyTerm("axial", "EA/2 int (u_x)^2 dx",
-               lambda f: E * A / (2 * L) * f.u_stretch_s**2),
+               lambda f: E * A / (2 * L) * f.weights["ea"] * f.u_stretch_s**2),
     EnergyTerm("bending", "EI/2 int (v_xx)^2 dx",
-               lambda f: E * I / (2 * L**3) * f.v_ss**2),
+               lambda f: E * I / (2 * L**3) * f.weights["ei"] * f.v_ss**2),
     EnergyTerm("cubic", "EA/2 int u_x (v_x)^2 dx",
-               lambda f: E * A / (2 * L**2) * f.u_stretch_s * f.v_s**2),
+               lambda f: E * A / (2 * L**2) * f.weights["ea"] * f.u_stretch_s * f.v_s**2),
     EnergyTerm("quartic", "EA/8 int (v_x)^4 dx",
-               lambda f: E * A / (8 * L**3) * f.v_s**4),
-    EnergyTerm("prestress", "1/2 int N(x) (v_x)^2 dx, N = rho A w^2 (L^2 - x^2)/2",
-               lambda f: rho * A * w**2 * L / 4 * (1 - s**2) * f.v_s**2),
+               lambda f: E * A / (8 * L**3) * f.weights["ea"] * f.v_s**4),
+    EnergyTerm("prestress", "1/2 int N(x) (v_x)^2 dx, N = rho A w^2 (L^2 - x^2)/2 (a body: "
+               "N = w^2 [int_x^L rho A x dx + m_tip L])",
+               lambda f: rho * A * w**2 * L / 4 * f.weights["nhat"] * f.v_s**2),
 )}
 
 

@@ -18,6 +18,10 @@
  * close, 3 simulation stopped, 4 I/O.
  * The CSV is written to a temporary file and renamed, so an existing file is replaced
  * only by a complete one; after a divergence it holds the rows computed up to then.
+ * Limits and defaults come from flexsym/limits.h (written from symbolic/options.py); flexsym
+ * checks every option before starting the driver, so these checks are a last line of defence.
+ * With FLEXSYM_PARENT_PID set (flexsym sets it), the driver ends when that process does
+ * (Linux: PR_SET_PDEATHSIG), so a killed run leaves no orphan that writes later.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
@@ -27,11 +31,16 @@
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
+#ifdef __linux__
+#include <signal.h>
+#include <sys/prctl.h>
+#endif
 
+#include "flexsym/limits.h"
 #include "flexsym/runtime.h"
 #include "flexsym/system.h"
 
-#define MAX_REPEAT 1000
+#define MAX_REPEAT FSR_MAX_REPEAT
 
 static int usage(const char* msg, const char* arg)
 {
@@ -163,8 +172,21 @@ static int cmp_double(const void* a, const void* b)
     return (x > y) - (x < y);
 }
 
+/* End with the parent: SIGTERM when it dies, and now if it died before we got here. */
+static void die_with_parent(void)
+{
+#ifdef __linux__
+    const char* pp = getenv("FLEXSYM_PARENT_PID");
+    long want;
+    if (!pp || !parse_int(pp, &want)) return;
+    if (prctl(PR_SET_PDEATHSIG, SIGTERM) != 0) return;
+    if ((long)getppid() != want) _exit(143);
+#endif
+}
+
 int main(int argc, char** argv)
 {
+    die_with_parent();
     const fsm_system* m = fsm_system_model();
     fsr_options o;
     fsr_default_options(&o);
@@ -203,10 +225,10 @@ int main(int argc, char** argv)
         }
         else if (!strcmp(a, "--out")) out = val;
         else if (!strcmp(a, "--out-every")) {
-            if (!parse_int(val, &lv) || lv < 1 || lv > 1000000000L) return usage("bad --out-every", val);
+            if (!parse_int(val, &lv) || lv < 1 || lv > FSR_MAX_STEPS) return usage("bad --out-every (rows every K steps)", val);
             o.out_every = (int)lv;
         } else if (!strcmp(a, "--repeat")) {
-            if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (1..1000)", val);
+            if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (runs, 1 to FSR_MAX_REPEAT of flexsym/limits.h)", val);
         } else if (!strcmp(a, "--integrator")) {
             if (!strcmp(val, "rk4")) o.method = FSR_RK4;
             else if (!strcmp(val, "genalpha")) o.method = FSR_GENALPHA;
