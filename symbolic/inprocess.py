@@ -30,7 +30,7 @@ from .run import RunResult
 from .validity import VALIDITY_LIMIT, deflection_weights
 
 # fsr_method codes (runtime.h) and the driver's status words
-METHOD_CODES = {"rk4": 0, "genalpha": 1, "newmark": 2, "dopri5": 3, "radau5": 4}
+METHOD_CODES = {"rk4": 0, "genalpha": 1, "newmark": 2, "dopri5": 3, "radau5": 4, "ali3p": 5, "genalpha3": 6}
 STATUS_WORDS = {0: "ok", 1: "diverged"}  # any other fsr_status: "failed"
 SUMMARY_FIELDS = ("min", "max", "t_min", "t_max", "t_peak", "final")  # FSR_SUM_*, then `at`
 STAT_FIELDS = ("t_stop", "steps", "rejected_steps", "newton_iterations", "jacobian_evaluations",
@@ -54,7 +54,7 @@ def option_inputs(o: RunOptions) -> dict[str, float]:
     out = {"method": METHOD_CODES[o.integrator], "t_end": o.t_end, "dt": o.dt,
            "out_every": o.out_every}
     for name in ("tol", "step", "rho_inf", "blowup", "newton_tol", "max_steps", "newmark_gamma",
-                 "newmark_beta"):
+                 "newmark_beta", "penalty"):
         if getattr(o, name) is not None:
             out[INPUT_NAMES.get(name, name)] = getattr(o, name)
     if o.newton is not None:

@@ -82,9 +82,13 @@ CLI_BAD = [
     # options that would be ignored
     (["run", "m3", "--maneuver", "constant", "--ts", "5"], "--ts: does not apply to the manoeuvre 'constant'"),
     (["run", "m3", "--tol", "1e-6"], "--tol: applies to dopri5, not to integrator genalpha"),
-    (["run", "m3", "--integrator", "rk4", "--rho-inf", "0.5"], "--rho-inf: applies to genalpha, not to integrator rk4"),
-    (["run", "m3", "--integrator", "rk4", "--newton", "full"], "--newton: applies to genalpha and newmark and radau5"),
+    (["run", "m3", "--integrator", "rk4", "--rho-inf", "0.5"], "--rho-inf: applies to genalpha and genalpha3, not to integrator rk4"),
+    (["run", "m3", "--integrator", "rk4", "--newton", "full"], "--newton: applies to genalpha, newmark, radau5, ali3p and genalpha3"),
     (["run", "m3", "--newmark-beta", "0.3"], "--newmark-beta: applies to newmark, not to integrator genalpha"),
+    (["run", "m3", "--penalty", "1e6"], "--penalty: applies to ali3p, not to integrator genalpha"),
+    (["run", "m3", "--integrator", "genalpha3", "--penalty", "1e6"], "--penalty: applies to ali3p, not to integrator genalpha3"),
+    (["run", "m3", "--integrator", "ali3p", "--penalty", "0"], "--penalty: must be > 0 and <= 1e+15 (got 0)"),
+    (["run", "m3", "--integrator", "ali3p", "--blowup", "5"], "--blowup: applies to rk4, dopri5, genalpha, newmark and radau5, not to integrator ali3p"),
     (["run", "m3", "--integrator", "newmark", "--newmark-gamma", "0.9", "--newmark-beta", "0.3"],
      "--newmark-beta: 0.3 with gamma = 0.9 is not unconditionally stable"),
     (["run", "m3", "--rho-inf", "1.5"], "--rho-inf: must be >= 0 and <= 1 (got 1.5)"),
@@ -244,7 +248,7 @@ def test_run_options_with_a_scene_name_the_scene_key(capsys, workdir):
 
 API_BAD = [
     (dict(dt=-1), "dt: must be > 0 (got -1)"),
-    (dict(integrator="rk4", rho_inf=0.5), "rho_inf: applies to genalpha, not to integrator rk4"),
+    (dict(integrator="rk4", rho_inf=0.5), "rho_inf: applies to genalpha and genalpha3, not to integrator rk4"),
     (dict(bogus=1), "unknown run option 'bogus'"),
     (dict(t_end=1e19, dt=1), "t_end / dt = 1e+19 steps exceeds the limit"),
     (dict(out_every=2.5), "out_every must be a whole number of steps >= 1 (got 2.5)"),

@@ -17,8 +17,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "flexsym/model.h"
 #include "flexsym/runtime.h"
+#include "flexsym/system.h"
 
 /* How a named input reaches the options: a field of fsr_options, or a model parameter. */
 typedef enum { IN_DOUBLE, IN_INT, IN_LONG, IN_METHOD, IN_P, IN_MP, IN_Y0 } input_kind;
@@ -43,9 +43,10 @@ static const option_name OPTIONS[] = {
     {"tol", IN_DOUBLE, offsetof(fsr_options, tol)},
     {"max_steps", IN_LONG, offsetof(fsr_options, max_steps)},
     {"blowup", IN_DOUBLE, offsetof(fsr_options, blowup)},
+    {"penalty", IN_DOUBLE, offsetof(fsr_options, penalty)},
 };
 
-static int find_input(const fsm_model_info* m, const char* name, input_slot* slot)
+static int find_input(const fsm_system* m, const char* name, input_slot* slot)
 {
     for (size_t i = 0; i < sizeof OPTIONS / sizeof OPTIONS[0]; ++i)
         if (!strcmp(name, OPTIONS[i].name)) {
@@ -56,7 +57,7 @@ static int find_input(const fsm_model_info* m, const char* name, input_slot* slo
     for (int i = 0; i < m->np; ++i)
         if (!strcmp(name, m->param_names[i])) { slot->kind = IN_P; slot->offset = (size_t)i; return 1; }
     for (int i = 0; i < m->nmp; ++i)
-        if (!strcmp(name, m->maneuver_param_names[i])) { slot->kind = IN_MP; slot->offset = (size_t)i; return 1; }
+        if (!strcmp(name, m->drive_param_names[i])) { slot->kind = IN_MP; slot->offset = (size_t)i; return 1; }
     int rate = !strncmp(name, "qd0_", 4);
     if (rate || !strncmp(name, "q0_", 3))
         for (int i = 0; i < m->nq; ++i)
@@ -148,10 +149,15 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
               int nat, const double* at, const double* bound_weights, double bound_limit,
               double* summary, double* stats, int* status, char* messages, double** rows)
 {
-    const fsm_model_info* m = fsm_model();
+    const fsm_system* m = fsm_system_model();
     input_slot slots[64];
     if (ninputs > 64 || m->np > 64 || m->nmp > 64) {
         snprintf(messages, FSR_BATCH_MESSAGE, "too many inputs or parameters (at most 64)");
+        return -1;
+    }
+    if (m->nc > 0) {  /* its rows carry a violation column the summaries do not name */
+        snprintf(messages, FSR_BATCH_MESSAGE, "batch runs take models without constraints (%s has %d)",
+                 m->name, m->nc);
         return -1;
     }
     for (int i = 0; i < ninputs; ++i)
@@ -172,7 +178,7 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
         double p[64], mp[64];
         fsr_default_options(&o);
         memcpy(p, m->param_defaults, sizeof(double) * (size_t)m->np);
-        memcpy(mp, m->maneuver_param_defaults, sizeof(double) * (size_t)m->nmp);
+        memcpy(mp, m->drive_param_defaults, sizeof(double) * (size_t)m->nmp);
         for (int j = 0; j < ninputs; ++j)
             set_input(&slots[j], inputs[(size_t)i * (size_t)ninputs + (size_t)j], &o, p, mp, y0);
         o.p = p;
@@ -199,9 +205,11 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
         st[FSR_STAT_NCOLS] = (double)r.ncols;
         st[FSR_STAT_CPU] = cpu;
         st[FSR_STAT_BOUND_PEAK] = st[FSR_STAT_BOUND_T] = NAN;
-        if (bound_weights)
-            bound(&r, ncs, bound_weights, bound_limit * p[m->length_param], &st[FSR_STAT_BOUND_PEAK],
+        if (bound_weights) {
+            double L = m->length_param >= 0 ? p[m->length_param] : m->length_scale;
+            bound(&r, ncs, bound_weights, bound_limit * L, &st[FSR_STAT_BOUND_PEAK],
                   &st[FSR_STAT_BOUND_T]);
+        }
         if (rows) {
             rows[i] = r.rows;  /* the caller owns it now: fsr_batch_free */
             r.rows = NULL;
