@@ -1,13 +1,13 @@
 # Included by every generated variant's CMakeLists.txt (see templates/CMakeLists.txt.j2).
 # flexsym_add_model(NAME [SYSTEM] sources...) builds, from the generated sources plus this runtime:
 #   flexsym_NAME      the command-line driver (src/driver.c)
-#   libflexsym_NAME   a shared library exposing the kernels and fsr_simulate (tests, Python)
+#   libflexsym_NAME   a shared library exposing the kernels, fsr_simulate and fsr_batch (tests, Python)
 # SYSTEM: the sources define fsm_system_model() (system.h); without it, a one-beam model is
 # wrapped into that struct by src/model_adapter.c.
 set(FLEXSYM_RUNTIME_DIR "${CMAKE_CURRENT_LIST_DIR}")
 set(FLEXSYM_RUNTIME_SOURCES "${FLEXSYM_RUNTIME_DIR}/src/simulate.c" "${FLEXSYM_RUNTIME_DIR}/src/linalg.c"
     "${FLEXSYM_RUNTIME_DIR}/src/constrained.c" "${FLEXSYM_RUNTIME_DIR}/src/ali3p.c"
-    "${FLEXSYM_RUNTIME_DIR}/src/genalpha3.c")
+    "${FLEXSYM_RUNTIME_DIR}/src/genalpha3.c" "${FLEXSYM_RUNTIME_DIR}/src/batch.c")
 
 if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
   set(CMAKE_BUILD_TYPE Release)

@@ -17,7 +17,8 @@ from .run import RunResult, check_output_path, run_built
 from .scene import Scene, load_scene
 from .spec import builtin
 
-__all__ = ["load_scene", "variant", "generate", "build", "run", "simulate", "inspect", "kernels"]
+__all__ = ["load_scene", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
+           "inprocess", "sweep"]
 
 
 def variant(name_or_spec, **overrides):
@@ -80,3 +81,42 @@ def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,op
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
     return Report(_spec_of(target), latex=latex).render(chosen)
+
+
+def inprocess(target):
+    """The built model's library loaded in this process (InProcessModel): model.batch(runs, ...)
+    runs many parameter sets per call and returns arrays (see flexsym.inprocess)."""
+    from .inprocess import load
+
+    return load(_spec_of(target))
+
+
+def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), resume=False,
+          workers=None, dask=None, progress=None, on_chunk=None, **run_options) -> dict:
+    """`flexsym sweep` from Python: vary is a list of "NAME=START:STOP:COUNT" / "NAME=a,b,c" /
+    "NAME=LO:HI" strings, or a dict NAME -> list of values or such a string. Runs a scene with its
+    own settings, or a variant on the spin-up with the run options of simulate() (ws, ts,
+    params={...}, t_end, dt, integrator, tol, step, interval, ...; the option table). dask: a
+    scheduler address or a distributed.Client. Writes the table to out and returns it as
+    column -> numpy array (see flexsym.sweep)."""
+    from .sweep import check_partial, make_plan, prepare_plan, read_table, run_sweep, settings_of
+
+    if isinstance(vary, dict):
+        vary = [f"{k}={v}" if isinstance(v, str) else f"{k}={','.join(repr(float(x)) for x in v)}"
+                for k, v in vary.items()]
+    if isinstance(target, Scene) or (isinstance(target, (str, Path)) and str(target).endswith(".toml")):
+        scene = target if isinstance(target, Scene) else load_scene(target)
+        if run_options:
+            raise SpecError(f"{scene.path}: run options do not combine with a scene: set them in the scene")
+        spec, o, keep_interval = scene.spec, scene.options, True
+    else:
+        spec = _spec_of(target)
+        o = validate(run_options, API, spec)
+        keep_interval = run_options.get("interval") is not None or run_options.get("out_every") is not None
+    plan = make_plan(spec, settings_of(o, keep_interval), o.params, list(vary), samples=samples, seed=seed,
+                     sampling=sampling, at=at)
+    out = check_output_path(out, "out")
+    check_partial(out, resume)
+    prepare_plan(plan)
+    run_sweep(plan, out, resume=resume, workers=workers, dask=dask, progress=progress, on_chunk=on_chunk)
+    return read_table(out)

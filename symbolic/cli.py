@@ -1,7 +1,8 @@
-"""flexsym command line: generate, build, run, inspect, select, spinup, paper, variants."""
+"""flexsym command line: generate, build, run, inspect, select, spinup, paper, sweep, variants."""
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -9,7 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from .errors import FlexsymError, SpecError
-from .options import BY_NAME, CLI, OPTIONS, add_arguments, given_options, validate
+from .options import BY_NAME, CLI, OPTIONS, Where, add_arguments, given_options, validate
 
 
 def _variant_args(p: argparse.ArgumentParser) -> None:
@@ -378,6 +379,66 @@ def cmd_bench(args) -> int:
     return 0
 
 
+SWEEP_OPTIONS = tuple(n for n in RUN_OPTIONS if n not in ("repeat", "energy"))
+
+
+def cmd_sweep(args) -> int:
+    import numpy as np
+
+    from .run import check_output_path
+    from .sweep import check_partial, make_plan, partial_path, plot, prepare_plan, read_table, run_sweep, \
+        settings_of
+
+    spec, scene = resolve(args)
+    o = _run_options(args, spec, scene)
+    keep_interval = scene is not None or args.interval is not None
+    at = []
+    for item in (args.at or "").split(",") if args.at else []:
+        try:
+            at.append(float(item))
+        except ValueError:
+            raise SpecError(f"--at '{item}' is not a number") from None
+    if args.workers is not None and args.workers < 1:
+        raise SpecError(f"--workers must be >= 1 (got {args.workers})")
+    where = CLI if scene is None else Where("scene", scene.path)
+    plan = make_plan(spec, settings_of(o, keep_interval), o.params, args.vary or [], samples=args.samples,
+                     seed=args.seed, sampling=args.sampling, at=at, where=where)
+    plot_x = args.plot_x.split(",") if args.plot_x else list(plan.names[:2])
+    for name in plot_x:
+        if name not in plan.names:
+            raise SpecError(f"--plot-x {name}: not a varied input ({', '.join(plan.names)})")
+    if len(plot_x) > 2:
+        raise SpecError("--plot-x: one or two varied inputs")
+    plot_y = args.plot_y or f"{plan.outputs[0]}_min"
+    if args.plot and plot_y not in plan.header():
+        raise SpecError(f"--plot-y {plot_y}: not a column of the table ({', '.join(plan.header())})")
+    out = check_output_path(args.out, "--out")
+    plot_path = check_output_path(args.plot, "--plot", PLOT_TYPES) if args.plot else None
+    check_partial(out, args.resume)
+    prepare_plan(plan)
+    runs_on = f"dask at {args.dask}" if args.dask else f"{args.workers or os.cpu_count()} local processes"
+    print(f"sweep {spec.name}: {len(plan)} runs ({plan.sampling}"
+          + (f", seed {plan.seed}" if plan.seed is not None else "") + f") on {runs_on}")
+    try:
+        run_sweep(plan, out, resume=args.resume, workers=args.workers, dask=args.dask,
+                  progress=True if args.progress else None)
+    except KeyboardInterrupt:
+        print(f"flexsym: sweep interrupted; finished runs kept in {partial_path(out)}: "
+              "run the same command with --resume to continue", file=sys.stderr)
+        return 130
+    table = read_table(out)
+    status = table["status"]
+    ok = int(np.sum(status == "ok"))
+    valid = int(np.sum(table["valid"] == "True"))
+    print(f"table: {out} ({len(status)} runs: {ok} ok, {len(status) - ok} stopped, "
+          f"{valid} valid)")
+    if plot_path is not None:
+        plot(table, plot_x, plot_y, plot_path, f"{spec.name}: {plot_y}",
+             others=[n for n in plan.names if n not in plot_x])
+        print(f"plot: {plot_path}")
+    return 0
+
+
 def cmd_variants(args) -> int:
     from .energy import STRAIN_MODELS
     from .modes import FAMILIES
@@ -492,6 +553,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-end-to-end", action="store_true",
                    help="skip timing generation + compilation from scratch")
     p.set_defaults(func=cmd_paper)
+
+    p = sub.add_parser("sweep", help="many runs of a scene or variant over run-time parameters: "
+                       "a table with one row per run (local processes or a Dask cluster)")
+    _variant_args(p)
+    g = p.add_argument_group("run options shared by every run (checked against the table in "
+                             "symbolic/options.py)")
+    add_arguments(g, SWEEP_OPTIONS)
+    p.add_argument("--param", action="append", help="fixed beam or manoeuvre parameter NAME=VALUE")
+    p.add_argument("--vary", action="append", metavar="NAME=SPEC",
+                   help="START:STOP:COUNT (grid), a,b,c (list) or LO:HI (with --samples); repeatable; "
+                        "names: rho, E, A, I, L, ws, ts, q0_<coordinate>, qd0_<coordinate>, t_end, dt, "
+                        "step (radau5)")
+    p.add_argument("--samples", type=int, help="N random or Latin-hypercube samples of the LO:HI ranges")
+    p.add_argument("--seed", type=int, help="seed of the samples (default 0)")
+    p.add_argument("--sampling", choices=("random", "lhs"), help="with --samples (default lhs)")
+    p.add_argument("--at", help="comma-separated times [s]: also report every output's value there")
+    p.add_argument("--out", required=True, help="the table (CSV; its directory must exist); finished "
+                   "runs go to OUT.partial first")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted sweep from OUT.partial")
+    p.add_argument("--workers", type=int, help="local processes (default: all cores)")
+    p.add_argument("--dask", metavar="ADDRESS", help="run on an existing dask.distributed scheduler "
+                   "(e.g. tcp://host:8786)")
+    p.add_argument("--plot", help="PNG/PDF/SVG file: a summary column against one or two varied inputs "
+                   "(its directory must exist)")
+    p.add_argument("--plot-y", help="column to plot (default: <first output>_min)")
+    p.add_argument("--plot-x", help="one or two varied inputs, comma-separated (default: the first two)")
+    p.add_argument("--progress", action="store_true", help="progress bar on stderr even when not a terminal")
+    p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("variants", help="list built-in variants, strain models and mode families")
     p.set_defaults(func=cmd_variants)

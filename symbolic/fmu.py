@@ -50,6 +50,9 @@ def check_request(opts: FmuOptions, out: Path | None, spec) -> None:
         raise SpecError(f"--input '{opts.input}': expected one of {', '.join(INPUT_MODES)}")
     if out is not None:
         _check_out(out)
+    if opts.integrator not in METHODS:
+        raise SpecError(f"--integrator {opts.integrator}: an FMU offers {', '.join(METHODS)} (not yet the "
+                        "constrained integrators)")
     if opts.integrator == "dopri5" and opts.tol != 0:
         raise SpecError("--integrator dopri5 adapts its steps; the FMU takes fixed steps of dt: "
                         "use --tol 0 (dopri5 at fixed steps) or another integrator")

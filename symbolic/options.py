@@ -23,7 +23,7 @@ from .errors import SpecError
 
 INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5", "ali3p", "genalpha3")
 IMPLICIT = ("genalpha", "newmark", "radau5", "ali3p", "genalpha3")
-CONSTRAINED = ("ali3p", "genalpha3")  # index-3 methods for systems with cut joints
+CONSTRAINED = ("ali3p", "genalpha3")  # take models with constraints (system.h); no blow-up check
 
 # Limits of one run: beyond them a run is refused up front (and by the runtime as a last line).
 LIMITS = {
@@ -123,17 +123,18 @@ OPTIONS: tuple[Option, ...] = (
        "(default 1e-12)", "--newton-tol", "solver.newton_tol", "--newton-tol", low=1e-16, high=1e-3,
        integrators=IMPLICIT),
     _o("rho_inf", float, None, "generalized-alpha spectral radius at infinity in [0, 1] (default 0.9)",
-       "--rho-inf", "solver.rho_inf", "--rho-inf", low=0.0, high=1.0,
-       integrators=("genalpha", "genalpha3")),
-    _o("penalty", float, None, "ali3p penalty weight kappa against the mass matrix (default 1e7)",
-       "--penalty", "solver.penalty", "--penalty", low=1.0, high=1e12, integrators=("ali3p",)),
+       "--rho-inf", "solver.rho_inf", "--rho-inf", low=0.0, high=1.0, integrators=("genalpha", "genalpha3")),
     _o("newmark_gamma", float, None, "Newmark gamma (default 0.5; the paper: 0.5)", "--newmark-gamma",
        "solver.newmark_gamma", "--newmark-gamma", low=0.5, high=1.0, integrators=("newmark",)),
     _o("newmark_beta", float, None, "Newmark beta (default 0.25; the paper: 0.5625), at least "
        "(gamma + 1/2)^2 / 4", "--newmark-beta", "solver.newmark_beta", "--newmark-beta", low=0.25,
        high=1.0, integrators=("newmark",)),
     _o("blowup", float, None, "stop when a coordinate or abs(v_tip) exceeds this many beam lengths "
-       "(default 10)", "--blowup", "solver.blowup", "--blowup", low=0.0, low_open=True, high=1e6),
+       "(default 10)", "--blowup", "solver.blowup", "--blowup", low=0.0, low_open=True, high=1e6,
+       integrators=tuple(i for i in INTEGRATORS if i not in CONSTRAINED)),
+    _o("penalty", float, None, "ali3p penalty kappa: the penalty term's weight against the mass "
+       "matrix (default 1e7; the constraint residual after projection is about 1/kappa)", "--penalty",
+       "solver.penalty", "--penalty", low=0.0, low_open=True, high=1e15, integrators=("ali3p",)),
     _o("interval", float, None, "time between output rows [s], a whole number of steps --dt "
        "(default: about 0.01 s)", "--interval", "output.interval", None, low=0.0, low_open=True),
     _o("energy", bool, False, "append the kinetic and potential energy and the Jacobi integral "
@@ -148,7 +149,8 @@ OPTIONS: tuple[Option, ...] = (
 BY_NAME = {o.name: o for o in OPTIONS}
 DEFAULTS = {o.name: o.default for o in OPTIONS}
 RUNTIME_DEFAULTS = {"tol": 1e-6, "max_steps": 10**6, "newton": "modified", "newton_tol": 1e-12,
-                    "rho_inf": 0.9, "penalty": 1e7, "newmark_gamma": 0.5, "newmark_beta": 0.25, "blowup": 10.0}
+                    "rho_inf": 0.9, "newmark_gamma": 0.5, "newmark_beta": 0.25, "blowup": 10.0,
+                    "penalty": 1e7}
 ROW_INTERVAL = 0.01  # default time between rows [s]
 
 
@@ -193,6 +195,7 @@ class RunOptions:
     newmark_gamma: float | None = None
     newmark_beta: float | None = None
     blowup: float | None = None
+    penalty: float | None = None
     energy: bool = False
     repeat: int = 1
     steps: int = 0  # integration steps (fixed-step methods, radau5) or output-grid points
@@ -229,7 +232,9 @@ def validate(given: dict, where: Where = API, spec=None) -> RunOptions:
     for name in values:
         opt = BY_NAME[name]
         if integrator not in opt.integrators:
-            raise where.error(opt, f"applies to {' and '.join(opt.integrators)}, not to "
+            names = opt.integrators
+            listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+            raise where.error(opt, f"applies to {listed}, not to "
                                    f"integrator {integrator} (it would be ignored)")
     maneuver = getattr(spec, "maneuver", None)
     params = check_params(given.get("params") or {}, where, maneuver)

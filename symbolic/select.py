@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .pipeline import prepare
+from .progress import Progress
 from .run import RunResult, run_built
 from .spec import BUILTIN, VariantSpec, _refs
 
@@ -100,7 +101,10 @@ def select(scene, tol: float, max_bending: int = 4, repeat: int = 3, log=print):
     ref = run_built(prepare(reference_spec(scene), log=lambda m: None), t_end=scene.t_end, dt=ref_dt,
                     params=scene.params, out_every=round(interval / ref_dt), raise_on_failure=True)
     results = []
-    for spec in candidates(scene, max_bending):
+    specs = candidates(scene, max_bending)
+    bar = Progress(len(specs), "select")
+    log = bar.wrap(log)
+    for spec in specs:
         built = prepare(spec, log=lambda m: None)
         kw = dict(t_end=scene.t_end, dt=scene.dt, integrator=scene.integrator, params=scene.params,
                   out_every=scene.out_every, tol=scene.tol, step=scene.step)
@@ -111,6 +115,8 @@ def select(scene, tol: float, max_bending: int = 4, repeat: int = 3, log=print):
         c = Candidate(spec, cost, error(r, ref, scene.spec.outputs), "ok" if r.ok else r.message, spread)
         results.append(c)
         log(f"  {c.label}  {c.cost * 1e3:8.3f} ms  error {c.error:.2e}")
+        bar.update()
+    bar.close()
     return results, choose(results, tol)
 
 

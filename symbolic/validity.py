@@ -43,6 +43,17 @@ def deflection_bound(spec, result) -> tuple[np.ndarray, str]:
     return bound, "a bound on |v|"
 
 
+def deflection_weights(spec, columns) -> list[float] | None:
+    """Weights w over `columns` with sum_j w_j |y_j| = the quantity deflection_bound() uses
+    (for the C batch, which has no rows to hand back); None when the model has no limit."""
+    if spec.kind != "modal":
+        return None
+    if "v_tip" in columns:
+        return [float(c == "v_tip") for c in columns]
+    peaks = {m.coordinate: _mode_peak(m) for m in spec.bending}
+    return [peaks.get(c, 0.0) for c in columns]
+
+
 def assess(spec, result, params: dict | None = None) -> Assessment:
     length = (params or {}).get("L", 10.0)
     a = Assessment(True)

@@ -152,7 +152,12 @@ fsr_status cs_consistent_start(csim* s)
     const fsm_system* m = s->m;
     const int n = s->n, nc = s->nc;
     double *q = s->q, *v = s->v;
-    if (m->initial_state) m->initial_state(s->o->p, s->o->mp, q, v);
+    if (s->o->y0) {  /* the caller's initial state, as a starting guess like initial_state's */
+        memcpy(q, s->o->y0, sizeof(double) * (size_t)n);
+        memcpy(v, s->o->y0 + n, sizeof(double) * (size_t)n);
+    } else if (m->initial_state) {
+        m->initial_state(s->o->p, s->o->mp, q, v);
+    }
     cs_drive(s, 0.0);
     if (nc > 0) {
         int it = 0, w_best = 0;
@@ -266,6 +271,7 @@ static fsr_status check_options(csim* s)
     if (o->step != 0.0)
         return cs_fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)",
                        o->method == FSR_ALI3P ? "ali3p" : "genalpha3");
+    if (fsr_check_run(o, m, s->r)) return s->r->status;
     if (!m->drive || !m->mass || !m->force || !m->residual_jac || !m->outputs
         || (m->nc > 0 && (!m->constraints || !m->constraint_jac || !m->constraint_rate
                           || !m->constraint_acc || !m->constraint_names)))

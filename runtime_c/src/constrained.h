@@ -43,6 +43,10 @@ typedef struct {
 } csim;
 
 fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...);
+/* simulate.c: r->message and r->status; and the checks every run makes (finite o->y0, the
+ * run-size limits of limits.h; r->ncols set), FSR_OK or FSR_BAD_OPTIONS with the message. */
+fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...);
+fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r);
 double cs_time(const csim* s, long k);
 /* s->d = the drive at t */
 void cs_drive(csim* s, double t);

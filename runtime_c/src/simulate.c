@@ -174,6 +174,17 @@ const char* fsr_method_name(fsr_method m)
     return "?";
 }
 
+/* r->message from fmt, r->status = st; returns st (shared with constrained.c). */
+fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->message, sizeof r->message, fmt, ap);
+    va_end(ap);
+    r->status = st;
+    return st;
+}
+
 static fsr_status fail(sim* s, fsr_status st, const char* fmt, ...)
 {
     va_list ap;
@@ -1007,6 +1018,29 @@ static fsr_status radau_step(sim* s)
     return accept(s, t1, h, y, A + last * n, &d);
 }
 
+/* What every run checks (shared with constrained.c): a finite initial state and the run-size
+ * limits of limits.h (r->ncols set). Counts are checked as doubles before any conversion to
+ * long (no overflow, no UB). */
+fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r)
+{
+    const int n = m->nq;
+    for (int i = 0; o->y0 && i < 2 * n; ++i)
+        if (!isfinite(o->y0[i]))
+            return fsr_fail(r, FSR_BAD_OPTIONS, "initial %s of %s is not finite", i < n ? "value" : "rate",
+                            m->coord_names[i % n]);
+    double grid = o->t_end / o->dt, radau = o->step > 0.0 ? o->t_end / o->step : grid;
+    if (!(grid <= (double)FSR_MAX_STEPS) || !(radau <= (double)FSR_MAX_STEPS))
+        return fsr_fail(r, FSR_BAD_OPTIONS, "t_end / dt = %.3g steps exceeds the limit of %ld",
+                        grid > radau ? grid : radau, FSR_MAX_STEPS);
+    if (o->max_steps > FSR_MAX_STEPS)
+        return fsr_fail(r, FSR_BAD_OPTIONS, "max_steps %ld exceeds the limit of %ld", o->max_steps, FSR_MAX_STEPS);
+    double rows = floor(grid / o->out_every) + 2.0;
+    if (rows > (double)FSR_MAX_ROWS || rows * r->ncols * 8.0 > (double)FSR_MAX_ROW_BYTES)
+        return fsr_fail(r, FSR_BAD_OPTIONS, "%.3g output rows of %d columns exceed the limits (%ld rows, "
+                        "%ld bytes)", rows, r->ncols, FSR_MAX_ROWS, FSR_MAX_ROW_BYTES);
+    return FSR_OK;
+}
+
 static fsr_status check_options(sim* s)
 {
     const fsr_options* o = s->o;
@@ -1030,17 +1064,7 @@ static fsr_status check_options(sim* s)
         return fail(s, FSR_BAD_OPTIONS, "step must be >= 0 (got %g; 0 = steps of dt)", o->step);
     if (o->step > 0.0 && o->method != FSR_RADAU5)
         return fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)", fsr_method_name(o->method));
-    /* Counts are checked as doubles before any conversion to long (no overflow, no UB). */
-    double grid = o->t_end / o->dt, radau = o->step > 0.0 ? o->t_end / o->step : grid;
-    if (!(grid <= (double)FSR_MAX_STEPS) || !(radau <= (double)FSR_MAX_STEPS))
-        return fail(s, FSR_BAD_OPTIONS, "t_end / dt = %.3g steps exceeds the limit of %ld",
-                    grid > radau ? grid : radau, FSR_MAX_STEPS);
-    if (o->max_steps > FSR_MAX_STEPS)
-        return fail(s, FSR_BAD_OPTIONS, "max_steps %ld exceeds the limit of %ld", o->max_steps, FSR_MAX_STEPS);
-    double rows = floor(grid / o->out_every) + 2.0;
-    if (rows > (double)FSR_MAX_ROWS || rows * s->r->ncols * 8.0 > (double)FSR_MAX_ROW_BYTES)
-        return fail(s, FSR_BAD_OPTIONS, "%.3g output rows of %d columns exceed the limits (%ld rows, "
-                    "%ld bytes)", rows, s->r->ncols, FSR_MAX_ROWS, FSR_MAX_ROW_BYTES);
+    if (fsr_check_run(o, s->m, s->r)) return s->r->status;
     for (int i = 0; i < s->m->np; ++i)
         if (!(o->p[i] > 0.0) || !isfinite(o->p[i]))
             return fail(s, FSR_BAD_OPTIONS, "beam parameter %s must be a positive number (got %g)",
@@ -1077,7 +1101,8 @@ static fsr_status sim_step(sim* s)
 }
 
 /* Check the options and allocate a run with room for `capacity` rows (0: every row of the
- * run); the state starts at the model's initial_state, or at rest. sim_close releases it. */
+ * run); the state starts at o->y0, else at the model's initial_state, else at rest.
+ * sim_close releases it. */
 static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long capacity)
 {
     const fsm_system* m = fsm_system_model();
@@ -1140,7 +1165,8 @@ static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long cap
     memset(s->dw, 0, sizeof(double) * drives);
     memset(s->qdd, 0, sizeof(double) * (size_t)(4 * n));
     memset(s->S, 0, sizeof(double) * NN);
-    if (m->initial_state) m->initial_state(o->p, o->mp, s->state, s->state + n);  /* else at rest */
+    if (o->y0) memcpy(s->state, o->y0, sizeof(double) * (size_t)(2 * n));
+    else if (m->initial_state) m->initial_state(o->p, o->mp, s->state, s->state + n);
     return FSR_OK;
 }
 

@@ -43,6 +43,7 @@ typedef struct {
                                 (alpha = kappa (4 / dt^2) tr M / |Phi_q|_F^2 at t = 0) */
     const double* p;         /* beam parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
+    const double* y0;        /* initial state [q, q'] (2 nq values); NULL: at rest */
 } fsr_options;
 
 typedef struct {
@@ -93,5 +94,33 @@ fsr_status fsr_stepper_retune(fsr_stepper* p);
 const fsr_result* fsr_stepper_result(const fsr_stepper* p);
 double fsr_stepper_time(const fsr_stepper* p);
 void fsr_stepper_free(fsr_stepper* p);
+
+/* ---- Batch: many runs in one call (batch.c; in-process runs and sweeps from Python) ----
+ * Run r takes fsr_default_options and the model's default parameters, then sets the named
+ * inputs to inputs[r * ninputs + i]: option names method (an fsr_method), t_end, dt,
+ * out_every, step, rho_inf, nm_gamma, nm_beta, newton_tol, newton_max, newton_full, tol,
+ * max_steps, blowup, penalty, a beam/manoeuvre parameter name of the model, or q0_<coordinate> /
+ * qd0_<coordinate> for the initial state (the others start at rest). Each run goes through
+ * fsr_simulate. Outputs, per run r:
+ *   summary[r][j][f]  over the stored rows, column j = 0 .. ny + nq - 1 (outputs, then
+ *                     coordinates), f = FSR_SUM_* then the values at the nat times `at`
+ *                     (linear between rows, exact at a row, NaN past the last row);
+ *   stats[r][FSR_STAT_*]; status[r] (fsr_status); messages + r * FSR_BATCH_MESSAGE;
+ *   bound_weights (ny + nq, may be NULL): FSR_STAT_BOUND_PEAK is the peak over the rows of
+ *     sum_j w_j |y_j|, FSR_STAT_BOUND_T the first time it exceeded bound_limit * L (NaN: never);
+ *   rows (may be NULL): rows[r] receives run r's rows (FSR_STAT_NROWS x FSR_STAT_NCOLS,
+ *     as fsr_result.rows), released with fsr_batch_free.
+ * Returns the number of runs that did not end FSR_OK, or -1 (message in messages[0]) when an
+ * input name is unknown or the model has constraints (nc > 0). */
+#define FSR_BATCH_MESSAGE 512
+enum { FSR_SUM_MIN, FSR_SUM_MAX, FSR_SUM_T_MIN, FSR_SUM_T_MAX, FSR_SUM_T_PEAK, FSR_SUM_FINAL,
+       FSR_SUM_FIELDS };
+enum { FSR_STAT_T_STOP, FSR_STAT_STEPS, FSR_STAT_REJECTED, FSR_STAT_NEWTON, FSR_STAT_JACOBIANS,
+       FSR_STAT_FORCES, FSR_STAT_OMEGA_MAX, FSR_STAT_NROWS, FSR_STAT_NCOLS, FSR_STAT_CPU,
+       FSR_STAT_BOUND_PEAK, FSR_STAT_BOUND_T, FSR_STAT_FIELDS };
+int fsr_batch(int ninputs, const char* const* names, int nruns, const double* inputs,
+              int nat, const double* at, const double* bound_weights, double bound_limit,
+              double* summary, double* stats, int* status, char* messages, double** rows);
+void fsr_batch_free(double** rows, int nruns);
 
 #endif
