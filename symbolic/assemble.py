@@ -10,6 +10,10 @@ joint's coordinate; a flexible beam's frame is its root's tangent frame. Energie
   modal beam   T = int 1/2 rho A |V + r' + phi' k x r|^2 dx in frame components (energy.py's
                kinetic_density with the frame's actual motion), V_g = -m g.R - int rho A g.A r dx,
                strain terms and their `wrt` groups exactly as the variant's strain model.
+  ef beam      the same per ANCF element (efbody.py); its elastic energy is differentiated by
+               casadi AD in sysgen.py.
+Loads: gravity, motors, point forces, torques, spring-dampers. Cut joints give constraint rows
+Phi(q, theta) (cut_joint_rows); sysgen.py differentiates them.
 Lagrange with guided coordinates theta_k (p = dT/dq'):
   M = dp/dq',  f = dT/dq - (dp/dq) q' - sum_k (dp/dtheta_k theta_k' + dp/dtheta_k' theta_k'') + Q
 Q: strain terms (their groups only), gravity, motors, point forces and torques.
@@ -32,12 +36,11 @@ from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, buil
                      gravity_density, kinetic_density, momentum_density, w)
 from .efbody import EfPart, ef_part
 from .errors import SpecError
-from .integrals import BodyIntegralTable, IntegralTable
+from .integrals import IntegralTable
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
-from .modes import s
 from .outputs import field_at, output_expression
-from .system import (GROUND, FlexibleBeam, Gravity, PointForce, RigidBody, SpringDamper, System,
-                     Torque, beam_station, parse_output)
+from .system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
+                     beam_station, parse_output)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
 
@@ -85,7 +88,7 @@ class FlexPart:
     coords: list  # mode names in order
     psyms: dict  # global beam parameter symbol -> this body's symbol
 
-    def view(self, pose_omega=None):
+    def view(self):
         """What outputs.field_at / output_expression read (a derivation-like object)."""
         return SimpleNamespace(spec=self.beam.model, table=self.table, modes=self.modes,
                                fields=self.fields)
@@ -230,13 +233,11 @@ def derive_system(system: System) -> SystemDerivation:
         j = system.joint(tree.joint_of(body))
         if j.has_coordinate and j.name not in guided_by_joint:
             coords.append(Coordinate(j.name, "joint", body, j.name))
-    flex_modes = {}
     for b in system.bodies:
         if b.flexible and b.model.kind == "fe":
             coords += [Coordinate(f"{b.name}_{c}", "node", b.name) for c in b.model.coordinates]
         elif b.flexible:
             refs = b.model.modes
-            flex_modes[b.name] = refs
             for r in refs:
                 coords.append(Coordinate(f"{b.name}_{r.coordinate}", r.axis, b.name))
     q = sp.Matrix([sp.Symbol(c.name, real=True) for c in coords])
