@@ -113,31 +113,40 @@ def parse_theta(text: str) -> sp.Expr:
     The cost is bounded for any input: at most MAX_NODES syntax nodes, numeric exponents up
     to MAX_EXPONENT, and the magnitude of every constant result is estimated before sympy
     computes it exactly."""
+    return parse_expression(text, (("t", t),), "theta(t)")
+
+
+@lru_cache(maxsize=256)
+def parse_expression(text: str, names: tuple[tuple[str, sp.Symbol], ...], label: str) -> sp.Expr:
+    """parse_theta's grammar with the names given (name, symbol) instead of t alone (a motor's
+    torque: t and joint coordinates and rates); `label` names the expression in messages."""
+    env = dict(names)
     if not isinstance(text, str) or not text.strip():
-        raise SpecError("theta(t) expression is empty")
+        raise SpecError(f"{label} expression is empty")
     if len(text) > 2000:
-        raise SpecError("theta(t) expression is longer than 2000 characters")
+        raise SpecError(f"{label} expression is longer than 2000 characters")
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
-        raise SpecError(f"cannot parse theta(t) = '{text}': {exc.msg} at column {exc.offset}") from None
+        raise SpecError(f"cannot parse {label} = '{text}': {exc.msg} at column {exc.offset}") from None
     except (ValueError, RecursionError, MemoryError) as exc:
-        raise SpecError(f"cannot parse theta(t) = '{text}': {exc}") from None
+        raise SpecError(f"cannot parse {label} = '{text}': {exc}") from None
     if sum(1 for _ in ast.walk(tree)) > MAX_NODES:
-        raise SpecError(f"theta(t) expression has more than {MAX_NODES} syntax nodes")
+        raise SpecError(f"{label} expression has more than {MAX_NODES} syntax nodes")
     try:
-        expr = _build(tree.body, text)
+        expr = _build(tree.body, text, env, label)
     except _SYMPY_ERRORS as exc:
-        raise SpecError(f"theta(t) = '{text}': cannot be built ({type(exc).__name__}: {exc})") from None
-    extra = expr.free_symbols - {t}
+        raise SpecError(f"{label} = '{text}': cannot be built ({type(exc).__name__}: {exc})") from None
+    extra = expr.free_symbols - set(env.values())
     if extra:
-        raise SpecError(f"theta(t) = '{text}' depends on {', '.join(sorted(map(str, extra)))}, not only t")
+        raise SpecError(f"{label} = '{text}' depends on {', '.join(sorted(map(str, extra)))}, not only "
+                        f"{', '.join(env)}")
     if expr.has(sp.zoo, sp.oo, -sp.oo):
-        raise SpecError(f"theta(t) = '{text}' is infinite (a division by zero?)")
+        raise SpecError(f"{label} = '{text}' is infinite (a division by zero?)")
     if expr.has(sp.nan):
-        raise SpecError(f"theta(t) = '{text}' is undefined (nan)")
+        raise SpecError(f"{label} = '{text}' is undefined (nan)")
     if expr.has(sp.I):
-        raise SpecError(f"theta(t) = '{text}' is not real (it contains the imaginary unit)")
+        raise SpecError(f"{label} = '{text}' is not real (it contains the imaginary unit)")
     return expr
 
 
@@ -155,10 +164,11 @@ def _check_magnitude(value, text):
     return value
 
 
-def _build(node, text):
+def _build(node, text, env=None, label="theta(t)"):
+    env = {"t": t} if env is None else env
     def bad(what):
-        return SpecError(f"theta(t) = '{text}': {what} is not allowed (use numbers, t, pi, e, "
-                         f"+ - * / **, ifelse(cond, a, b) and {', '.join(_FUNCTIONS)})")
+        return SpecError(f"{label} = '{text}': {what} is not allowed (use numbers, t, pi, e, "
+                         f"{', '.join(n for n in env if n != 't')}{', ' if len(env) > 1 else ''}+ - * / **, ifelse(cond, a, b) and {', '.join(_FUNCTIONS)})")
 
     if isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, (int, float)) \
@@ -167,24 +177,24 @@ def _build(node, text):
         return _check_magnitude(sp.Integer(node.value) if isinstance(node.value, int)
                                 else sp.Float(repr(node.value)), text)
     if isinstance(node, ast.Name):
-        if node.id == "t":
-            return t
+        if node.id in env:
+            return env[node.id]
         if node.id in _CONSTANTS:
             return _CONSTANTS[node.id]
         raise bad(f"the name '{node.id}'")
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        val = _build(node.operand, text)
+        val = _build(node.operand, text, env, label)
         return -val if isinstance(node.op, ast.USub) else val
     if isinstance(node, ast.BinOp):
-        a, b = _build(node.left, text), _build(node.right, text)
+        a, b = _build(node.left, text, env, label), _build(node.right, text, env, label)
         if isinstance(node.op, ast.Pow):
             if b.is_Number and abs(b) > MAX_EXPONENT:
                 raise bad(f"the exponent {b}")
             if a.is_Number and b.is_Number:  # estimate before sympy computes it exactly
                 if a == 0 and b < 0:
-                    raise SpecError(f"theta(t) = '{text}' divides by zero (0 to a negative power)")
+                    raise SpecError(f"{label} = '{text}' divides by zero (0 to a negative power)")
                 if a != 0 and float(b) * _log10_abs(a) > MAX_MAGNITUDE:
-                    raise SpecError(f"theta(t) = '{text}': {a}**{b} is beyond 1e{MAX_MAGNITUDE} "
+                    raise SpecError(f"{label} = '{text}': {a}**{b} is beyond 1e{MAX_MAGNITUDE} "
                                     "(double precision)")
             return _check_magnitude(a**b, text)
         op = _BINARY.get(type(node.op))
@@ -198,10 +208,10 @@ def _build(node, text):
             if not (isinstance(cond, ast.Compare) and len(cond.ops) == 1
                     and type(cond.ops[0]) in _COMPARE):
                 raise bad("an ifelse condition other than one comparison (<, <=, >, >=)")
-            c = _COMPARE[type(cond.ops[0])](_build(cond.left, text), _build(cond.comparators[0], text))
-            return sp.Piecewise((_build(args[1], text), c), (_build(args[2], text), True))
+            c = _COMPARE[type(cond.ops[0])](_build(cond.left, text, env, label), _build(cond.comparators[0], text, env, label))
+            return sp.Piecewise((_build(args[1], text, env, label), c), (_build(args[2], text, env, label), True))
         if name in _FUNCTIONS and len(args) == 1:
-            return _FUNCTIONS[name](_build(args[0], text))
+            return _FUNCTIONS[name](_build(args[0], text, env, label))
         raise bad(f"the call {name}(...) with {len(args)} argument(s)")
     raise bad(f"a {type(node).__name__}")
 
