@@ -21,8 +21,9 @@ from pathlib import Path
 
 from .errors import SpecError
 
-INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5")
-IMPLICIT = ("genalpha", "newmark", "radau5")
+INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5", "ali3p", "genalpha3")
+IMPLICIT = ("genalpha", "newmark", "radau5", "ali3p", "genalpha3")
+CONSTRAINED = ("ali3p", "genalpha3")  # index-3 methods for systems with cut joints
 
 # Limits of one run: beyond them a run is refused up front (and by the runtime as a last line).
 LIMITS = {
@@ -99,7 +100,8 @@ class Option:
 _o = Option  # rows below: name, type, default, help, flag, scene key, driver flag, rules
 OPTIONS: tuple[Option, ...] = (
     _o("integrator", str, "genalpha", "rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark, "
-       "radau5 (implicit, order 5, large steps)", "--integrator", "solver.integrator", "--integrator",
+       "radau5 (implicit, order 5, large steps), ali3p, genalpha3 (constrained systems; without "
+       "constraints: the trapezoidal rule, generalized-alpha)", "--integrator", "solver.integrator", "--integrator",
        choices=INTEGRATORS),
     _o("t_end", float, 20.0, "end time [s] (default 20)", "--t-end", "solver.t_end", "--t-end",
        low=0.0, low_open=True),
@@ -121,7 +123,10 @@ OPTIONS: tuple[Option, ...] = (
        "(default 1e-12)", "--newton-tol", "solver.newton_tol", "--newton-tol", low=1e-16, high=1e-3,
        integrators=IMPLICIT),
     _o("rho_inf", float, None, "generalized-alpha spectral radius at infinity in [0, 1] (default 0.9)",
-       "--rho-inf", "solver.rho_inf", "--rho-inf", low=0.0, high=1.0, integrators=("genalpha",)),
+       "--rho-inf", "solver.rho_inf", "--rho-inf", low=0.0, high=1.0,
+       integrators=("genalpha", "genalpha3")),
+    _o("penalty", float, None, "ali3p penalty weight kappa against the mass matrix (default 1e7)",
+       "--penalty", "solver.penalty", "--penalty", low=1.0, high=1e12, integrators=("ali3p",)),
     _o("newmark_gamma", float, None, "Newmark gamma (default 0.5; the paper: 0.5)", "--newmark-gamma",
        "solver.newmark_gamma", "--newmark-gamma", low=0.5, high=1.0, integrators=("newmark",)),
     _o("newmark_beta", float, None, "Newmark beta (default 0.25; the paper: 0.5625), at least "
@@ -143,7 +148,7 @@ OPTIONS: tuple[Option, ...] = (
 BY_NAME = {o.name: o for o in OPTIONS}
 DEFAULTS = {o.name: o.default for o in OPTIONS}
 RUNTIME_DEFAULTS = {"tol": 1e-6, "max_steps": 10**6, "newton": "modified", "newton_tol": 1e-12,
-                    "rho_inf": 0.9, "newmark_gamma": 0.5, "newmark_beta": 0.25, "blowup": 10.0}
+                    "rho_inf": 0.9, "penalty": 1e7, "newmark_gamma": 0.5, "newmark_beta": 0.25, "blowup": 10.0}
 ROW_INTERVAL = 0.01  # default time between rows [s]
 
 

@@ -20,7 +20,7 @@
 #include <string.h>
 
 #include "flexsym/limits.h"
-#include "flexsym/model.h"
+#include "flexsym/system.h"
 #include "linalg.h"
 
 /* Modified Newton: rebuild the iteration matrix when an iteration contracts the update by
@@ -92,7 +92,7 @@ typedef struct {
 } radau_tableau;
 
 typedef struct {
-    const fsm_model_info* m;
+    const fsm_system* m;  /* the model (system.h; a one-beam model through model_adapter.c) */
     const fsr_options* o;
     fsr_result* r;
     int n;
@@ -118,10 +118,13 @@ typedef struct {
     double* dense; /* 2n: a state between steps, for rows */
     int* piv;
     int mass_have, mass_factored; /* only trusted when the mass is constant */
-    double drive_t[2], drive_v[2][2];
+    int nd;        /* drive vector d = [t, theta, theta', theta'', ...] */
+    double* dw;    /* drive vectors of the callers: DW_ACCEL, DW_ROW, DW_STEP (+ stage), nd each */
+    double drive_t[2], *drive_v[2];
     int drive_valid[2], drive_next;
     int drive_held;   /* drive from the caller (fsr_stepper_set_drive), not the manoeuvre: */
-    double hold_t, hold[2];  /* theta' = hold[0] + hold[1] (t - hold_t), theta'' = hold[1] */
+    double hold_t, hold[2], hold_theta;  /* theta' = hold[0] + hold[1] (t - hold_t), theta'' =
+                                            hold[1], theta = hold_theta + its integral */
     long capacity; /* rows */
     /* the run, resumable step by step (sim_step): the state and what a method carries over */
     double* state; /* [q, q'] */
@@ -153,6 +156,7 @@ void fsr_default_options(fsr_options* o)
     o->tol = FSR_DEFAULT_TOL;
     o->max_steps = FSR_DEFAULT_MAX_STEPS;
     o->blowup = FSR_DEFAULT_BLOWUP;
+    o->penalty = FSR_DEFAULT_PENALTY;
 }
 
 const char* fsr_method_name(fsr_method m)
@@ -163,6 +167,8 @@ const char* fsr_method_name(fsr_method m)
     case FSR_NEWMARK: return "newmark";
     case FSR_DOPRI5: return "dopri5";
     case FSR_RADAU5: return "radau5";
+    case FSR_ALI3P: return "ali3p";
+    case FSR_GENALPHA3: return "genalpha3";
     }
     return "?";
 }
@@ -184,37 +190,40 @@ static double max_abs(double m, double x)
     return x > m ? x : m;
 }
 
-/* drive = [theta', theta''] at t. The last two times are cached: RK stages and output rows
- * ask for the same time repeatedly, and the manoeuvre costs a sin and a cos. */
-static void drive_at(sim* s, double t, double* drive)
+enum { DW_ACCEL = 0, DW_ROW = 1, DW_STEP = 2, DW_COUNT = 2 + 3 };  /* DW_STEP: 3 radau stages */
+
+/* The drive vector d (nd) at t into d. The last two times are cached: RK stages and output
+ * rows ask for the same time repeatedly, and the manoeuvre costs a sin and a cos. */
+static void drive_at(sim* s, double t, double* d)
 {
-    if (s->drive_held) {
-        drive[0] = s->hold[0] + s->hold[1] * (t - s->hold_t);
-        drive[1] = s->hold[1];
+    if (s->drive_held) {  /* one guided joint (nd = 4, checked by fsr_stepper_new) */
+        double tau = t - s->hold_t;
+        d[0] = t;
+        d[1] = s->hold_theta + tau * (s->hold[0] + 0.5 * s->hold[1] * tau);
+        d[2] = s->hold[0] + s->hold[1] * (t - s->hold_t);
+        d[3] = s->hold[1];
         return;
     }
+    const int nd = s->nd;  /* a loop, not memcpy: a call to it cost 4-10 % on #3 and prestress */
     for (int i = 0; i < 2; ++i)
         if (s->drive_valid[i] && s->drive_t[i] == t) {
-            drive[0] = s->drive_v[i][0];
-            drive[1] = s->drive_v[i][1];
+            for (int j = 0; j < nd; ++j) d[j] = s->drive_v[i][j];
             return;
         }
-    double d3[3];
-    fsm_maneuver(&t, s->o->mp, d3);
     int k = s->drive_next;
     s->drive_next = 1 - k;
     s->drive_valid[k] = 1;
     s->drive_t[k] = t;
-    drive[0] = s->drive_v[k][0] = d3[1];
-    drive[1] = s->drive_v[k][1] = d3[2];
+    s->m->drive(&t, s->o->mp, s->drive_v[k]);
+    for (int j = 0; j < nd; ++j) d[j] = s->drive_v[k][j];
 }
 
-/* M(q) into Mraw and, with factor, its Cholesky factor into Mfac; once when M is constant. */
-static fsr_status mass_at(sim* s, double t, const double* q, int factor)
+/* M(q, d) into Mraw and, with factor, its Cholesky factor into Mfac; once when M is constant. */
+static fsr_status mass_at(sim* s, double t, const double* q, const double* d, int factor)
 {
     int n = s->n, constant = s->m->mass_constant;
     if (!constant || !s->mass_have) {
-        fsm_mass(q, s->o->p, s->Mraw);
+        s->m->mass(q, d, s->o->p, s->Mraw);
         s->mass_have = 1;
         s->mass_factored = 0;
     }
@@ -237,11 +246,11 @@ static void apply_inverse(sim* s, const double* Ainv, int dim, double* x)
 
 static fsr_status accel(sim* s, double t, const double* q, const double* v, double* a)
 {
-    double drive[2];
-    fsr_status st = mass_at(s, t, q, 1);
-    if (st) return st;
+    double* drive = s->dw + DW_ACCEL * s->nd;
     drive_at(s, t, drive);
-    fsm_force(q, v, drive, s->o->p, a);
+    fsr_status st = mass_at(s, t, q, drive, 1);
+    if (st) return st;
+    s->m->force(q, v, drive, s->o->p, a);
     s->r->force_evaluations++;
     if (s->m->mass_constant && s->bw < 0) apply_inverse(s, s->Minv, s->n, a);
     else fsr_chol_solve(s->Mfac, s->n, a);
@@ -277,7 +286,7 @@ static fsr_status store(sim* s, double t, const double* q, const double* v, cons
     fsr_result* r = s->r;
     if (r->nrows >= s->capacity) return FSR_OK;
     double* row = r->rows + (size_t)r->nrows * (size_t)r->ncols;
-    double drive[2] = {0.0, 0.0};
+    double* drive = s->dw + DW_ROW * s->nd;  /* zeros unless something reads it */
     const double* qdd = s->qdd;
     if (s->m->outputs_use_drive || s->o->energy) drive_at(s, t, drive);
     if (s->m->outputs_use_acceleration) {
@@ -288,10 +297,10 @@ static fsr_status store(sim* s, double t, const double* q, const double* v, cons
         }
     }
     row[0] = t;
-    fsm_outputs(q, v, qdd, drive, s->o->p, s->y);
+    s->m->outputs(q, v, qdd, s->zero, drive, s->o->p, s->y);  /* no multipliers: nc = 0 */
     memcpy(row + 1, s->y, sizeof(double) * (size_t)s->m->ny);
     memcpy(row + 1 + s->m->ny, q, sizeof(double) * (size_t)s->n);
-    if (s->o->energy) fsm_energy(q, v, drive, s->o->p, row + 1 + s->m->ny + s->n);
+    if (s->o->energy) s->m->energy(q, v, drive, s->o->p, row + 1 + s->m->ny + s->n);
     r->nrows++;
     return FSR_OK;
 }
@@ -530,14 +539,15 @@ static fsr_status erk_advance(sim* s)
 static fsr_status estimate_omega_max(sim* s, double* omega)
 {
     int n = s->n;
-    double *x = s->work, *z = x + n, lam = 0.0;
-    fsr_status st = mass_at(s, 0.0, s->zero, 1);
+    double *x = s->work, *z = x + n, lam = 0.0, *drive = s->dw + DW_STEP * s->nd;
+    drive_at(s, 0.0, drive);
+    fsr_status st = mass_at(s, 0.0, s->zero, drive, 1);
     if (st) return st;
     for (int i = 0; i < n; ++i) x[i] = (1.0 + 0.1 * i) / sqrt((double)n);
     for (int sample = 0; sample < 5; ++sample) {
-        double drive[2], est = 0.0;
+        double est = 0.0;
         drive_at(s, s->o->t_end * sample / 4.0, drive);
-        fsm_residual_jac(s->zero, s->zero, s->zero, drive, s->o->p, s->Jq, s->Jv);
+        s->m->residual_jac(s->zero, s->zero, s->zero, drive, s->o->p, s->Jq, s->Jv);
         for (int it = 0; it < 1000; ++it) {
             fsr_matvec(s->Jq, n, -1, x, z);
             fsr_chol_solve(s->Mfac, n, z);
@@ -709,7 +719,7 @@ static fsr_status alpha_step(sim* s)
     /* a: acceleration, ab: the algorithmic acceleration; 1: their values at t1 */
     double *a = s->work, *ab = a + n, *a1 = ab + n, *q1 = a1 + n, *v1 = q1 + n, *res = v1 + n, *ma = res + n;
     double* a_old = ma + n;
-    double drive[2], tol = o->newton_tol * s->L;
+    double *drive = s->dw + DW_STEP * s->nd, tol = o->newton_tol * s->L;
     newton_state* ns = &s->ns;
     fsr_status st;
     long k = s->k;
@@ -729,13 +739,13 @@ static fsr_status alpha_step(sim* s)
     double dq = 0.0, dq_prev = -1.0;
     for (int it = 0;; ++it) {
         if (it == o->newton_max) return newton_failed(s, t1, dq, it);
-        if ((st = mass_at(s, t1, q1, 0))) return st;
-        fsm_force(q1, v1, drive, o->p, res);
+        if ((st = mass_at(s, t1, q1, drive, 0))) return st;
+        s->m->force(q1, v1, drive, o->p, res);
         s->r->force_evaluations++;
         fsr_matvec(s->Mraw, n, s->bw, a1, ma);
         for (int i = 0; i < n; ++i) res[i] -= ma[i];  /* -(M a1 - f) */
         if (rebuild) {
-            fsm_residual_jac(q1, v1, a1, drive, o->p, s->Jq, s->Jv);
+            s->m->residual_jac(q1, v1, a1, drive, o->p, s->Jq, s->Jv);
             newton_rows(s, 0, &cb, &cg);
             if ((st = newton_factor(s, t1))) return st;
             ns->h = h;
@@ -927,7 +937,8 @@ static fsr_status radau_step(sim* s)
     double *y = s->state, *q = y, *v = y + n;
     double *A = s->work, *Q = A + m, *V = Q + m, *res = V + m, *f = res + m, *ma = f + n;
     double* y0 = ma + n;  /* [q, q'] at the start of the step, for rows inside it */
-    double drive[RADAU_STAGES][2], tol = o->newton_tol * s->L;
+    double* drive[RADAU_STAGES];
+    double tol = o->newton_tol * s->L;
     const double H = s->H;
     const long nsteps = s->msteps, k = s->k;
     newton_state* ns = &s->ns;
@@ -935,6 +946,7 @@ static fsr_status radau_step(sim* s)
     double t = (double)k * H, t1 = k + 1 >= nsteps ? o->t_end : (double)(k + 1) * H, h = t1 - t;
     double cq[RADAU_STAGES][RADAU_STAGES], cv[RADAU_STAGES][RADAU_STAGES];
     for (int i = 0; i < RADAU_STAGES; ++i) {
+        drive[i] = s->dw + (DW_STEP + i) * s->nd;
         drive_at(s, i == last ? t1 : t + T->c[i] * h, drive[i]);
         for (int j = 0; j < RADAU_STAGES; ++j) {
             cq[i][j] = h * h * T->aa[i][j];
@@ -955,13 +967,13 @@ static fsr_status radau_step(sim* s)
         if (it == o->newton_max) return newton_failed(s, t1, dq, it);
         for (int i = 0; i < RADAU_STAGES; ++i) {  /* res = -(M(Q_i) A_i - f_i), interleaved */
             const double *Qi = Q + i * n, *Vi = V + i * n, *Ai = A + i * n;
-            if ((st = mass_at(s, t + T->c[i] * h, Qi, 0))) return st;
-            fsm_force(Qi, Vi, drive[i], o->p, f);
+            if ((st = mass_at(s, t + T->c[i] * h, Qi, drive[i], 0))) return st;
+            s->m->force(Qi, Vi, drive[i], o->p, f);
             s->r->force_evaluations++;
             fsr_matvec(s->Mraw, n, s->bw, Ai, ma);
             for (int r = 0; r < n; ++r) res[r * RADAU_STAGES + i] = f[r] - ma[r];
             if (rebuild && (o->newton_full || i == last)) {
-                fsm_residual_jac(Qi, Vi, Ai, drive[i], o->p, s->Jq, s->Jv);
+                s->m->residual_jac(Qi, Vi, Ai, drive[i], o->p, s->Jq, s->Jv);
                 for (int b = o->newton_full ? i : 0; b <= i; ++b) newton_rows(s, b, cq[b], cv[b]);
             }
         }
@@ -1035,7 +1047,7 @@ static fsr_status check_options(sim* s)
     for (int i = 0; i < s->m->nmp; ++i)
         if (!isfinite(o->mp[i]))
             return fail(s, FSR_BAD_OPTIONS, "manoeuvre parameter %s must be finite",
-                        s->m->maneuver_param_names[i]);
+                        s->m->drive_param_names[i]);
     return FSR_OK;
 }
 
@@ -1067,7 +1079,7 @@ static fsr_status sim_step(sim* s)
  * run); the state starts at rest. sim_close releases it. */
 static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long capacity)
 {
-    const fsm_model_info* m = fsm_model();
+    const fsm_system* m = fsm_system_model();
     memset(s, 0, sizeof *s);
     memset(r, 0, sizeof *r);
     s->m = m;
@@ -1076,9 +1088,13 @@ static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long cap
     s->n = m->nq;
     r->ncols = 1 + m->ny + m->nq + (o->energy ? 3 : 0);
     fsr_status st = check_options(s);
+    if (!st && m->nc > 0)
+        st = fail(s, FSR_BAD_OPTIONS, "%s: this model has %d constraint equations: use ali3p or genalpha3",
+                  fsr_method_name(o->method), m->nc);
     if (st) return st;
     int n = s->n;
-    s->L = o->p[m->length_param];
+    s->nd = m->nd;
+    s->L = m->length_param >= 0 ? o->p[m->length_param] : m->length_scale;
     s->bw = m->bandwidth >= 0 && 2 * m->bandwidth + 1 < n ? m->bandwidth : -1;
     s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
     if (s->nsteps < 1) s->nsteps = 1;
@@ -1093,7 +1109,9 @@ static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long cap
     size_t nn = (size_t)n * (size_t)n, NN = (size_t)s->N * (size_t)s->N;
     size_t work = (size_t)(2 * MAX_STAGES + 4) * (size_t)n + 2 * (size_t)n;
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
-    double* mem = malloc(sizeof(double) * (5 * nn + 2 * NN + (size_t)m->ny + (size_t)s->N + 4 * (size_t)n + work));
+    size_t base = 5 * nn + 2 * NN + (size_t)m->ny + (size_t)s->N + 4 * (size_t)n + work;
+    size_t drives = (size_t)(DW_COUNT + 2) * (size_t)m->nd;  /* after the rest, at mem + base */
+    double* mem = malloc(sizeof(double) * (base + drives));
     s->piv = malloc(sizeof(int) * (size_t)s->N);
     if (!r->rows || !mem || !s->piv) {
         free(mem);
@@ -1115,6 +1133,10 @@ static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long cap
     s->state = s->zero + n;  /* [q, q'] */
     s->dense = s->state + 2 * n;
     s->work = s->dense + 2 * n;
+    s->dw = mem + base;
+    s->drive_v[0] = s->dw + DW_COUNT * m->nd;
+    s->drive_v[1] = s->drive_v[0] + m->nd;
+    memset(s->dw, 0, sizeof(double) * drives);
     memset(s->qdd, 0, sizeof(double) * (size_t)(4 * n));
     memset(s->S, 0, sizeof(double) * NN);
     return FSR_OK;
@@ -1128,8 +1150,15 @@ static void sim_close(sim* s)
     s->piv = NULL;
 }
 
+static int constrained_method(fsr_method m)
+{
+    return m == FSR_ALI3P || m == FSR_GENALPHA3;
+}
+
 fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
 {
+    /* the constrained integrators take the model as a struct (constrained.c, system.h) */
+    if (constrained_method(o->method)) return fsr_simulate_system(fsm_system_model(), o, r);
     sim s;
     fsr_status st = sim_open(&s, o, r, 0);
     if (!st) st = store(&s, 0.0, s.state, s.state + s.n, NULL);
@@ -1156,6 +1185,9 @@ fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
     p->o = *o;
     p->o.out_every = 1;  /* any grid point may be asked for */
     fsr_status st = sim_open(s, &p->o, &p->r, 1);
+    if (!st && constrained_method(o->method))
+        st = fail(s, FSR_BAD_OPTIONS, "%s: not available step by step yet (use fsr_simulate)",
+                  fsr_method_name(o->method));
     if (!st && !(o->method == FSR_GENALPHA || o->method == FSR_NEWMARK || o->method == FSR_RK4
                  || (o->method == FSR_DOPRI5 && o->tol == 0.0)
                  || (o->method == FSR_RADAU5 && (o->step == 0.0 || o->step == o->dt))))
@@ -1165,9 +1197,13 @@ fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
         st = fail(s, FSR_BAD_OPTIONS, "%s: a drive given step by step needs an implicit method (the "
                   "stability limit of explicit steps depends on the drive to come)",
                   fsr_method_name(o->method));
+    if (!st && drive && s->nd != 4)
+        st = fail(s, FSR_BAD_OPTIONS, "a drive given step by step needs a model with one guided joint "
+                  "(this one has %d drive values)", s->nd);
     if (!st && drive) {
         s->drive_held = 1;
         s->hold_t = 0.0;
+        s->hold_theta = 0.0;
         s->hold[0] = drive[0];
         s->hold[1] = drive[1];
     }
@@ -1225,7 +1261,9 @@ fsr_status fsr_stepper_set_drive(fsr_stepper* p, double theta_d, double theta_dd
     sim* s = &p->s;
     if (!s->drive_held) return refuse(p, "this run takes its drive from the manoeuvre");
     if (!isfinite(theta_d) || !isfinite(theta_dd)) return refuse(p, "drive values must be finite");
-    s->hold_t = time_of(s, s->k);
+    double now = time_of(s, s->k), tau = now - s->hold_t;
+    s->hold_theta += tau * (s->hold[0] + 0.5 * s->hold[1] * tau);  /* theta continues */
+    s->hold_t = now;
     s->hold[0] = theta_d;
     s->hold[1] = theta_dd;
     return FSR_OK;
@@ -1238,7 +1276,7 @@ fsr_status fsr_stepper_retune(fsr_stepper* p)
     if (r->status) return r->status;
     fsr_status st = check_options(s);
     if (st) return st;
-    s->L = s->o->p[s->m->length_param];
+    s->L = s->m->length_param >= 0 ? s->o->p[s->m->length_param] : s->m->length_scale;
     s->mass_have = s->mass_factored = 0;     /* M(p) again, factored */
     s->drive_valid[0] = s->drive_valid[1] = 0;  /* the manoeuvre at the new mp */
     s->ns.h = 0.0;                            /* a new Newton matrix at the next step */

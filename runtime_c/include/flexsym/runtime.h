@@ -2,7 +2,12 @@
 #ifndef FLEXSYM_RUNTIME_H
 #define FLEXSYM_RUNTIME_H
 
-typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4 } fsr_method;
+#include "flexsym/system.h"
+
+/* ali3p, genalpha3: the constrained integrators (ali3p.c, genalpha3.c); they also run models
+ * without constraints (nc = 0). */
+typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4,
+               FSR_ALI3P = 5, FSR_GENALPHA3 = 6 } fsr_method;
 
 typedef enum {
     FSR_OK = 0,
@@ -12,7 +17,8 @@ typedef enum {
     FSR_BAD_OPTIONS = 4,
     FSR_NO_MEMORY = 5,
     FSR_UNSTABLE_STEP = 6,   /* fixed explicit step above the stability limit: refused */
-    FSR_STEP_FAILED = 7      /* adaptive step control gave up (too many steps, step underflow) */
+    FSR_STEP_FAILED = 7,     /* adaptive step control gave up (too many steps, step underflow) */
+    FSR_ASSEMBLY = 8         /* constraints cannot be satisfied at t = 0: refused before any step */
 } fsr_status;
 
 typedef struct {
@@ -33,6 +39,8 @@ typedef struct {
     long max_steps;          /* dopri5: accepted + rejected steps before giving up */
     double blowup;           /* diverged when any |q_i| or |v_tip| exceeds blowup * L */
     int energy;              /* 1: rows end with T, V and the Jacobi integral h (fsm_energy) */
+    double penalty;          /* ali3p: kappa, the penalty term's weight against the mass matrix
+                                (alpha = kappa (4 / dt^2) tr M / |Phi_q|_F^2 at t = 0) */
     const double* p;         /* beam parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
 } fsr_options;
@@ -48,7 +56,8 @@ typedef struct {
     long jacobian_evaluations; /* iteration matrices built (and factored) */
     long force_evaluations;
     double omega_max;        /* explicit methods: stability estimate [rad/s], else 0 */
-    int ncols;               /* 1 + ny + nq: t, outputs, coordinates */
+    int ncols;               /* 1 + ny + nq: t, outputs, coordinates; constrained integrators on
+                                a model with nc > 0: t, outputs, violation, coordinates */
     int nrows;
     double* rows;            /* nrows x ncols, row-major; owned, release with fsr_free */
 } fsr_result;
@@ -58,12 +67,18 @@ void fsr_default_options(fsr_options* o);
 fsr_status fsr_simulate(const fsr_options* o, fsr_result* r);
 void fsr_free(fsr_result* r);
 const char* fsr_method_name(fsr_method m);
+/* The same for a model given as a struct (system.h); methods ali3p and genalpha3 only. Before
+ * the first step the initial state is made consistent with the constraints (FSR_ASSEMBLY and a
+ * message naming the constraint with the largest residual when it cannot be). */
+fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r);
 
 /* The same run advanced by the caller, step by step (an FMU's doStep): fsr_simulate is this
  * loop run to t_end, so the rows at grid points are identical bit for bit. Fixed steps of dt
  * only (genalpha, newmark, rk4, dopri5 with tol = 0, radau5 with step 0 or dt).
  * drive: NULL to take theta', theta'' from the model's manoeuvre (o->mp), or [theta',
- * theta''] at t = 0 given by the caller, then by fsr_stepper_set_drive (implicit methods).
+ * theta''] at t = 0 given by the caller, then by fsr_stepper_set_drive (implicit methods; a
+ * model with one guided joint, nd = 4; theta is their integral from 0). ali3p and genalpha3
+ * are not available step by step yet.
  * Returns NULL only when out of memory; check fsr_stepper_result(p)->status. */
 typedef struct fsr_stepper fsr_stepper;
 fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive);

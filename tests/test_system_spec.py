@@ -1,0 +1,74 @@
+"""The system spec layer: structure checks (one line naming the item) and the spanning tree."""
+from dataclasses import replace
+
+import pytest
+
+from symbolic.errors import SpecError
+from symbolic.spec import builtin
+from symbolic.system import (Driver, FlexibleBeam, Joint, Marker, Output, RigidBody, System,
+                             spanning_tree)
+from symbolic.systems_library import (PAPER_SECTION, hub_system, pendulum_system,
+                                      slider_crank_system, spin_up_system)
+
+M3 = builtin("m3")
+
+
+def test_library_systems_validate_and_trees():
+    assert spin_up_system(M3).tree().cut == ()
+    hub = hub_system(M3).tree()
+    assert hub.order == ("hub", "beam") and hub.joint_of("beam") == "clamp" and hub.cut == ()
+    sc = slider_crank_system(M3).tree()
+    assert sc.order == ("crank", "slider", "rod")
+    assert sc.cut == ("slider_pin",)  # the loop closes at the rod tip
+    assert pendulum_system(M3).tree().order == ("beam",)
+
+
+def _bad(system, match):
+    with pytest.raises(SpecError, match=match) as exc:
+        system.validate()
+    assert "\n" not in str(exc.value)
+
+
+BASE = hub_system(M3)
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(joints=(Joint("hub_joint", "revolute", "ground", "hubx.centre"),
+                  Joint("clamp", "clamp", "hub.centre", "beam.root"))), "unknown body 'hubx'"),
+    (dict(joints=(Joint("hub_joint", "revolute", "ground", "hub.middle"),
+                  Joint("clamp", "clamp", "hub.centre", "beam.root"))), "no marker 'middle'"),
+    (dict(bodies=BASE.bodies + (RigidBody("extra", 1.0, 1.0),)), "'extra' is connected to nothing"),
+    (dict(bodies=(RigidBody("hub", 0.0, 40.0, markers=(Marker("centre", 0.0),)),) + BASE.bodies[1:]),
+     "body 'hub': mass 0.0"),
+    (dict(bodies=(RigidBody("hub", 1.0, -1.0, markers=(Marker("centre", 0.0),)),) + BASE.bodies[1:]),
+     "body 'hub': inertia -1.0"),
+    (dict(drivers=(Driver("motor", "motor", "nojoint", expression="1"),)), "joint 'nojoint' does not exist"),
+    (dict(drivers=(Driver("motor", "motor", "clamp", expression="1"),)), "clamp \\(no coordinate"),
+    (dict(drivers=BASE.drivers + (Driver("motor", "guided", "hub_joint", maneuver="spin_up"),)),
+     "duplicate name 'motor'"),
+    (dict(joints=(Joint("hub_joint", "revolute", "ground", "hub.centre"),
+                  Joint("clamp", "clamp", "hub.centre", "beam.tip"))), "flexible body 'beam' is not reached"),
+    (dict(outputs=(Output("a", "angle(nope)"),)), "output 'angle\\(nope\\)'"),
+    (dict(outputs=(Output("a", "v(hub, tip)"),)), "'hub' is not a flexible body"),
+])
+def test_malformed_systems_one_line(change, match):
+    _bad(replace(BASE, **change), match)
+
+
+def test_driver_on_cut_joint_refused():
+    sc = slider_crank_system(M3)
+    _bad(replace(sc, drivers=(Driver("d", "motor", "slider_pin", expression="0"),)), "cut joint")
+
+
+def test_beam_marker_outside_refused():
+    beam = FlexibleBeam("beam", 10.0, PAPER_SECTION, M3, markers=(Marker("far", 11.0),))
+    _bad(replace(spin_up_system(M3), bodies=(beam,)), "marker 'far' at x = 11.0 is outside")
+
+
+def test_spanning_tree_prefers_root_of_flexible_body():
+    # the rod is reached first through its tip joint in file order, but hangs from its root
+    sys = slider_crank_system(M3)
+    j = sys.joints
+    reordered = replace(sys, joints=(j[0], j[2], j[3], j[1]))
+    tree = spanning_tree(reordered)
+    assert tree.joint_of("rod") == "crank_pin" and tree.cut == ("slider_pin",)
