@@ -51,8 +51,9 @@ def _elements(text):
         raise SpecError(f"--elements: '{text}' is not a whole number") from None
 
 
-def resolve(args):
-    """(spec, scene or None) from a variant name with overrides, or from a scene file."""
+def resolve(args, systems: bool = False):
+    """(spec, scene or None) from a variant name with overrides, or from a scene file; with
+    systems, a system scene gives (None, SystemScene)."""
     from .spec import builtin, customize
 
     if args.variant.endswith(".toml"):
@@ -63,6 +64,11 @@ def resolve(args):
             raise SpecError(f"{args.variant}: --{given[0].replace('_', '-')} does not combine with a "
                             "scene file: set it in the scene's [model] table")
         scene = load_scene(args.variant, model=getattr(args, "model", None))
+        if getattr(scene, "system", None) is not None:  # a mechanism: only run and inspect take it
+            if not systems:
+                raise SpecError(f"{args.variant}: a system scene ([[body]] entries): this command takes "
+                                "one-beam variants and scenes; use flexsym run or flexsym inspect")
+            return None, scene
         return scene.spec, scene
     if getattr(args, "model", None) is not None:
         raise SpecError(f"--model replaces the model of a scene file; '{args.variant}' is not one")
@@ -161,7 +167,9 @@ def cmd_run(args) -> int:
     from .run import run_built
     from .validity import assess
 
-    spec, scene = resolve(args)
+    spec, scene = resolve(args, systems=True)
+    if spec is None:
+        return _run_system(args, scene)
     options = _run_options(args, spec, scene)
     out, plot_path = _outputs_checked(args, spec, scene)
     if options.energy and out is None:
@@ -194,6 +202,25 @@ def cmd_run(args) -> int:
     if not res.ok:
         return 3
     return 0 if verdict.valid else 4
+
+
+def _run_system(args, scene) -> int:
+    """flexsym run SYSTEM_SCENE: options from the scene, --out/--plot checked before any work."""
+    from .run import check_output_path
+
+    _run_options(args, None, scene)  # refuses run flags given with a scene file
+    out = None
+    if args.out is not None:
+        out = check_output_path(args.out, "--out")
+    elif scene.output_file is not None:
+        out = check_output_path(scene.output_file, f"{scene.path}: [output] file")
+    plot = check_output_path(args.plot, "--plot", PLOT_TYPES) if args.plot is not None else None
+    try:
+        from .assemble import run_system  # the derivation and generation of systems (issue 10)
+    except ImportError:
+        raise FlexsymError(f"{scene.path}: system '{scene.system.name}' is valid (flexsym inspect "
+                           f"{scene.path} shows it), but this build cannot derive systems yet") from None
+    return run_system(scene, out=out, plot=plot)
 
 
 FMU_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "interval", "ws", "ts")
@@ -266,11 +293,19 @@ def cmd_fe_export(args) -> int:
 def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
+    spec, scene = resolve(args, systems=True)
+    if spec is None:  # a system scene
+        from .system_scene import summary
+
+        if args.section not in (None, "system") or args.plot_modes or args.latex:
+            raise SpecError(f"{scene.path}: a system scene shows --section system (no --latex, "
+                            "--plot-modes)")
+        sys.stdout.write(summary(scene.system))
+        return 0
     sections = args.section.split(",") if args.section is not None else SECTIONS
     for s in sections:
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
-    spec, scene = resolve(args)
     if args.plot_modes and spec.kind != "modal":
         raise SpecError(f"--plot-modes: '{spec.name}' has no mode shapes (finite elements)")
     report = Report(spec, latex=args.latex)
@@ -458,7 +493,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot-modes", dest="plot_modes", help="PNG file for a plot of the mode shapes")
     p.add_argument("--model", help="with a scene file: inspect this variant on the scene's body")
     p.add_argument("--section", help="comma-separated subset of: modes, energy, integrals, mass, "
-                   "stiffness, equations, ops")
+                   "stiffness, equations, ops (a system scene: system)")
     p.set_defaults(func=cmd_inspect)
 
     p = sub.add_parser("spinup", help="the benchmark: variants #0-#3, summary table and plot")

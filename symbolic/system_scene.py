@@ -517,3 +517,48 @@ def system_from_dict(data: dict, name: str = "system", t_end: float | None = Non
     """The Python API: the same data as a scene (a dict of lists/tables), the same checks."""
     system, given, _ = system_from_data(data, "", name)
     return check_system(system, t_end if t_end is not None else validate(given).t_end)
+
+
+def summary(system: System) -> str:
+    """What `flexsym inspect SCENE --section system` prints: bodies, joints (tree or cut),
+    coordinates, drivers, loads, outputs, the initial assembly."""
+    tree = system.tree()
+    poses = initial_poses(system)
+    guided = {d.joint for d in system.drivers if d.kind == "guided"}
+    lines = [f"system '{system.name}'" + (f": {system.description}" if system.description else ""), "",
+             "bodies (frame at t = 0: X, Y [m], angle [rad]):"]
+    for b in system.bodies:
+        X, Y, phi = poses[b.name]
+        marks = ", ".join(f"{m.name} ({m.x:g}, {m.y:g})" for m in b.all_markers)
+        if b.flexible:
+            s = b.section
+            what = (f"beam L = {b.length:g} m, rho {s.rho:g}, E {s.E:g}, A {s.A:g}, I {s.I:g}; "
+                    f"model {b.model.name}")
+        else:
+            what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
+        lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")
+    lines += ["", "joints (tree: one per body, from ground; cut: constraint equations):"]
+    for j in system.joints:
+        role = "cut" if j.name in tree.cut else f"tree of {dict((v, k) for k, v in tree.parent_joint)[j.name]}"
+        parent = f"ground at ({j.point[0]:g}, {j.point[1]:g})" if j.parent == GROUND else j.parent
+        axis = f", axis ({j.axis[0]:g}, {j.axis[1]:g})" if j.axis else ""
+        lines.append(f"  {j.name}: {j.kind} {parent} -> {j.child}{axis} [{role}]")
+    eqs = {"revolute": "2 (position)", "prismatic": "2 (across the axis, angle)", "clamp": "3 (position, angle)"}
+    lines.append("constraint equations: " + (", ".join(f"{n}: {eqs[system.joint(n).kind]}" for n in tree.cut)
+                                            or "none (a tree)"))
+    coords = [(j.name, j.kind) for j in system.joints if j.has_coordinate and j.name not in tree.cut]
+    free = [f"{n} ({'angle' if k == 'revolute' else 'displacement'})" for n, k in coords if n not in guided]
+    lines += ["", "joint coordinates: " + (", ".join(free) or "none")
+              + (f"; guided (known functions of t): {', '.join(sorted(guided))}" if guided else ""),
+              "elastic coordinates: " + ", ".join(
+                  f"{b.name}: {len(b.model.coordinates)} ({b.model.name})"
+                  for b in system.bodies if b.flexible) if any(b.flexible for b in system.bodies)
+              else "elastic coordinates: none"]
+    lines += ["", "drivers:"] + [
+        f"  {d.name}: {d.kind} on {d.joint}: " + (d.expression or f"{d.maneuver} "
+                                                  + ", ".join(f"{k} = {v:g}" for k, v in d.params))
+        for d in system.drivers] if system.drivers else ["", "drivers: none"]
+    lines += ["", "loads: " + (", ".join(type(x).__name__ + (f" g = {x.g}" if isinstance(x, Gravity) else "")
+                                        for x in system.loads) or "none")]
+    lines += ["", "outputs:"] + [f"  {o.column} = {o.quantity}" for o in system.outputs]
+    return "\n".join(lines) + "\n"
