@@ -81,14 +81,47 @@ def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
                   weights)
 
 
-def kinetic_density(f: Fields) -> sp.Expr:
-    """T per unit s: 1/2 rho A L mu [(u' - w v)^2 + (v' + w (x + u))^2], velocities in the moving
-    frame (mu = 1 for the uniform beam), plus 1/2 J (w + v'_x)^2 of point rotary inertias."""
-    mu, rot = f.weights["mu"], f.weights["rot"]
-    T = rho * A * L / 2 * mu * ((f.u_dot - w * f.v)**2 + (f.v_dot + w * (L * s + f.u))**2)
+@dataclass(frozen=True)
+class FrameMotion:
+    """The floating frame's motion, in the frame's own components: rate omega = phi' and the
+    velocity (Vx, Vy) = A(phi)^T R' of its origin. The guided hub of a one-beam variant is
+    FrameMotion(w): a frame turning about a fixed point."""
+
+    omega: sp.Expr
+    Vx: sp.Expr = sp.Integer(0)
+    Vy: sp.Expr = sp.Integer(0)
+
+
+def kinetic_density(f: Fields, frame: FrameMotion = FrameMotion(w)) -> sp.Expr:
+    """T per unit s: 1/2 rho A L mu [(Vx + u' - omega v)^2 + (Vy + v' + omega (x + u))^2],
+    velocities in the moving frame (mu = 1 for the uniform beam), plus 1/2 J (omega + v'_x)^2
+    of point rotary inertias."""
+    mu, rot, om = f.weights["mu"], f.weights["rot"], frame.omega
+    T = rho * A * L / 2 * mu * ((frame.Vx + f.u_dot - om * f.v)**2
+                                + (frame.Vy + f.v_dot + om * (L * s + f.u))**2)
     if rot != 0:
-        T += rho * A * L**3 / 2 * rot * (w + f.v_dot_s / L)**2
+        T += rho * A * L**3 / 2 * rot * (om + f.v_dot_s / L)**2
     return T
+
+
+def gravity_density(f: Fields, gx: sp.Expr, gy: sp.Expr) -> sp.Expr:
+    """-rho A L mu g.r per unit s for the part of r in the frame, (x + u, v); (gx, gy) = A^T g
+    (the frame origin's part, -m g.R, is added by the caller)."""
+    return -rho * A * L * f.weights["mu"] * (gx * (L * s + f.u) + gy * f.v)
+
+
+def momentum_density(f: Fields, frame: FrameMotion, Rx: sp.Expr, Ry: sp.Expr) -> sp.Expr:
+    """Angular momentum about the ground origin per unit s, in frame components (a rotation
+    keeps the planar cross product): (R + r) x (V + r' + omega k x r), R = (Rx, Ry) = A^T R,
+    plus the point rotary inertias' J (omega + v'_x)."""
+    om = frame.omega
+    px, py = Rx + L * s + f.u, Ry + f.v
+    vx, vy = frame.Vx + f.u_dot - om * f.v, frame.Vy + f.v_dot + om * (L * s + f.u)
+    h = rho * A * L * f.weights["mu"] * (px * vy - py * vx)
+    rot = f.weights["rot"]
+    if rot != 0:
+        h += rho * A * L**3 * rot * (om + f.v_dot_s / L)
+    return h
 
 
 @dataclass(frozen=True)

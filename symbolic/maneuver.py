@@ -113,13 +113,14 @@ def parse_theta(text: str) -> sp.Expr:
     The cost is bounded for any input: at most MAX_NODES syntax nodes, numeric exponents up
     to MAX_EXPONENT, and the magnitude of every constant result is estimated before sympy
     computes it exactly."""
-    return parse_expression(text, {"t": t}, "theta(t)")
+    return parse_expression(text, (("t", t),), "theta(t)")
 
 
-def parse_expression(text: str, names: dict, label: str) -> sp.Expr:
-    """The bounded parser of parse_theta with the given names: {"t": t, "angle(j)": q, ...}
-    (a key "f(a)" is the call f(a) of a name a, e.g. a joint's coordinate in a motor law).
-    label names the expression in every message ("theta(t)", "motor 'm' torque")."""
+@lru_cache(maxsize=256)
+def parse_expression(text: str, names: tuple[tuple[str, sp.Symbol], ...], label: str) -> sp.Expr:
+    """parse_theta's grammar with the names given (name, symbol) instead of t alone (a motor's
+    torque: t and joint coordinates and rates); `label` names the expression in messages."""
+    env = dict(names)
     if not isinstance(text, str) or not text.strip():
         raise SpecError(f"{label} expression is empty")
     if len(text) > 2000:
@@ -133,12 +134,13 @@ def parse_expression(text: str, names: dict, label: str) -> sp.Expr:
     if sum(1 for _ in ast.walk(tree)) > MAX_NODES:
         raise SpecError(f"{label} expression has more than {MAX_NODES} syntax nodes")
     try:
-        expr = _build(tree.body, f"{label} = '{text}'", names)
+        expr = _build(tree.body, text, env, label)
     except _SYMPY_ERRORS as exc:
         raise SpecError(f"{label} = '{text}': cannot be built ({type(exc).__name__}: {exc})") from None
-    extra = expr.free_symbols - set(names.values())
+    extra = expr.free_symbols - set(env.values())
     if extra:
-        raise SpecError(f"{label} = '{text}' depends on {', '.join(sorted(map(str, extra)))}")
+        raise SpecError(f"{label} = '{text}' depends on {', '.join(sorted(map(str, extra)))}, not only "
+                        f"{', '.join(env)}")
     if expr.has(sp.zoo, sp.oo, -sp.oo):
         raise SpecError(f"{label} = '{text}' is infinite (a division by zero?)")
     if expr.has(sp.nan):
@@ -157,21 +159,16 @@ def _log10_abs(x: sp.Number) -> float:
 def _check_magnitude(value, text):
     if value.is_Number and value.is_finite is not False and value != 0:
         if _log10_abs(value) > MAX_MAGNITUDE:
-            raise SpecError(f"{text}: the constant {sp.Float(value, 3)} is beyond "
+            raise SpecError(f"theta(t) = '{text}': the constant {sp.Float(value, 3)} is beyond "
                             f"1e{MAX_MAGNITUDE} (double precision)")
     return value
 
 
-def _build(node, text, names):
-    """text: the label and expression, for messages; names: the allowed names (see
-    parse_expression)."""
+def _build(node, text, env=None, label="theta(t)"):
+    env = {"t": t} if env is None else env
     def bad(what):
-        known = ", ".join(n for n in names if n != "t")
-        return SpecError(f"{text}: {what} is not allowed (use numbers, t, {known + ', ' if known else ''}"
-                         f"pi, e, + - * / **, ifelse(cond, a, b) and {', '.join(_FUNCTIONS)})")
-
-    def build(n):
-        return _build(n, text, names)
+        return SpecError(f"{label} = '{text}': {what} is not allowed (use numbers, t, pi, e, "
+                         f"{', '.join(n for n in env if n != 't')}{', ' if len(env) > 1 else ''}+ - * / **, ifelse(cond, a, b) and {', '.join(_FUNCTIONS)})")
 
     if isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, (int, float)) \
@@ -180,24 +177,24 @@ def _build(node, text, names):
         return _check_magnitude(sp.Integer(node.value) if isinstance(node.value, int)
                                 else sp.Float(repr(node.value)), text)
     if isinstance(node, ast.Name):
-        if node.id in names:
-            return names[node.id]
+        if node.id in env:
+            return env[node.id]
         if node.id in _CONSTANTS:
             return _CONSTANTS[node.id]
         raise bad(f"the name '{node.id}'")
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        val = build(node.operand)
+        val = _build(node.operand, text, env, label)
         return -val if isinstance(node.op, ast.USub) else val
     if isinstance(node, ast.BinOp):
-        a, b = build(node.left), build(node.right)
+        a, b = _build(node.left, text, env, label), _build(node.right, text, env, label)
         if isinstance(node.op, ast.Pow):
             if b.is_Number and abs(b) > MAX_EXPONENT:
                 raise bad(f"the exponent {b}")
             if a.is_Number and b.is_Number:  # estimate before sympy computes it exactly
                 if a == 0 and b < 0:
-                    raise SpecError(f"{text} divides by zero (0 to a negative power)")
+                    raise SpecError(f"{label} = '{text}' divides by zero (0 to a negative power)")
                 if a != 0 and float(b) * _log10_abs(a) > MAX_MAGNITUDE:
-                    raise SpecError(f"{text}: {a}**{b} is beyond 1e{MAX_MAGNITUDE} "
+                    raise SpecError(f"{label} = '{text}': {a}**{b} is beyond 1e{MAX_MAGNITUDE} "
                                     "(double precision)")
             return _check_magnitude(a**b, text)
         op = _BINARY.get(type(node.op))
@@ -211,12 +208,10 @@ def _build(node, text, names):
             if not (isinstance(cond, ast.Compare) and len(cond.ops) == 1
                     and type(cond.ops[0]) in _COMPARE):
                 raise bad("an ifelse condition other than one comparison (<, <=, >, >=)")
-            c = _COMPARE[type(cond.ops[0])](build(cond.left), build(cond.comparators[0]))
-            return sp.Piecewise((build(args[1]), c), (build(args[2]), True))
-        if len(args) == 1 and isinstance(args[0], ast.Name) and f"{name}({args[0].id})" in names:
-            return names[f"{name}({args[0].id})"]
+            c = _COMPARE[type(cond.ops[0])](_build(cond.left, text, env, label), _build(cond.comparators[0], text, env, label))
+            return sp.Piecewise((_build(args[1], text, env, label), c), (_build(args[2], text, env, label), True))
         if name in _FUNCTIONS and len(args) == 1:
-            return _FUNCTIONS[name](build(args[0]))
+            return _FUNCTIONS[name](_build(args[0], text, env, label))
         raise bad(f"the call {name}(...) with {len(args)} argument(s)")
     raise bad(f"a {type(node).__name__}")
 

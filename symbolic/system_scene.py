@@ -367,7 +367,7 @@ def check_system(system: System, t_end: float = 20.0) -> System:
 def _expression(text: str, names: dict, label: str) -> sp.Expr:
     if not isinstance(text, str):
         raise SpecError(f"{label}: must be a string (got {text!r})")
-    return parse_expression(text, names, label)
+    return parse_expression(text, tuple(names.items()), label)
 
 
 def _carried(system: System, o: Output) -> None:

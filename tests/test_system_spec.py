@@ -3,11 +3,11 @@ from dataclasses import replace
 
 import pytest
 
-from symbolic.errors import SpecError
-from symbolic.spec import builtin
-from symbolic.system import (Driver, FlexibleBeam, Joint, Marker, Output, RigidBody, System,
+from flexsym.errors import SpecError
+from flexsym.spec import builtin
+from flexsym.system import (Driver, FlexibleBeam, Joint, Marker, Output, RigidBody, System,
                              spanning_tree)
-from symbolic.systems_library import (PAPER_SECTION, hub_system, pendulum_system,
+from flexsym.systems_library import (PAPER_SECTION, hub_system, pendulum_system,
                                       slider_crank_system, spin_up_system)
 
 M3 = builtin("m3")
