@@ -215,12 +215,25 @@ def _run_system(args, scene) -> int:
     elif scene.output_file is not None:
         out = check_output_path(scene.output_file, f"{scene.path}: [output] file")
     plot = check_output_path(args.plot, "--plot", PLOT_TYPES) if args.plot is not None else None
-    try:
-        from .assemble import run_system  # the derivation and generation of systems (issue 10)
+    system, geometry = scene.system, None
+    if plot is not None:  # the picture's marker positions become extra output columns
+        from .system_plot import with_plot_outputs
+
+        system, geometry = with_plot_outputs(system)
+    try:  # contract: run_system(System, RunOptions, out=Path|None) -> RunResult (res.t, res[col])
+        from .assemble import run_system
     except ImportError:
-        raise FlexsymError(f"{scene.path}: system '{scene.system.name}' is valid (flexsym inspect "
-                           f"{scene.path} shows it), but this build cannot derive systems yet") from None
-    return run_system(scene, out=out, plot=plot)
+        raise FlexsymError(f"{scene.path}: system '{system.name}' is valid (flexsym inspect "
+                           f"{scene.path} shows it), but this build cannot generate systems yet") from None
+    res = run_system(system, scene.options, out=out)
+    if out is not None:
+        print(f"results: {out}")
+    if plot is not None and len(res.t) > 1:
+        from .system_plot import plot_system
+
+        factor = plot_system(system, geometry, {"t": res.t} | {c: res[c] for c in res.columns}, plot)
+        print(f"plot: {plot} (beam deflection from the chord scaled x{factor:g})")
+    return 0 if res.ok else 3
 
 
 FMU_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "interval", "ws", "ts")

@@ -3,6 +3,8 @@ malformed systems refused in one line naming the file and the item, exit 2, noth
 from __future__ import annotations
 
 import math
+
+import numpy as np
 from pathlib import Path
 
 import pytest
@@ -143,3 +145,48 @@ def test_model_override_refused_in_one_line(tmp_path, capsys):
     assert main(["run", str(SCENES / "hub.toml"), "--model", "m9"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "hub.toml: --model: unknown variant 'm9'" in err, err
+
+
+def test_exaggerate_scales_only_the_distance_from_the_chord():
+    from flexsym.system_plot import chord_distance, exaggerate
+
+    rng = np.random.default_rng(3)
+    p = np.column_stack([np.linspace(0, 1, 7), 0.01 * rng.standard_normal(7)]) @ [[0.6, 0.8], [-0.8, 0.6]]
+    p[0], p[-1] = (0.0, 0.0), (0.6, 0.8)
+    q = exaggerate(p, 50.0)
+    assert np.allclose(chord_distance(q), 50.0 * chord_distance(p), rtol=1e-12, atol=1e-15)
+    e = np.array([0.6, 0.8])
+    assert np.allclose(q @ e, p @ e, atol=1e-14)  # positions along the chord kept
+
+
+def test_plot_of_a_system_from_synthetic_rows(tmp_path):
+    """The slider-crank's picture from rows of a known motion (crank turning, rod bent by a
+    sine of amplitude 0.2 mm): every extra column is a marker position, the scale is stated."""
+    from flexsym.system_plot import plot_system, with_plot_outputs
+
+    base = load_scene(SCENES / "slider_crank.toml").system
+    system, geometry = with_plot_outputs(base)
+    system.validate()
+    assert [o.column for o in system.outputs[:3]] == ["x_s", "w_mid", "N_mid"]
+    assert len(geometry["rod"]) == 11 and len(geometry["crank"]) == 2
+    t = np.linspace(0, 0.05, 51)
+    r, l = 0.15, 0.3
+    phi = 150 * t
+    cols = {"t": t}
+    crank_tip = np.column_stack([r * np.cos(phi), r * np.sin(phi)])
+    xs = r * np.cos(phi) + np.sqrt(l**2 - (r * np.sin(phi))**2)
+    slider = np.column_stack([xs, 0 * xs])
+    for k, (cx, cy) in enumerate(geometry["rod"]):
+        s = k / 10
+        chord = crank_tip + s * (slider - crank_tip)
+        normal = np.column_stack([-(slider - crank_tip)[:, 1], (slider - crank_tip)[:, 0]]) / l
+        p = chord + 2e-4 * np.sin(np.pi * s) * np.sin(800 * t)[:, None] * normal
+        cols[cx], cols[cy] = p[:, 0], p[:, 1]
+    for (cx, cy), p in zip(geometry["crank"], (0 * crank_tip, crank_tip)):
+        cols[cx], cols[cy] = p[:, 0], p[:, 1]
+    (cx, cy), = geometry["slider"]
+    cols[cx], cols[cy] = slider[:, 0], slider[:, 1]
+    cols.update(x_s=xs, w_mid=2e-4 * np.sin(800 * t), N_mid=np.cos(800 * t))
+    factor = plot_system(system, geometry, cols, tmp_path / "s2.png")
+    assert factor == 100.0  # 0.08 x the extent (~0.6 m) / the largest distance (<= 0.2 mm), as 10^k
+    assert (tmp_path / "s2.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
