@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 from .errors import SpecError
 
@@ -423,6 +423,27 @@ class System:
             return self.marker(ref)
         except SpecError as exc:
             raise SpecError(f"{where}: {str(exc).split(': ', 1)[1]}") from None
+
+
+def system_to_dict(system: System) -> dict:
+    """Canonical content of a system (what generated code depends on): every field, a flexible
+    body's model as its variant's to_dict()."""
+    def item(x):
+        out = {"type": type(x).__name__}
+        for f in fields(x):
+            v = getattr(x, f.name)
+            if f.name == "model":
+                v = v.to_dict()
+            elif isinstance(v, Section):
+                v = item(v)
+            elif isinstance(v, tuple):
+                v = [item(e) if hasattr(e, "__dataclass_fields__") else
+                     (list(e) if isinstance(e, tuple) else e) for e in v]
+            out[f.name] = v
+        return out
+    d = item(system)
+    d.pop("description", None)
+    return d
 
 
 def spanning_tree(system: System) -> Tree:
