@@ -220,14 +220,19 @@ def _run_system(args, scene) -> int:
         from .system_plot import with_plot_outputs
 
         system, geometry = with_plot_outputs(system)
-    try:  # contract: run_system(System, RunOptions, out=Path|None) -> RunResult (res.t, res[col])
-        from .assemble import run_system
-    except ImportError:
-        raise FlexsymError(f"{scene.path}: system '{system.name}' is valid (flexsym inspect "
-                           f"{scene.path} shows it), but this build cannot generate systems yet") from None
-    res = run_system(system, scene.options, out=out)
-    if out is not None:
-        print(f"results: {out}")
+    from .run import run_built
+    from .sysgen import prepare_system
+
+    try:
+        built = prepare_system(system)
+    except SpecError as exc:  # what the derivation does not support yet, named with the file
+        raise SpecError(f"{scene.path}: {exc}") from None
+    res = run_built(built, scene.options, out=out)
+    status = "ok" if res.ok else f"stopped: {res.message}"
+    print(f"{system.name}: {scene.options.integrator}, dt = {scene.options.dt:g} s, t_end = "
+          f"{scene.options.t_end:g} s: {status}")
+    if res.written != "none":
+        print(f"results{' (truncated)' if res.written == 'truncated' else ''}: {out}")
     if plot is not None and len(res.t) > 1:
         from .system_plot import plot_system
 

@@ -67,10 +67,12 @@ def exaggerate(points: np.ndarray, factor: float) -> np.ndarray:
 
 
 def chord_distance(points: np.ndarray) -> np.ndarray:
+    """Signed distance of each point from the chord root-tip, positive to the left of root ->
+    tip (the output w(B, x))."""
     a, b = points[0], points[-1]
     e = (b - a) / max(math.hypot(*(b - a)), 1e-300)
     rel = points - a
-    return rel[:, 0] * e[1] - rel[:, 1] * e[0]
+    return e[0] * rel[:, 1] - e[1] * rel[:, 0]
 
 
 def plot_system(system: System, geometry: dict, columns: dict, path, instants: int = 4,
