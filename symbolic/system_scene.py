@@ -92,6 +92,10 @@ def is_system_scene(data: dict) -> bool:
     return isinstance(data.get("body"), list) or any(k in data for k in SYSTEM_TABLES[2:5])
 
 
+class _Located(SpecError):
+    """Already names the source and the item: not to be wrapped again."""
+
+
 class _Items:
     """Typed access to one entry of the data, with errors naming the source and the item."""
 
@@ -99,7 +103,7 @@ class _Items:
         self.prefix = prefix
 
     def fail(self, where: str, msg: str):
-        raise SpecError(f"{self.prefix}{where}: {msg}")
+        raise _Located(f"{self.prefix}{where}: {msg}")
 
     def table(self, where: str, tab, keys: set) -> dict:
         if not isinstance(tab, dict):
@@ -240,6 +244,8 @@ def _model(r: _Items, where: str, given, flag: str | None):
             base = builtin(r.string(where, given, "variant"))
             if set(given) & {"strain", "axial", "bending"}:
                 r.fail(where, "give either variant or strain/axial/bending, not both")
+            if "elements" in given and base.kind != "fe":
+                r.fail(f"{where} elements", f"applies to variant = \"ef\" only, not to '{given['variant']}'")
             return customize(base, elements=given["elements"]) if "elements" in given else base
         if "elements" in given:
             r.fail(f"{where} elements", "applies to variant = \"ef\" only")
@@ -250,9 +256,9 @@ def _model(r: _Items, where: str, given, flag: str | None):
                 r.fail(f"{where} {key}", f"must be a list of mode names (got {val!r})")
         return VariantSpec("body", strain, _refs("axial", axial), _refs("bending", bending),
                            outputs=("v_tip",)).validate()
+    except _Located:
+        raise
     except SpecError as exc:
-        if str(exc).startswith(r.prefix) and r.prefix:
-            raise
         r.fail(where, str(exc))
 
 
@@ -515,7 +521,7 @@ def _model_outputs(system: System) -> System:
 
 def system_from_dict(data: dict, name: str = "system", t_end: float | None = None) -> System:
     """The Python API: the same data as a scene (a dict of lists/tables), the same checks."""
-    system, given, _ = system_from_data(data, "", name)
+    system, given, _ = system_from_data(data, "system data: ", name)
     return check_system(system, t_end if t_end is not None else validate(given).t_end)
 
 

@@ -121,6 +121,8 @@ MALFORMED = [
     ("ground_joint_without_point", 'parent = "ground"\npoint = [0.0, 0.0]\nchild = "crank.root"',
      'parent = "ground"\nchild = "crank.root"', "[[joint]] 'crank_joint' point: missing"),
     ("bad_run_option", "dt = 1e-4", "dt = -1e-4", "[solver] dt"),
+    ("elements_on_modal", 'model = "m2"', 'model = { variant = "m2", elements = 4 }', "[[body]] 'rod' model elements: applies to variant = \"ef\" only"),
+    ("model_not_a_name", 'model = "m2"', 'model = 2', "[[body]] 'rod' model: must be a variant name or a table"),
     ("maneuver_unknown", 'maneuver = "spin-up"', 'maneuver = "spin-down"', "maneuver: unknown manoeuvre 'spin-down'"),
 ]
 
