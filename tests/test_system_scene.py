@@ -229,3 +229,15 @@ def test_pendulum_scene_runs_with_csv_and_plot(tmp_path, capsys):
     assert np.abs(col["w_mid"]).max() > 1e-4  # the strip does bend
     assert np.abs(w - col["w_mid"]).max() <= 1e-9 * np.abs(col["w_mid"]).max() + 1e-15
     assert plot.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_api_system_checks_python_systems_like_scenes():
+    from dataclasses import replace
+
+    from flexsym import api
+
+    good = lib.pendulum_system(builtin("m3"))
+    assert api.system(good) == good
+    bad = replace(good, outputs=good.outputs + (lib.Output("w_tip", "w(beam, tip)"),))
+    with pytest.raises(SpecError, match="output w_tip = 'w\\(beam, tip\\)': the distance from the chord is zero"):
+        api.system(bad)
