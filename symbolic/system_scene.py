@@ -89,7 +89,7 @@ class SystemScene:
 
 
 def is_system_scene(data: dict) -> bool:
-    return isinstance(data.get("body"), list) or any(k in data for k in SYSTEM_TABLES[2:5])
+    return isinstance(data.get("body"), list) or any(k in data for k in _ARRAYS[1:] + ("system", "gravity"))
 
 
 class _Located(SpecError):

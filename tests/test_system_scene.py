@@ -241,3 +241,15 @@ def test_api_system_checks_python_systems_like_scenes():
     bad = replace(good, outputs=good.outputs + (lib.Output("w_tip", "w(beam, tip)"),))
     with pytest.raises(SpecError, match="output w_tip = 'w\\(beam, tip\\)': the distance from the chord is zero"):
         api.system(bad)
+
+
+def test_run_flags_and_other_commands_refuse_system_scenes(tmp_path, capsys):
+    scene = str(SCENES / "pendulum.toml")
+    assert main(["run", scene, "--dt", "1e-3"]) == 2
+    assert "pendulum.toml: --dt given with a scene file: set [solver] dt in the scene" in capsys.readouterr().err
+    assert main(["build", scene]) == 2
+    assert "a system scene ([[body]] entries)" in capsys.readouterr().err
+    (tmp_path / "s.toml").write_text('[system]\nname = "x"\n')
+    assert main(["inspect", str(tmp_path / "s.toml")]) == 2
+    assert "s.toml: [[body]]: a system scene needs [[body]] entries" in capsys.readouterr().err
+    assert load_scene(SCENES / "stepped_blade.toml").spec.body is not None  # [body]: one beam, as before
