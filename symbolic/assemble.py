@@ -110,6 +110,9 @@ class SystemDerivation:
     M: sp.Matrix = None
     f: sp.Matrix = None
     outputs: dict[str, sp.Expr] = field(default_factory=dict)
+    constraints: list[tuple[str, sp.Expr]] = field(default_factory=list)  # Phi(q, theta) rows
+    lam: sp.Matrix = None  # their multipliers (outputs read them)
+    V_grav: sp.Expr = sp.Integer(0)
     dropped: list[dict] = field(default_factory=list)
 
     @property
@@ -146,9 +149,6 @@ class SystemDerivation:
 
 def _unsupported(system: System, tree) -> None:
     where = f"system '{system.name}'"
-    if tree.cut:
-        raise SpecError(f"{where}: cut joint(s) {', '.join(tree.cut)} close a loop; constraint "
-                        "equations are not derived yet (tree systems only)")
     for b in system.bodies:
         if b.flexible and b.model.kind != "modal":
             raise SpecError(f"{where}: body '{b.name}': '{b.model.name}' (finite elements) in a "
@@ -333,8 +333,9 @@ def derive_system(system: System) -> SystemDerivation:
             der.V += V
             Q += Qk
     der.V += V_grav
+    der.V_grav = V_grav
     Q += sp.Matrix([-sp.diff(V_grav, x) for x in q])
-    Q += _applied_forces(der)
+    Q += _applied_forces(der, list(q))
     der.Q = Q.applyfunc(sp.expand)
 
     pvec = sp.Matrix([sp.diff(der.T, x) for x in qd])
@@ -344,26 +345,54 @@ def derive_system(system: System) -> SystemDerivation:
         th, thd, thdd = gd.symbols
         f -= pvec.diff(th) * thd + pvec.diff(thd) * thdd
     der.f = f.applyfunc(sp.expand)
+    der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
+    der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
     return der
 
 
-def _applied_forces(der: SystemDerivation) -> sp.Matrix:
-    system, q = der.system, der.q
-    Q = sp.zeros(len(q), 1)
+def _side(der: SystemDerivation, joint, side: str) -> tuple[sp.Matrix, sp.Expr]:
+    ref = getattr(joint, side)
+    if ref == GROUND:
+        return sp.Matrix([sp.nsimplify(c) for c in joint.point]), sp.Integer(0)
+    return marker_pose(der, ref)
+
+
+def cut_joint_rows(der: SystemDerivation, joint) -> list[tuple[str, sp.Expr]]:
+    """Phi = 0 of a cut joint: revolute (pin: the two points coincide), clamp (and the angles
+    differ by the offset), prismatic (the child point on the parent's axis line, angles differ
+    by the offset). On a beam, a point's angle is its tangent's."""
+    (pp, ap), (pc, ac) = _side(der, joint, "parent"), _side(der, joint, "child")
+    off = sp.nsimplify(joint.offset)
+    n = joint.name
+    if joint.kind == "prismatic":
+        ax = sp.Matrix([sp.nsimplify(a) for a in joint.axis])
+        normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
+        return [(f"{n}.normal", (pc - pp).dot(normal)), (f"{n}.angle", ac - ap - off)]
+    rows = [(f"{n}.x", pc[0] - pp[0]), (f"{n}.y", pc[1] - pp[1])]
+    if joint.kind == "clamp":
+        rows.append((f"{n}.angle", ac - ap - off))
+    return rows
+
+
+def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
+    """Generalised forces of the motors, point forces and torques on the coordinates `wrt`
+    (symbols: unknowns, or a guided theta_k for the torque it needs)."""
+    system = der.system
+    Q = sp.zeros(len(wrt), 1)
     env = [("t", t)]
+    coordinate_of = {}
     for c, x, xd in zip(der.coords, der.q, der.qd):
         if c.group == "joint":
             env += [(c.joint, x), (f"{c.joint}_rate", xd)]
+            coordinate_of[c.joint] = x
     for gd in der.guided:
         env += [(gd.joint, gd.symbols[0]), (f"{gd.joint}_rate", gd.symbols[1])]
     env = tuple(env)
-    index = {c.joint: i for i, c in enumerate(der.coords) if c.group == "joint"}
     for d in system.drivers:
-        if d.kind != "motor":
-            continue
-        tau = parse_expression(d.expression, env, f"motor '{d.name}' force")
-        Q[index[d.joint]] += tau
+        if d.kind == "motor" and coordinate_of[d.joint] in wrt:
+            tau = parse_expression(d.expression, env, f"motor '{d.name}' force")
+            Q[list(wrt).index(coordinate_of[d.joint])] += tau
     for load in system.loads:
         if isinstance(load, PointForce):
             body, _ = system.marker(load.marker)
@@ -371,12 +400,27 @@ def _applied_forces(der: SystemDerivation) -> sp.Matrix:
             F = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
             if load.frame == "body":
                 F = _rot(der.poses[body].angle) * F
-            Q += sp.Matrix([F.dot(r.diff(x)) for x in q])
+            Q += sp.Matrix([F.dot(r.diff(x)) for x in wrt])
         elif isinstance(load, Torque):
             tau = parse_expression(load.expression, env, f"torque on '{load.body}'")
             phi = der.poses[load.body].angle
-            Q += sp.Matrix([tau * sp.diff(phi, x) for x in q])
+            Q += sp.Matrix([tau * sp.diff(phi, x) for x in wrt])
     return Q
+
+
+def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
+    """torque(D): a motor's force as given; for a guided joint the generalised force that
+    keeps it on theta(t): d/dt dT/dtheta' - dT/dtheta + dV_g/dtheta - Q_theta + Phi_theta^T
+    lambda (lambda: the cut joints' multipliers, M q'' = f - Phi_q^T lambda)."""
+    if driver.kind == "motor":
+        j = next(c for c in der.coords if c.joint == driver.joint)
+        return _applied_forces(der, [der.q[der.coords.index(j)]])[0]
+    th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
+    p = sp.diff(der.T, thd)
+    tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
+    for (_, phi), lam in zip(der.constraints, der.lam):
+        tau += sp.diff(phi, th) * lam
+    return sp.expand(tau)
 
 
 def marker_pose(der: SystemDerivation, ref: str) -> tuple[sp.Matrix, sp.Expr]:
@@ -428,6 +472,8 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
         return der.V
     if fn == "momentum":
         return der.momentum
+    if fn == "torque":
+        return motor_torque(der, next(d for d in system.drivers if d.name == args[0]))
     if fn in ("v", "u", "w", "N", "M"):
         beam = system.body(args[0])
         x = beam_station(system, beam, args[1], where)

@@ -3,7 +3,7 @@
 Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = parameters):
   mass(q, d, p) -> M        force(q, qd, d, p) -> f          M q'' = f
   residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f
-  outputs(q, qd, qdd, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
+  outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
 and templates) and this module, assemble.py, system.py and templates/system/.
@@ -53,12 +53,14 @@ def build_system_kernels(der: SystemDerivation) -> list:
     n, nd = len(der.q), len(der.drive_symbols)
     x = {"q": ca.SX.sym("q", n), "qd": ca.SX.sym("qd", n), "qdd": ca.SX.sym("qdd", n),
          "d": ca.SX.sym("d", nd), "p": ca.SX.sym("p", len(der.params)), "t": ca.SX.sym("t"),
-         "mp": ca.SX.sym("mp", len(der.drive_params))}
+         "mp": ca.SX.sym("mp", len(der.drive_params)), "lam": ca.SX.sym("lam", len(der.lam))}
     symbols, priority = {}, {}
     for i, (_, sym, _) in enumerate(der.params):
         symbols[sym], priority[sym] = x["p"][i], 0
     for i, sym in enumerate(der.drive_symbols):
         symbols[sym], priority[sym] = x["d"][i], 1
+    for i, sym in enumerate(der.lam):
+        symbols[sym], priority[sym] = x["lam"][i], 2
     for i in range(n):
         for key, syms in (("q", der.q), ("qd", der.qd), ("qdd", der.qdd)):
             symbols[syms[i]], priority[syms[i]] = x[key][i], 2
@@ -75,7 +77,28 @@ def build_system_kernels(der: SystemDerivation) -> list:
         drive += [dtr(g.theta), dtr(sp.diff(g.theta, t_sym)), dtr(sp.diff(g.theta, t_sym, 2))]
     r = ca.mtimes(M, x["qdd"]) - f
     q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
-    return make_kernels([
+    constraint_kernels = []
+    if der.constraints:
+        # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d', with
+        # d' = [1, then theta_k', theta_k'', 0 per guided joint] (Phi does not read theta_k')
+        phi = _matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
+        ddot = [ca.SX(1.0)]
+        for k in range(len(der.guided)):
+            ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
+        ddot = ca.vertcat(*ddot)
+        phi_q = ca.jacobian(phi, q)
+        phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
+        phi_dot = ca.mtimes(phi_q, qd) + phi_t
+        gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
+        constraint_kernels = [
+            ("constraints", "Phi of the cut joints", [("q", q), ("d", d), ("p", p)], [("phi", phi)]),
+            ("constraint_jac", "Phi_q", [("q", q), ("d", d), ("p", p)], [("phi_q", phi_q)]),
+            ("constraint_rate", "Phi_t (Phi_q q' + Phi_t = 0)", [("q", q), ("d", d), ("p", p)],
+             [("phi_t", phi_t)]),
+            ("constraint_acc", "gamma (Phi_q q'' = gamma), casadi AD",
+             [("q", q), ("qd", qd), ("d", d), ("p", p)], [("gamma", gamma)]),
+        ]
+    return make_kernels(constraint_kernels + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
@@ -83,7 +106,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
          [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)],
          [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
         ("outputs", "outputs " + ", ".join(der.outputs),
-         [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)], [("y", y)]),
+         [("q", q), ("qd", qd), ("qdd", qdd), ("lambda", x["lam"]), ("d", d), ("p", p)],
+         [("y", y)]),
         ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
          [("q", q), ("qd", qd), ("d", d), ("p", p)], [("e", en)]),
         ("drive", "d = [t, theta_k, theta_k', theta_k''] of the guided joints",
@@ -108,7 +132,8 @@ def generate_system_files(system: System) -> dict[str, str]:
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
         "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
         "summary": f"{len(system.bodies)} bodies, {len(der.q)} coordinates, "
-                   f"{len(der.guided)} guided joints, no cut joints.",
+                   f"{len(der.guided)} guided joints, {len(der.constraints)} constraint equations.",
+        "constraints": [n for n, _ in der.constraints],
         "banner": "system/banner.j2", "kernels": emitted,
         "guided": [g.joint for g in der.guided], "coords": [c.name for c in der.coords],
         "outputs": list(der.outputs), "nd": len(der.drive_symbols),
@@ -137,6 +162,7 @@ def generate_system_files(system: System) -> dict[str, str]:
         "drive_params": [{"name": p.name, "default": p.default, "unit": p.unit}
                          for p in der.drive_params],
         "params": [{"name": n, "default": v} for n, _, v in der.params],
+        "constraints": [{"name": n, "phi": str(e)} for n, e in der.constraints],
         "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
                          for b, term, wrt, _, _ in der.terms],
         "outputs": dict(zip(der.outputs, (o.quantity for o in system.outputs))),
@@ -180,3 +206,12 @@ def prepare_system(system: System) -> Built:
             if not _current(folder, fp):
                 write_folder(generate_system_files(system), folder)
     return build(folder)
+
+
+def run_system(system: System, out: Path | None = None, **options):
+    """Generate, build and run a system: run.run_built's options (t_end, dt, integrator,
+    params, ...), checked against the option table before any work."""
+    from .run import check_options, run_built
+
+    opts = check_options(**options)
+    return run_built(prepare_system(system), opts, out=out)

@@ -266,6 +266,10 @@ static fsr_status check_options(csim* s)
     if (o->step != 0.0)
         return cs_fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)",
                        o->method == FSR_ALI3P ? "ali3p" : "genalpha3");
+    if (!m->drive || !m->mass || !m->force || !m->residual_jac || !m->outputs
+        || (m->nc > 0 && (!m->constraints || !m->constraint_jac || !m->constraint_rate
+                          || !m->constraint_acc || !m->constraint_names)))
+        return cs_fail(s, FSR_BAD_OPTIONS, "model %s lacks a kernel its sizes need (system.h)", m->name);
     if (o->energy && !m->energy)
         return cs_fail(s, FSR_BAD_OPTIONS, "model %s has no energy kernel", m->name);
     if (!(m->length_scale > 0.0) || !isfinite(m->length_scale))
@@ -280,7 +284,7 @@ static fsr_status check_options(csim* s)
 }
 
 /* Workspace in one block: doubles, then ints. */
-static fsr_status open_run(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r)
+fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r, long capacity)
 {
     memset(s, 0, sizeof *s);
     memset(r, 0, sizeof *r);
@@ -298,13 +302,13 @@ static fsr_status open_run(csim* s, const fsm_system* m, const fsr_options* o, f
     s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
     if (s->nsteps < 1) s->nsteps = 1;
     s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
-    s->capacity = s->nsteps / o->out_every + 2;
+    s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
     size_t nz = n > nc ? n : nc;
     size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + 2 * nc * n + nc * nc
                      + 2 * nc + nz + 1;
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
     double* x = calloc(doubles, sizeof(double));
-    s->piv = malloc(sizeof(int) * (n + 2 * nc + 1));
+    s->piv = malloc(sizeof(int) * (n + nc + 1));
     if (!r->rows || !x || !s->piv) {
         free(x);
         free(s->piv);
@@ -343,21 +347,38 @@ static fsr_status open_run(csim* s, const fsm_system* m, const fsr_options* o, f
     s->Z = x; x += nc * n;
     s->G = x; x += nc * nc;
     s->zero = x;
-    s->rp = s->piv + n;
-    s->cp = s->rp + nc;
+    s->cp = s->piv + n;
     return FSR_OK;
+}
+
+fsr_status cs_start(csim* s)
+{
+    fsr_status st = cs_consistent_start(s);
+    if (!st) st = store(s, 0.0);
+    if (!st) st = s->o->method == FSR_ALI3P ? ali3p_begin(s) : genalpha3_begin(s);
+    return st;
+}
+
+fsr_status cs_step(csim* s)
+{
+    return s->o->method == FSR_ALI3P ? ali3p_step(s) : genalpha3_step(s);
+}
+
+void cs_close(csim* s)
+{
+    free(s->M);  /* the start of the workspace */
+    free(s->piv);
+    s->M = NULL;
+    s->piv = NULL;
 }
 
 fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r)
 {
     csim s;
-    fsr_status st = open_run(&s, m, o, r);
-    if (!st) st = cs_consistent_start(&s);
-    if (!st) st = store(&s, 0.0);
-    if (!st) st = o->method == FSR_ALI3P ? ali3p_begin(&s) : genalpha3_begin(&s);
-    while (!st && s.k < s.nsteps) st = o->method == FSR_ALI3P ? ali3p_step(&s) : genalpha3_step(&s);
-    free(s.M);
-    free(s.piv);
+    fsr_status st = cs_open(&s, m, o, r, 0);
+    if (!st) st = cs_start(&s);
+    while (!st && s.k < s.nsteps) st = cs_step(&s);
+    cs_close(&s);
     r->status = st;
     return st;
 }

@@ -18,10 +18,11 @@ typedef struct {
     long next_row;   /* grid index of the next row */
     long capacity;
     long k;          /* steps taken */
-    /* state at t_k: q, q', q'', multipliers (ali3p: lambda*), the algorithmic acceleration */
+    /* state at t_k: q, q', q'', multipliers (ali3p: lambda*), the algorithmic acceleration
+     * (genalpha3; ali3p keeps qh'' there) */
     double *q, *v, *a, *lam, *ab;
     double* mult;    /* the multipliers the outputs see (genalpha3: lam; ali3p: from q'') */
-    double* vout;    /* the velocities the rows see (ali3p: v; genalpha3: v projected) */
+    double* vout;    /* the velocities the rows see: v projected (v when nc = 0) */
     /* iterates at t_k+1 */
     double *q1, *v1, *a1, *lam1;
     double* d;       /* drive (nd) */
@@ -31,7 +32,7 @@ typedef struct {
     int* piv;
     double *Pq, *phi, *phit, *gam;  /* Phi_q (nc x n), Phi, Phi_t, gamma */
     double *Z, *G;   /* n x nc: S^-1 Phi_q^T; nc x nc: Phi_q Z */
-    int *rp, *cp;    /* complete pivoting of G */
+    int* cp;         /* column order of the complete pivoting of G */
     double *res, *f, *w1, *w2;  /* n */
     double *e1, *e2; /* nc */
     double* zero;    /* max(n, nc) zeros: lambda when nc = 0 */
@@ -60,6 +61,14 @@ fsr_status cs_consistent_start(csim* s);
 /* An accepted step to t1 with the state in q, v, a, lam: finiteness, counters, row if due. */
 fsr_status cs_accept(csim* s, double t1);
 fsr_status cs_newton_failed(csim* s, double t1, double dq, int it);
+
+/* A run resumable step by step (fsr_simulate_system, fsr_stepper): cs_open with room for
+ * `capacity` rows (0: every row of the run), cs_start (consistent initial state, the row at
+ * t = 0, the method's start), cs_step until s->k == s->nsteps, cs_close. */
+fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r, long capacity);
+fsr_status cs_start(csim* s);
+fsr_status cs_step(csim* s);
+void cs_close(csim* s);
 
 fsr_status ali3p_begin(csim* s);
 fsr_status ali3p_step(csim* s);

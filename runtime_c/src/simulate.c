@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "constrained.h"
 #include "flexsym/limits.h"
 #include "flexsym/system.h"
 #include "linalg.h"
@@ -1076,7 +1077,7 @@ static fsr_status sim_step(sim* s)
 }
 
 /* Check the options and allocate a run with room for `capacity` rows (0: every row of the
- * run); the state starts at rest. sim_close releases it. */
+ * run); the state starts at the model's initial_state, or at rest. sim_close releases it. */
 static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long capacity)
 {
     const fsm_system* m = fsm_system_model();
@@ -1139,6 +1140,7 @@ static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long cap
     memset(s->dw, 0, sizeof(double) * drives);
     memset(s->qdd, 0, sizeof(double) * (size_t)(4 * n));
     memset(s->S, 0, sizeof(double) * NN);
+    if (m->initial_state) m->initial_state(o->p, o->mp, s->state, s->state + n);  /* else at rest */
     return FSR_OK;
 }
 
@@ -1173,6 +1175,8 @@ fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
 
 struct fsr_stepper {
     sim s;
+    csim c;         /* instead of s for ali3p and genalpha3 (constrained.c) */
+    int constrained;
     fsr_options o;  /* a copy; p and mp still point to the caller's arrays */
     fsr_result r;   /* status, message, counters; rows: the one row at the current time */
 };
@@ -1184,10 +1188,18 @@ fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
     sim* s = &p->s;
     p->o = *o;
     p->o.out_every = 1;  /* any grid point may be asked for */
+    if (constrained_method(o->method)) {
+        csim* c = &p->c;
+        p->constrained = 1;
+        fsr_status st = cs_open(c, fsm_system_model(), &p->o, &p->r, 1);
+        if (!st && drive)
+            st = cs_fail(c, FSR_BAD_OPTIONS, "%s: no drive given step by step (the model's drive runs)",
+                         fsr_method_name(o->method));
+        if (!st) st = cs_start(c);
+        p->r.status = st;
+        return p;
+    }
     fsr_status st = sim_open(s, &p->o, &p->r, 1);
-    if (!st && constrained_method(o->method))
-        st = fail(s, FSR_BAD_OPTIONS, "%s: not available step by step yet (use fsr_simulate)",
-                  fsr_method_name(o->method));
     if (!st && !(o->method == FSR_GENALPHA || o->method == FSR_NEWMARK || o->method == FSR_RK4
                  || (o->method == FSR_DOPRI5 && o->tol == 0.0)
                  || (o->method == FSR_RADAU5 && (o->step == 0.0 || o->step == o->dt))))
@@ -1220,7 +1232,7 @@ const fsr_result* fsr_stepper_result(const fsr_stepper* p)
 
 double fsr_stepper_time(const fsr_stepper* p)
 {
-    return time_of(&p->s, p->s.k);
+    return p->constrained ? cs_time(&p->c, p->c.k) : time_of(&p->s, p->s.k);
 }
 
 /* A refused request leaves the run as it was: the message says why, the status stays. */
@@ -1236,21 +1248,30 @@ static fsr_status refuse(fsr_stepper* p, const char* fmt, ...)
 fsr_status fsr_stepper_advance(fsr_stepper* p, double t)
 {
     sim* s = &p->s;
+    csim* c = &p->c;
     fsr_result* r = &p->r;
+    const fsr_options* o = &p->o;
     if (r->status) return r->status;
-    double dt = s->o->dt, x = t / dt;
-    if (!(x > (double)s->k && x < (double)s->nsteps + 0.5))
+    long now = p->constrained ? c->k : s->k, nsteps = p->constrained ? c->nsteps : s->nsteps;
+    double dt = o->dt, x = t / dt;
+    if (!(x > (double)now && x < (double)nsteps + 0.5))
         return refuse(p, "t = %.17g s is not after the current time %.17g s and up to t_end = %.17g s", t,
-                      time_of(s, s->k), s->o->t_end);
+                      fsr_stepper_time(p), o->t_end);
     double eps = 1e-9 * (dt > fabs(t) ? dt : fabs(t));
-    long k = fabs(t - s->o->t_end) <= eps ? s->nsteps : (long)floor(x + 0.5);
-    if (k > s->nsteps) k = s->nsteps;
-    if (k <= s->k || !(fabs(time_of(s, k) - t) <= eps))
+    long k = fabs(t - o->t_end) <= eps ? nsteps : (long)floor(x + 0.5);
+    if (k > nsteps) k = nsteps;
+    double tk = k >= nsteps ? o->t_end : (double)k * dt;
+    if (k <= now || !(fabs(tk - t) <= eps))
         return refuse(p, "t = %.17g s is not on the step grid (multiples of dt = %.17g s, and t_end)", t, dt);
     r->nrows = 0;
-    s->next_row = k;
     fsr_status st = FSR_OK;
-    while (!st && s->k < k) st = sim_step(s);
+    if (p->constrained) {
+        c->next_row = k;
+        while (!st && c->k < k) st = cs_step(c);
+    } else {
+        s->next_row = k;
+        while (!st && s->k < k) st = sim_step(s);
+    }
     r->nrows = 1;  /* the row at t_k; after a failure, the last row stored */
     r->status = st;
     return st;
@@ -1274,6 +1295,7 @@ fsr_status fsr_stepper_retune(fsr_stepper* p)
     sim* s = &p->s;
     fsr_result* r = &p->r;
     if (r->status) return r->status;
+    if (p->constrained) return refuse(p, "%s: retuning is not available yet", fsr_method_name(p->o.method));
     fsr_status st = check_options(s);
     if (st) return st;
     s->L = s->m->length_param >= 0 ? s->o->p[s->m->length_param] : s->m->length_scale;
@@ -1292,7 +1314,8 @@ fsr_status fsr_stepper_retune(fsr_stepper* p)
 void fsr_stepper_free(fsr_stepper* p)
 {
     if (!p) return;
-    sim_close(&p->s);
+    if (p->constrained) cs_close(&p->c);
+    else sim_close(&p->s);
     fsr_free(&p->r);
     free(p);
 }

@@ -77,8 +77,8 @@ fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_re
  * only (genalpha, newmark, rk4, dopri5 with tol = 0, radau5 with step 0 or dt).
  * drive: NULL to take theta', theta'' from the model's manoeuvre (o->mp), or [theta',
  * theta''] at t = 0 given by the caller, then by fsr_stepper_set_drive (implicit methods; a
- * model with one guided joint, nd = 4; theta is their integral from 0). ali3p and genalpha3
- * are not available step by step yet.
+ * model with one guided joint, nd = 4; theta is their integral from 0). ali3p and genalpha3:
+ * the model's own drive only, no retuning yet.
  * Returns NULL only when out of memory; check fsr_stepper_result(p)->status. */
 typedef struct fsr_stepper fsr_stepper;
 fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive);
