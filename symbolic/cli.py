@@ -431,6 +431,21 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_bench_systems(args) -> int:
+    from .run import check_output_dir
+    from .system_bench import QUICK, SYSTEMS, run_system_bench
+
+    table = QUICK if args.quick else SYSTEMS
+    systems = _names(args.systems, "--systems") if args.systems else None
+    for name in systems or ():
+        if name not in table:
+            raise SpecError(f"--systems: unknown system '{name}' (here: {', '.join(table)})")
+    models = _names(args.models, "--models") if args.models else None
+    repeat = BY_NAME["repeat"].convert(args.repeat, CLI) if args.repeat is not None else None
+    run_system_bench(check_output_dir(args.out, "--out"), systems, models, args.quick, repeat)
+    return 0
+
+
 def cmd_variants(args) -> int:
     from .energy import STRAIN_MODELS
     from .modes import FAMILIES
@@ -526,6 +541,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variants", help="comma-separated subset (default: all with cases)")
     p.add_argument("--repeat", help="runs per case after a warm-up (default 21; quick 3)")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser("bench-systems", help="CPU time against integration error on the mechanisms "
+                       "S1-S3 (scenes hub, slider_crank, pendulum)")
+    p.add_argument("--quick", action="store_true", help="two cases on the pendulum (about 10 s)")
+    p.add_argument("--out", default="bench_systems", help="output folder (default: bench_systems)")
+    p.add_argument("--systems", help="comma-separated subset of hub, slider_crank, pendulum")
+    p.add_argument("--models", help="comma-separated models (default: each system's list)")
+    p.add_argument("--repeat", help="timed runs per case (default 5; quick 1)")
+    p.set_defaults(func=cmd_bench_systems)
 
     p = sub.add_parser("select", help="cheapest model whose error on a scene stays under a tolerance")
     p.add_argument("scene", help="scene file (.toml)")

@@ -253,3 +253,17 @@ def test_run_flags_and_other_commands_refuse_system_scenes(tmp_path, capsys):
     assert main(["inspect", str(tmp_path / "s.toml")]) == 2
     assert "s.toml: [[body]]: a system scene needs [[body]] entries" in capsys.readouterr().err
     assert load_scene(SCENES / "stepped_blade.toml").spec.body is not None  # [body]: one beam, as before
+
+
+def test_bench_systems_quick(tmp_path):
+    """flexsym bench-systems --quick: the pendulum at two generalized-alpha steps against its
+    own reference step; every output's integration error shrinks when the step is halved."""
+    from flexsym.system_bench import run_system_bench
+
+    rows = run_system_bench(tmp_path, quick=True, log=lambda m: None)
+    assert [(r["integrator"], r["dt"]) for r in rows] == [("genalpha", 1e-3), ("genalpha", 5e-4)]
+    assert all(r["status"] == "ok" and r["cpu_s"] > 0 for r in rows)
+    for c in ("x_tip", "y_tip", "w_mid", "M_mid"):
+        assert 0 < rows[1][f"err_{c}"] < 0.75 * rows[0][f"err_{c}"], c
+    assert (tmp_path / "bench_systems.csv").read_text().startswith("system,model,integrator,dt,cpu_s,err_max")
+    assert "| pendulum | m3 | genalpha | 0.001 s |" in (tmp_path / "bench_systems.md").read_text()
