@@ -35,8 +35,8 @@ from .integrals import BodyIntegralTable, IntegralTable
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from .modes import s
 from .outputs import field_at, output_expression
-from .system import (GROUND, FlexibleBeam, Gravity, PointForce, RigidBody, System, Torque,
-                     beam_station, parse_output)
+from .system import (GROUND, FlexibleBeam, Gravity, PointForce, RigidBody, SpringDamper, System,
+                     Torque, beam_station, parse_output)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
 
@@ -160,7 +160,7 @@ def _unsupported(system: System, tree) -> None:
             raise SpecError(f"{where}: body '{b.name}': a body from finite-element data is not "
                             "supported in a system yet")
     for load in system.loads:
-        if not isinstance(load, (Gravity, PointForce, Torque)):
+        if not isinstance(load, (Gravity, PointForce, Torque, SpringDamper)):
             raise SpecError(f"{where}: load {type(load).__name__} is not derived yet")
 
 
@@ -335,6 +335,12 @@ def derive_system(system: System) -> SystemDerivation:
     der.V += V_grav
     der.V_grav = V_grav
     Q += sp.Matrix([-sp.diff(V_grav, x) for x in q])
+    for load in system.loads:
+        if isinstance(load, SpringDamper):
+            Vs, Qs = _spring(der, load)
+            der.V += Vs
+            der.terms.append(("", f"spring {load.name or load.a + '-' + load.b}", ("all",), Vs, Qs))
+            Q += Qs
     Q += _applied_forces(der, list(q))
     der.Q = Q.applyfunc(sp.expand)
 
@@ -406,6 +412,25 @@ def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
             phi = der.poses[load.body].angle
             Q += sp.Matrix([tau * sp.diff(phi, x) for x in wrt])
     return Q
+
+
+def _spring(der: SystemDerivation, load) -> tuple[sp.Expr, sp.Matrix]:
+    """V = k (l - l0)^2 / 2 and Q = -dV/dq - c l' dl/dq of a spring-damper."""
+    ends = []
+    for ref, point in ((load.a, load.point_a), (load.b, load.point_b)):
+        ends.append(sp.Matrix([sp.nsimplify(c) for c in point]) if ref == GROUND
+                    else marker_pose(der, ref)[0])
+    delta = ends[1] - ends[0]
+    k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
+    if l0 == 0:  # no square root: smooth when the ends meet
+        V = k * delta.dot(delta) / 2
+        rate = der.ddt(delta)
+        damping = sp.Matrix([-c * rate.dot(delta.diff(x)) for x in der.q])
+    else:
+        length = sp.sqrt(delta.dot(delta))
+        V = k * (length - l0)**2 / 2
+        damping = sp.Matrix([-c * der.ddt(length) * sp.diff(length, x) for x in der.q])
+    return V, sp.Matrix([-sp.diff(V, x) for x in der.q]) + damping
 
 
 def motor_torque(der: SystemDerivation, driver) -> sp.Expr:

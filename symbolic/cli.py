@@ -312,13 +312,23 @@ def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
     spec, scene = resolve(args, systems=True)
-    if spec is None:  # a system scene
+    if spec is None:  # a system scene: its structure, then its derivation (sysgen.describe)
         from .system_scene import summary
 
-        if args.section not in (None, "system") or args.plot_modes or args.latex:
-            raise SpecError(f"{scene.path}: a system scene shows --section system (no --latex, "
-                            "--plot-modes)")
-        sys.stdout.write(summary(scene.system))
+        chosen = args.section.split(",") if args.section is not None else ["system", "derivation"]
+        if not set(chosen) <= {"system", "derivation"} or args.plot_modes or args.latex:
+            raise SpecError(f"{scene.path}: a system scene shows --section system,derivation (no "
+                            "--latex, --plot-modes)")
+        if "system" in chosen:
+            sys.stdout.write(summary(scene.system))
+        if "derivation" in chosen:
+            from .sysgen import describe
+
+            try:
+                text = describe(scene.system)
+            except SpecError as exc:
+                raise SpecError(f"{scene.path}: {exc}") from None
+            sys.stdout.write(("\n" if "system" in chosen else "") + text)
         return 0
     sections = args.section.split(",") if args.section is not None else SECTIONS
     for s in sections:
@@ -526,7 +536,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot-modes", dest="plot_modes", help="PNG file for a plot of the mode shapes")
     p.add_argument("--model", help="with a scene file: inspect this variant on the scene's body")
     p.add_argument("--section", help="comma-separated subset of: modes, energy, integrals, mass, "
-                   "stiffness, equations, ops (a system scene: system)")
+                   "stiffness, equations, ops (a system scene: system, derivation)")
     p.set_defaults(func=cmd_inspect)
 
     p = sub.add_parser("spinup", help="the benchmark: variants #0-#3, summary table and plot")

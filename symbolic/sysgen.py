@@ -215,3 +215,23 @@ def run_system(system: System, out: Path | None = None, **options):
 
     opts = check_options(**options)
     return run_built(prepare_system(system), opts, out=out)
+
+
+def describe(system: System) -> str:
+    """What `inspect` shows of a system's derivation: tree, coordinates, constraint rows, which
+    energy term acts on which coordinates, and the kernels' operation counts."""
+    files = generate_system_files(system)
+    m = json.loads(files[MANIFEST])
+    lines = [f"system '{system.name}': {len(system.bodies)} bodies; tree "
+             + ", ".join(f"{b} <- {j}" for b, j in m["tree"]["tree_joints"].items())
+             + (f"; cut joints: {', '.join(m['tree']['cut_joints'])}" if m["tree"]["cut_joints"] else ""),
+             "coordinates: " + ", ".join(f"{c['name']} ({c['group']})" for c in m["coordinates"]),
+             "drive d: " + ", ".join(m["drive"])]
+    for c in m["constraints"]:
+        lines.append(f"constraint {c['name']}: {c['phi']} = 0")
+    for t_ in m["energy_terms"]:
+        where = f"body {t_['body']}: " if t_["body"] else ""
+        lines.append(f"{where}{t_['term']} acts on {', '.join(t_['differentiated_wrt'])}")
+    for name, k in m["kernels"].items():
+        lines.append(f"kernel {k['c_name']}: {k['total_ops']} operations")
+    return "\n".join(lines) + "\n"

@@ -211,12 +211,17 @@ class Torque:
 
 @dataclass(frozen=True)
 class SpringDamper:
+    """A linear spring-damper between two points: force k (l - l0) + c l' along the line
+    (V = k (l - l0)^2 / 2; l0 = 0: V = k |r_b - r_a|^2 / 2, smooth at l = 0)."""
+
     a: str  # "body.marker" or "ground" (at point_a)
     b: str
     k: float
     c: float = 0.0
     l0: float = 0.0
     name: str = ""
+    point_a: tuple[float, float] = (0.0, 0.0)
+    point_b: tuple[float, float] = (0.0, 0.0)
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,7 @@ CLI_BAD = [
     # options that would be ignored
     (["run", "m3", "--maneuver", "constant", "--ts", "5"], "--ts: does not apply to the manoeuvre 'constant'"),
     (["run", "m3", "--tol", "1e-6"], "--tol: applies to dopri5, not to integrator genalpha"),
-    (["run", "m3", "--integrator", "rk4", "--rho-inf", "0.5"], "--rho-inf: applies to genalpha, not to integrator rk4"),
+    (["run", "m3", "--integrator", "rk4", "--rho-inf", "0.5"], "--rho-inf: applies to genalpha and genalpha3, not to integrator rk4"),
     (["run", "m3", "--integrator", "rk4", "--newton", "full"], "--newton: applies to genalpha and newmark and radau5"),
     (["run", "m3", "--newmark-beta", "0.3"], "--newmark-beta: applies to newmark, not to integrator genalpha"),
     (["run", "m3", "--integrator", "newmark", "--newmark-gamma", "0.9", "--newmark-beta", "0.3"],
@@ -244,7 +244,7 @@ def test_run_options_with_a_scene_name_the_scene_key(capsys, workdir):
 
 API_BAD = [
     (dict(dt=-1), "dt: must be > 0 (got -1)"),
-    (dict(integrator="rk4", rho_inf=0.5), "rho_inf: applies to genalpha, not to integrator rk4"),
+    (dict(integrator="rk4", rho_inf=0.5), "rho_inf: applies to genalpha and genalpha3, not to integrator rk4"),
     (dict(bogus=1), "unknown run option 'bogus'"),
     (dict(t_end=1e19, dt=1), "t_end / dt = 1e+19 steps exceeds the limit"),
     (dict(out_every=2.5), "out_every must be a whole number of steps >= 1 (got 2.5)"),
