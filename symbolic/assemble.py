@@ -30,6 +30,7 @@ import sympy as sp
 
 from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, build_fields,
                      gravity_density, kinetic_density, momentum_density, w)
+from .efbody import EfPart, ef_part
 from .errors import SpecError
 from .integrals import BodyIntegralTable, IntegralTable
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
@@ -112,6 +113,8 @@ class SystemDerivation:
     outputs: dict[str, sp.Expr] = field(default_factory=dict)
     constraints: list[tuple[str, sp.Expr]] = field(default_factory=list)  # Phi(q, theta) rows
     lam: sp.Matrix = None  # their multipliers (outputs read them)
+    elastic: list = field(default_factory=list)  # ef bodies' elastic energies, unexpanded
+                                                 # (sysgen: Q = -dV/dq by casadi AD)
     V_grav: sp.Expr = sp.Integer(0)
     dropped: list[dict] = field(default_factory=list)
 
@@ -150,13 +153,10 @@ class SystemDerivation:
 def _unsupported(system: System, tree) -> None:
     where = f"system '{system.name}'"
     for b in system.bodies:
-        if b.flexible and b.model.kind != "modal":
-            raise SpecError(f"{where}: body '{b.name}': '{b.model.name}' (finite elements) in a "
-                            "system is not derived yet; use a modal variant")
-        if b.flexible and (b.model.axial_force != "constitutive" or b.model.moment != "constitutive"):
+        if b.flexible and b.model.kind == "modal" and (b.model.axial_force != "constitutive" or b.model.moment != "constitutive"):
             raise SpecError(f"{where}: body '{b.name}': N or M from equilibrium is derived for a "
                             "guided hub only; use the constitutive recovery in a system")
-        if b.flexible and getattr(b.model, "body", None) is not None:
+        if b.flexible and b.model.kind == "modal" and getattr(b.model, "body", None) is not None:
             raise SpecError(f"{where}: body '{b.name}': a body from finite-element data is not "
                             "supported in a system yet")
     for load in system.loads:
@@ -232,7 +232,9 @@ def derive_system(system: System) -> SystemDerivation:
             coords.append(Coordinate(j.name, "joint", body, j.name))
     flex_modes = {}
     for b in system.bodies:
-        if b.flexible:
+        if b.flexible and b.model.kind == "fe":
+            coords += [Coordinate(f"{b.name}_{c}", "node", b.name) for c in b.model.coordinates]
+        elif b.flexible:
             refs = b.model.modes
             flex_modes[b.name] = refs
             for r in refs:
@@ -250,6 +252,9 @@ def derive_system(system: System) -> SystemDerivation:
     # deformation fields of each flexible body, in its own coordinate symbols
     for b in system.bodies:
         if not b.flexible:
+            continue
+        if b.model.kind == "fe":
+            der.flex[b.name] = ef_part(b, psyms[b.name])
             continue
         spec = b.model.validate()
         modes = {r.coordinate: spec.mode(r) for r in spec.modes}
@@ -307,19 +312,25 @@ def derive_system(system: System) -> SystemDerivation:
             continue
         part = der.flex[b.name]
         ph = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
-        frame = FrameMotion(ph[0], ph[1], ph[2])
-        Vloc = A_.T * Rdot
-        Rloc = A_.T * pose.R
-        gloc = A_.T * gvec
+        Vloc, Rloc, gloc = A_.T * Rdot, A_.T * pose.R, A_.T * gvec
         actual = {ph[0]: omega, ph[1]: Vloc[0], ph[2]: Vloc[1], ph[3]: Rloc[0], ph[4]: Rloc[1],
                   ph[5]: gloc[0], ph[6]: gloc[1]}
+        mass = BEAM_PARAMS[0].symbol * BEAM_PARAMS[2].symbol * BEAM_PARAMS[4].symbol
+        if isinstance(part, EfPart):
+            T_, Vg_, H_, V_el = part.energies()
+            der.T += T_.xreplace(actual)
+            V_grav += Vg_.xreplace(actual) - mass.xreplace(part.psyms) * gvec.dot(pose.R)
+            der.momentum += H_.xreplace(actual)
+            der.elastic.append(V_el)
+            der.terms.append((b.name, "ancf_elastic", ("node",), V_el, None))
+            continue
+        frame = FrameMotion(ph[0], ph[1], ph[2])
         tab, fl = part.table, part.fields
 
         def body_expr(expr, tab=tab, part=part, actual=actual):
             return expr.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
 
         der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
-        mass = (BEAM_PARAMS[0].symbol * BEAM_PARAMS[2].symbol * BEAM_PARAMS[4].symbol)
         V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
             - body_expr(mass) * gvec.dot(pose.R)
         der.momentum += body_expr(tab.integrate(momentum_density(fl, frame, ph[3], ph[4])))
@@ -468,6 +479,9 @@ def _x(der, body, x):
 def beam_fields_at(der: SystemDerivation, body: str, x: float):
     """(u, v, v_x) at x on a flexible body, in its frame and coordinate symbols."""
     part = der.flex[body]
+    if isinstance(part, EfPart):
+        rx, ry, slope = part.position(x)
+        return rx - _x(der, body, x), ry, slope
     at = sp.nsimplify(x) / sp.nsimplify(part.beam.length)
     view = part.view()
     L_ = part.psyms[BEAM_PARAMS[4].symbol]
@@ -494,7 +508,7 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
     if fn == "T":
         return der.T
     if fn == "V":
-        return der.V
+        return der.V + sp.Add(*der.elastic)
     if fn == "momentum":
         return der.momentum
     if fn == "torque":
@@ -520,6 +534,8 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
 
 def _stress(der, beam, x, fn, where):
     part = der.flex[beam.name]
+    if isinstance(part, EfPart):
+        return part.stress(fn, x)
     frac = sp.nsimplify(x) / sp.nsimplify(beam.length)
     spec = replace(beam.model, points=(("o", str(frac)),))
     if fn == "N" and not spec.axial and spec.strain != "prestress":

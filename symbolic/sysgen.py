@@ -68,8 +68,15 @@ def build_system_kernels(der: SystemDerivation) -> list:
     psyms = [sym for _, sym, _ in der.params]
     M = _matrix_sx(tr, der.M, psyms)
     f = _matrix_sx(tr, der.f, psyms)
-    y = _matrix_sx(tr, sp.Matrix(list(der.outputs.values())), psyms)
-    en = _matrix_sx(tr, sp.Matrix(list(der.energies())), psyms)
+    # outputs and ef elastic energies hold square roots and atan2: translated as they are
+    y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
+    T_, V_, h_ = der.energies()
+    V_el = ca.SX(0.0)
+    for V in der.elastic:
+        V_el = V_el + tr(V)
+    if der.elastic:
+        f = f - ca.gradient(V_el, x["q"])  # ef bodies: Q = -dV/dq by casadi AD, as fe.py
+    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms) + ca.vertcat(0, V_el, V_el)
     dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
     dtr = SympyToCasadi(dsyms, {})
     drive = [x["t"]]

@@ -63,7 +63,7 @@ def pendulum_system(model, section: Section = PENDULUM_SECTION, length: float = 
 
 def slider_crank_system(model) -> System:
     """S2: rigid crank (guided), flexible rod pinned to crank and slider, slider on x. N_mid
-    only for a model with axial coordinates (#3's foreshortening carries no axial force)."""
+    only for ef or a model with axial coordinates (#3's foreshortening carries no axial force)."""
     d = 0.006
     rod = Section(rho=7870.0, E=2.0e11, A=math.pi * d**2 / 4, I=math.pi * d**4 / 64)
     m_rod = rod.rho * rod.A * 0.3
@@ -81,5 +81,5 @@ def slider_crank_system(model) -> System:
         drivers=(Driver("crank_drive", "guided", "crank_joint", maneuver="spin_up",
                         params=(("ws", 150.0), ("ts", 0.1))),),
         outputs=(Output("x_s", "x(slider.pin)"), Output("w_mid", "w(rod, mid)"))
-        + ((Output("N_mid", "N(rod, mid)"),) if model.kind == "modal" and model.axial else ()),
+        + ((Output("N_mid", "N(rod, mid)"),) if model.kind == "fe" or model.axial else ()),
     ).validate()
