@@ -9,7 +9,7 @@ The reference is the same model at REF_DIVISOR times smaller a step than the sma
 cases, by rk4 for a tree (no cut joint: the smallest error per step of the methods here;
 rk4 at 0.1 ms is within 3e-5 of the peak of rk4 at 10 us on S3) and by the scene's
 integrator for a closed loop (ali3p on S2). The error of each modal model against the geometrically exact `ef` on the same
-system is not measured here: `ef` bodies in systems are not derived yet.
+system is not measured here yet.
 Writes bench_systems.csv and bench_systems.md to --out.
 """
 from __future__ import annotations
