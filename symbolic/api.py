@@ -5,6 +5,9 @@
     result = api.run(scene)                 # RunResult: result["v_tip"], result.t, result.columns
     result = api.simulate("m3", ws=4.0, t_end=10.0)
     print(api.inspect("m1", sections="energy"))
+    hub = api.load_scene("scenes/hub.toml")  # a system scene ([[body]] entries): SystemScene
+    result = api.run(hub)                   # columns theta_h, omega_h, v_tip, M_A
+    pendulum = api.system({...})            # the same data as a scene, as a dict: a checked System
 """
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ from .run import RunResult, check_output_path, run_built
 from .scene import Scene, load_scene
 from .spec import builtin
 
-__all__ = ["load_scene", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
+__all__ = ["load_scene", "system", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
            "inprocess", "sweep"]
 
 
@@ -52,13 +55,29 @@ def kernels(target):
     return compiled(_spec_of(target))
 
 
+def system(data, name: str = "system", t_end: float | None = None):
+    """A System from the data of a system scene as a dict ({"body": [...], "joint": [...],
+    "driver": [...], "output": {"columns": {...}}, ...}), or a System built in Python (e.g. by
+    flexsym.systems_library): checked exactly as a scene file is (one line per problem)."""
+    from .system import System
+    from .system_scene import check_system, system_from_dict
+
+    if isinstance(data, System):
+        return check_system(data, 20.0 if t_end is None else t_end)
+    return system_from_dict(data, name, t_end)
+
+
 def run(scene, out=None) -> RunResult:
-    """Run a scene (a Scene or a path to a .toml file); results as numpy arrays."""
-    if not isinstance(scene, Scene):
+    """Run a scene (a Scene, a SystemScene or a path to a .toml file); results as numpy arrays."""
+    if not isinstance(scene, Scene) and not hasattr(scene, "system"):
         scene = load_scene(scene)
     out = out if out is not None else scene.output_file
     if out is not None:
         out = check_output_path(out, "out")
+    if hasattr(scene, "system"):  # a mechanism: symbolic/sysgen.py generates and builds it
+        from .sysgen import prepare_system
+
+        return run_built(prepare_system(scene.system), scene.options, out=out)
     return run_built(prepare(scene.spec), scene.options, out=out)
 
 

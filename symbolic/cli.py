@@ -52,8 +52,9 @@ def _elements(text):
         raise SpecError(f"--elements: '{text}' is not a whole number") from None
 
 
-def resolve(args):
-    """(spec, scene or None) from a variant name with overrides, or from a scene file."""
+def resolve(args, systems: bool = False):
+    """(spec, scene or None) from a variant name with overrides, or from a scene file; with
+    systems, a system scene gives (None, SystemScene)."""
     from .spec import builtin, customize
 
     if args.variant.endswith(".toml"):
@@ -64,6 +65,11 @@ def resolve(args):
             raise SpecError(f"{args.variant}: --{given[0].replace('_', '-')} does not combine with a "
                             "scene file: set it in the scene's [model] table")
         scene = load_scene(args.variant, model=getattr(args, "model", None))
+        if getattr(scene, "system", None) is not None:  # a mechanism: only run and inspect take it
+            if not systems:
+                raise SpecError(f"{args.variant}: a system scene ([[body]] entries): this command takes "
+                                "one-beam variants and scenes; use flexsym run or flexsym inspect")
+            return None, scene
         return scene.spec, scene
     if getattr(args, "model", None) is not None:
         raise SpecError(f"--model replaces the model of a scene file; '{args.variant}' is not one")
@@ -162,7 +168,9 @@ def cmd_run(args) -> int:
     from .run import run_built
     from .validity import assess
 
-    spec, scene = resolve(args)
+    spec, scene = resolve(args, systems=True)
+    if spec is None:
+        return _run_system(args, scene)
     options = _run_options(args, spec, scene)
     out, plot_path = _outputs_checked(args, spec, scene)
     if options.energy and out is None:
@@ -195,6 +203,43 @@ def cmd_run(args) -> int:
     if not res.ok:
         return 3
     return 0 if verdict.valid else 4
+
+
+def _run_system(args, scene) -> int:
+    """flexsym run SYSTEM_SCENE: options from the scene, --out/--plot checked before any work."""
+    from .run import check_output_path
+
+    _run_options(args, None, scene)  # refuses run flags given with a scene file
+    out = None
+    if args.out is not None:
+        out = check_output_path(args.out, "--out")
+    elif scene.output_file is not None:
+        out = check_output_path(scene.output_file, f"{scene.path}: [output] file")
+    plot = check_output_path(args.plot, "--plot", PLOT_TYPES) if args.plot is not None else None
+    system, geometry = scene.system, None
+    if plot is not None:  # the picture's marker positions become extra output columns
+        from .system_plot import with_plot_outputs
+
+        system, geometry = with_plot_outputs(system)
+    from .run import run_built
+    from .sysgen import prepare_system
+
+    try:
+        built = prepare_system(system)
+    except SpecError as exc:  # what the derivation does not support yet, named with the file
+        raise SpecError(f"{scene.path}: {exc}") from None
+    res = run_built(built, scene.options, out=out)
+    status = "ok" if res.ok else f"stopped: {res.message}"
+    print(f"{system.name}: {scene.options.integrator}, dt = {scene.options.dt:g} s, t_end = "
+          f"{scene.options.t_end:g} s: {status}")
+    if res.written != "none":
+        print(f"results{' (truncated)' if res.written == 'truncated' else ''}: {out}")
+    if plot is not None and len(res.t) > 1:
+        from .system_plot import plot_system
+
+        factor = plot_system(system, geometry, {"t": res.t} | {c: res[c] for c in res.columns}, plot)
+        print(f"plot: {plot} (beam deflection from the chord scaled x{factor:g})")
+    return 0 if res.ok else 3
 
 
 FMU_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "interval", "ws", "ts")
@@ -267,11 +312,29 @@ def cmd_fe_export(args) -> int:
 def cmd_inspect(args) -> int:
     from .inspect_model import SECTIONS, Report
 
+    spec, scene = resolve(args, systems=True)
+    if spec is None:  # a system scene: its structure, then its derivation (sysgen.describe)
+        from .system_scene import summary
+
+        chosen = args.section.split(",") if args.section is not None else ["system", "derivation"]
+        if not set(chosen) <= {"system", "derivation"} or args.plot_modes or args.latex:
+            raise SpecError(f"{scene.path}: a system scene shows --section system,derivation (no "
+                            "--latex, --plot-modes)")
+        if "system" in chosen:
+            sys.stdout.write(summary(scene.system))
+        if "derivation" in chosen:
+            from .sysgen import describe
+
+            try:
+                text = describe(scene.system)
+            except SpecError as exc:
+                raise SpecError(f"{scene.path}: {exc}") from None
+            sys.stdout.write(("\n" if "system" in chosen else "") + text)
+        return 0
     sections = args.section.split(",") if args.section is not None else SECTIONS
     for s in sections:
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
-    spec, scene = resolve(args)
     if args.plot_modes and spec.kind != "modal":
         raise SpecError(f"--plot-modes: '{spec.name}' has no mode shapes (finite elements)")
     report = Report(spec, latex=args.latex)
@@ -439,6 +502,21 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def cmd_bench_systems(args) -> int:
+    from .run import check_output_dir
+    from .system_bench import QUICK, SYSTEMS, run_system_bench
+
+    table = QUICK if args.quick else SYSTEMS
+    systems = _names(args.systems, "--systems") if args.systems else None
+    for name in systems or ():
+        if name not in table:
+            raise SpecError(f"--systems: unknown system '{name}' (here: {', '.join(table)})")
+    models = _names(args.models, "--models") if args.models else None
+    repeat = BY_NAME["repeat"].convert(args.repeat, CLI) if args.repeat is not None else None
+    run_system_bench(check_output_dir(args.out, "--out"), systems, models, args.quick, repeat)
+    return 0
+
+
 def cmd_variants(args) -> int:
     from .energy import STRAIN_MODELS
     from .modes import FAMILIES
@@ -519,7 +597,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot-modes", dest="plot_modes", help="PNG file for a plot of the mode shapes")
     p.add_argument("--model", help="with a scene file: inspect this variant on the scene's body")
     p.add_argument("--section", help="comma-separated subset of: modes, energy, integrals, mass, "
-                   "stiffness, equations, ops")
+                   "stiffness, equations, ops (a system scene: system, derivation)")
     p.set_defaults(func=cmd_inspect)
 
     p = sub.add_parser("spinup", help="the benchmark: variants #0-#3, summary table and plot")
@@ -534,6 +612,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variants", help="comma-separated subset (default: all with cases)")
     p.add_argument("--repeat", help="runs per case after a warm-up (default 21; quick 3)")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser("bench-systems", help="CPU time against integration error on the mechanisms "
+                       "S1-S3 (scenes hub, slider_crank, pendulum)")
+    p.add_argument("--quick", action="store_true", help="two cases on the pendulum (about 10 s)")
+    p.add_argument("--out", default="bench_systems", help="output folder (default: bench_systems)")
+    p.add_argument("--systems", help="comma-separated subset of hub, slider_crank, pendulum")
+    p.add_argument("--models", help="comma-separated models (default: each system's list)")
+    p.add_argument("--repeat", help="timed runs per case (default 5; quick 1)")
+    p.set_defaults(func=cmd_bench_systems)
 
     p = sub.add_parser("select", help="cheapest model whose error on a scene stays under a tolerance")
     p.add_argument("scene", help="scene file (.toml)")

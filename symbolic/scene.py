@@ -127,8 +127,9 @@ class _Reader:
         return val
 
 
-def load_scene(path, model: str | None = None) -> Scene:
-    """model: a variant name that replaces the scene's [model] (flexsym run --model)."""
+def load_scene(path, model: str | None = None):
+    """A Scene, or a SystemScene for a mechanism. model: a variant name that replaces the
+    scene's [model] (flexsym run --model), or every flexible body's model in a system."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -138,6 +139,10 @@ def load_scene(path, model: str | None = None) -> Scene:
         raise SpecError(f"{path}: cannot read: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"{path}: not valid TOML: {exc}") from None
+    from .system_scene import is_system_scene, load_system_scene
+
+    if is_system_scene(data):  # a mechanism ([[body]] entries): symbolic/system_scene.py
+        return load_system_scene(path, data, model)
     r = _Reader(path, data)
     unknown = sorted(set(data) - set(TABLES))
     if unknown:
