@@ -452,8 +452,15 @@ def cmd_sweep(args) -> int:
     from .sweep import check_partial, make_plan, partial_path, plot, prepare_plan, read_table, run_sweep, \
         settings_of
 
-    spec, scene = resolve(args)
+    spec, scene = resolve(args, systems=True)
     o = _run_options(args, spec, scene)
+    if spec is None:  # a system scene: its model is built first (its manifest names what varies)
+        from .sweep import system_target
+
+        try:
+            spec = system_target(scene.system)
+        except SpecError as exc:
+            raise SpecError(f"{scene.path}: {exc}") from None
     keep_interval = scene is not None or args.interval is not None
     at = []
     for item in (args.at or "").split(",") if args.at else []:

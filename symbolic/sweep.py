@@ -32,14 +32,14 @@ import math
 import os
 import re
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .errors import FlexsymError, SpecError, ToolchainError
 from .progress import Progress
-from .options import API, RunOptions, Where, check_params, validate
+from .options import API, BY_NAME, Option, RunOptions, Where, check_params, validate
 
 SAMPLINGS = ("random", "lhs")
 MAX_RUNS = 10_000_000
@@ -141,10 +141,47 @@ def _label(t: float) -> str:
     return f"{t:g}".replace("-", "m")
 
 
+@dataclass(frozen=True)
+class SystemTarget:
+    """A system scene's model as a sweep target: what a sweep uses of a one-beam VariantSpec
+    (name, outputs, coordinates), with the run-time names read from the built model."""
+    system: object  # system.System
+    name: str
+    outputs: tuple  # the scene's columns, then violation when the system has constraints
+    coordinates: tuple
+    params: tuple  # p (beam parameters, e.g. E or BEAM_E) and drive parameters (e.g. ws)
+    fingerprint: str
+    maneuver = None
+
+
+def system_target(system) -> SystemTarget:
+    """Build (or find) and load the system's model here; its manifest names what can vary."""
+    from .sysgen import fingerprint
+
+    key = fingerprint(system)
+    with _models_lock:
+        if key not in _models:
+            from .inprocess import load_system
+
+            _models[key] = load_system(system)
+        m = _models[key]
+    outputs = tuple(c for c in m.columns if c not in m.coordinates)
+    return SystemTarget(system, system.name, outputs, tuple(m.coordinates),
+                        tuple(m.params) + tuple(m.maneuver_params), key)
+
+
+def _fingerprint(spec) -> str:
+    from .generate import fingerprint
+
+    return spec.fingerprint if isinstance(spec, SystemTarget) else fingerprint(spec)
+
+
 def sweepable(spec) -> list[str]:
     from .energy import BEAM_PARAMS
     from .maneuver import maneuver_of
 
+    if isinstance(spec, SystemTarget):
+        return list(spec.params) + initial_state_names(spec)
     man = [] if spec.maneuver.startswith("expression:") else [p.name for p in maneuver_of(spec.maneuver).params]
     return [p.name for p in BEAM_PARAMS] + man + initial_state_names(spec)
 
@@ -178,6 +215,11 @@ def _check_values(spec, v: Vary, initial, options: list[str], where: Where) -> N
         return  # initial values: any finite number (parse_vary)
     for value in (v.values if v.values is not None else (v.low, v.high)):
         try:
+            if isinstance(spec, SystemTarget):  # BEAM_E, crank_ws: the rule of E, ws
+                base = v.name.rsplit("_", 1)[-1] if v.name.rsplit("_", 1)[-1] in BY_NAME else v.name
+                rule = BY_NAME.get(base) or Option(v.name, float, None, "", low=0.0, low_open=True)
+                replace(rule, name=v.name).convert(value, API)
+                continue
             check_params({v.name: value}, where, spec.maneuver)
         except SpecError as exc:
             raise _vary_error(v.name, value, exc) from None
@@ -277,15 +319,13 @@ _models_lock = threading.Lock()
 
 def _model(spec):
     """The worker's loaded model for spec (built here if needed), once per process."""
-    from .generate import fingerprint
-
-    key = fingerprint(spec)
+    key = _fingerprint(spec)
     with _models_lock:
         if key not in _models:
-            from .inprocess import load
+            from .inprocess import load, load_system
 
             _restore_malloc_thresholds()
-            _models[key] = load(spec)
+            _models[key] = load_system(spec.system) if isinstance(spec, SystemTarget) else load(spec)
         return _models[key]
 
 
@@ -507,10 +547,8 @@ def read_table(path) -> dict[str, np.ndarray]:
 
 def prepare_plan(plan: SweepPlan) -> SweepPlan:
     """Build (or find) and load the model; note its fingerprint."""
-    from .generate import fingerprint
-
     _model(plan.spec)
-    plan.fingerprint = fingerprint(plan.spec)
+    plan.fingerprint = _fingerprint(plan.spec)
     return plan
 
 
