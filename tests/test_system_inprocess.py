@@ -92,3 +92,18 @@ def test_system_sweep_refuses_an_unknown_name_in_one_line(system, tmp_path, caps
     assert main(["sweep", str(SCENES / "hub.toml"), "--vary", "E=-1,2", "--out", str(out)]) == 2
     assert "--vary E=-1" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_api_sweep_and_inprocess_take_a_system_scene(system, tmp_path):
+    """The pendulum (a tree under gravity): api.sweep over a shortened scene equals the batch of
+    api.inprocess, whose run at the scene's values is `flexsym run SCENE`'s."""
+    from flexsym import api
+
+    scene, _, built = system("pendulum")
+    model = api.inprocess(SCENES / "pendulum.toml")
+    e = model.params["E"]
+    table = api.sweep(SCENES / "pendulum.toml", {"E": [e, 2 * e]}, tmp_path / "p.csv", workers=1)
+    b = model.batch({"E": [e, 2 * e]}, rows=True, **settings_of(scene.options, True))
+    assert list(table["status"]) == ["ok", "ok"]
+    assert np.array_equal(table["x_tip_min"], b.summary("x_tip", "min"))
+    assert np.array_equal(b.rows[0], run_built(built, scene.options).data)
