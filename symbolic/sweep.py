@@ -8,7 +8,9 @@ runs are the Cartesian product of all --vary, in the order given (the last varie
 With --samples N every --vary is a range NAME=LO:HI sampled uniformly (random) or by Latin
 hypercube, reproducibly from --seed. NAME is a run-time parameter: beam (rho, E, A, I, L),
 manoeuvre (ws, ts for the spin-up), an initial value (q0_<coordinate>, qd0_<coordinate>) or
-a solver option t_end, dt, step (radau5); mode sets are structural (one model each).
+a solver option t_end, dt, step (radau5); mode sets are structural (one model each). A system
+scene (SystemTarget): its p and drive parameter names (E or BEAM_E, ws or DRIVER_ws), read
+from its built model, and a violation column when it has constraints.
 
 Table (CSV, one row per run, in run order): run, the varied inputs, status (ok | diverged |
 failed), valid (ok and |v| <= 0.1 L for modal models), message, then per output quantity
