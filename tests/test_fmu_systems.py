@@ -72,3 +72,15 @@ def test_system_fmu_parameter_start_value_changes_the_run(exported, tmp_path):
     for name in ("x_s", "w_mid", "N_mid"):
         scale = np.max(np.abs(ref[name]))
         assert np.max(np.abs(res[name] - ref[name])) <= 1e-12 * scale, name
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--input", "drive"], "a system scene's FMU has no inputs yet"),
+    (["--integrator", "ali3p"], "given with a scene file"),
+])
+def test_malformed_system_export_requests(capsys, tmp_path, argv, message):
+    out = tmp_path / "x.fmu"
+    assert main(["export-fmu", str(SCENES / "slider_crank.toml"), *argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
