@@ -217,8 +217,8 @@ def _check_values(spec, v: Vary, initial, options: list[str], where: Where) -> N
         return  # initial values: any finite number (parse_vary)
     for value in (v.values if v.values is not None else (v.low, v.high)):
         try:
-            if isinstance(spec, SystemTarget):  # BEAM_E, crank_ws: the rule of E, ws
-                base = v.name.rsplit("_", 1)[-1] if v.name.rsplit("_", 1)[-1] in BY_NAME else v.name
+            if isinstance(spec, SystemTarget):  # BEAM_E, crank_ws: the rule of E (> 0), ws
+                base = v.name.rsplit("_", 1)[-1]
                 rule = BY_NAME.get(base) or Option(v.name, float, None, "", low=0.0, low_open=True)
                 replace(rule, name=v.name).convert(value, API)
                 continue
