@@ -84,3 +84,27 @@ def test_malformed_system_export_requests(capsys, tmp_path, argv, message):
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_constrained_fmu_refuses_a_parameter_set_between_steps(exported, tmp_path):
+    """ali3p/genalpha3 cannot retune a run (fsr_stepper_retune): E set in step mode makes the next
+    doStep fail with one log line naming it, instead of going on with stale matrices."""
+    from fmpy import extract
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    fmu_path = exported["slider_crank"][0]
+    md = read_model_description(str(fmu_path))
+    messages = []
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmu_path), str(tmp_path / "u")),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="test")
+    fmu.instantiate(logMessage=lambda env, status, category, message: messages.append(message.decode()))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu.enterInitializationMode(startTime=0.0, stopTime=0.1)
+    fmu.exitInitializationMode()
+    fmu.doStep(0.0, 0.001)
+    fmu.setFloat64([vr["E"]], [1.0e11])
+    with pytest.raises(FMICallException):
+        fmu.doStep(0.001, 0.001)
+    assert any("retuning is not available yet" in m for m in messages)
+    fmu.freeInstance()
