@@ -45,9 +45,15 @@ endfunction()
 # FMU (runtime_c/fmi3, symbolic/fmu.py): the model's sources, this runtime and the fmi3 wrapper,
 # compiled with the flags of flexsym_add_model (so its rows equal the driver's bit for bit);
 # only the fmi3* functions are exported.
+# SYSTEM after CONFIG_DIR: as for flexsym_add_model (the sources define fsm_system_model()).
 function(flexsym_add_fmu id config_dir)
-  add_library(${id} MODULE ${ARGN} ${FLEXSYM_RUNTIME_SOURCES} "${FLEXSYM_RUNTIME_DIR}/src/model_adapter.c"
-              "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
+  set(sources ${ARGN})
+  if(sources AND "${ARGV2}" STREQUAL "SYSTEM")
+    list(REMOVE_AT sources 0)
+  else()
+    list(APPEND sources "${FLEXSYM_RUNTIME_DIR}/src/model_adapter.c")
+  endif()
+  add_library(${id} MODULE ${sources} ${FLEXSYM_RUNTIME_SOURCES} "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
   set_target_properties(${id} PROPERTIES PREFIX "" C_STANDARD 99 C_STANDARD_REQUIRED ON
                         C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden)
   target_include_directories(${id} PRIVATE "${FLEXSYM_RUNTIME_DIR}/include" "${FLEXSYM_RUNTIME_DIR}/fmi3"

@@ -105,9 +105,19 @@ def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,op
 def inprocess(target):
     """The built model's library loaded in this process (InProcessModel): model.batch(runs, ...)
     runs many parameter sets per call and returns arrays (see flexsym.inprocess)."""
-    from .inprocess import load
+    from .inprocess import load, load_system
 
+    scene = _system_scene(target)
+    if scene is not None:  # a mechanism: its p and drive parameters vary (see flexsym.inprocess)
+        return load_system(scene.system)
     return load(_spec_of(target))
+
+
+def _system_scene(target):
+    """The SystemScene target is or names, else None."""
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        target = load_scene(target)
+    return target if hasattr(target, "system") else None
 
 
 def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), resume=False,
@@ -123,11 +133,19 @@ def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), r
     if isinstance(vary, dict):
         vary = [f"{k}={v}" if isinstance(v, str) else f"{k}={','.join(repr(float(x)) for x in v)}"
                 for k, v in vary.items()]
-    if isinstance(target, Scene) or (isinstance(target, (str, Path)) and str(target).endswith(".toml")):
-        scene = target if isinstance(target, Scene) else load_scene(target)
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        target = load_scene(target)
+    if isinstance(target, Scene) or hasattr(target, "system"):
+        scene = target
         if run_options:
             raise SpecError(f"{scene.path}: run options do not combine with a scene: set them in the scene")
-        spec, o, keep_interval = scene.spec, scene.options, True
+        if hasattr(scene, "system"):  # a mechanism: names from its built model
+            from .sweep import system_target
+
+            spec = system_target(scene.system)
+        else:
+            spec = scene.spec
+        o, keep_interval = scene.options, True
     else:
         spec = _spec_of(target)
         o = validate(run_options, API, spec)

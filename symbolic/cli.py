@@ -249,7 +249,7 @@ def _fmu_request(args, out: Path | None):
     """(spec, FmuOptions) for export-fmu and bench-fmu, checked before any work (one table)."""
     from .fmu import FmuOptions, check_request
 
-    spec, scene = resolve(args)
+    spec, scene = resolve(args, systems=True)
     if scene is not None:
         given = given_options(args, FMU_OPTIONS)
         if given or args.param:
@@ -263,16 +263,30 @@ def _fmu_request(args, out: Path | None):
                       interval=o.out_every * o.dt, params=o.params,
                       input=getattr(args, "input", "none"))
     check_request(opts, out, spec)
-    return spec, opts
+    return (spec if spec is not None else scene), opts
+
+
+def _fmu_model(target):
+    """(generated folder, build) of a one-beam spec or a system scene."""
+    from .pipeline import generated_folder, prepare
+
+    if hasattr(target, "system"):
+        from .sysgen import prepare_system, system_folder
+
+        try:
+            built = prepare_system(target.system)
+        except SpecError as exc:
+            raise SpecError(f"{target.path}: {exc}") from None
+        return system_folder(target.system), built
+    return generated_folder(target), prepare(target)
 
 
 def cmd_export_fmu(args) -> int:
     from .fmu import export_fmu
-    from .pipeline import generated_folder
 
     out = Path(args.out)
     spec, opts = _fmu_request(args, out)
-    export_fmu(generated_folder(spec), opts, out)
+    export_fmu(_fmu_model(spec)[0], opts, out)
     print(f"wrote {out}: FMI 3.0 Co-Simulation, {opts.integrator} at dt = {opts.dt:g} s"
           f"{', drive from the inputs theta_dot, theta_ddot' if opts.input == 'drive' else ''}")
     return 0
@@ -280,13 +294,13 @@ def cmd_export_fmu(args) -> int:
 
 def cmd_bench_fmu(args) -> int:
     from .fmu import bench
-    from .pipeline import generated_folder, prepare
 
     if not 1 <= args.repeat <= 1000:
         raise SpecError(f"--repeat must be in 1..1000 (got {args.repeat})")
     spec, opts = _fmu_request(args, None)
-    r = bench(generated_folder(spec), prepare(spec), opts, repeat=args.repeat)
-    print(f"{spec.name}, {opts.integrator} at dt = {opts.dt:g} s, {r['steps']} steps, doStep every "
+    r = bench(*_fmu_model(spec), opts, repeat=args.repeat)
+    name = spec.system.name if hasattr(spec, "system") else spec.name
+    print(f"{name}, {opts.integrator} at dt = {opts.dt:g} s, {r['steps']} steps, doStep every "
           f"{opts.interval:g} s ({r['communication_steps']} calls, every output read after each), "
           f"median of {args.repeat} runs:")
     print(f"  FMU doStep loop   {r['fmu'] * 1e3:8.3f} ms  (min {r['fmu_min'] * 1e3:.3f}, max {r['fmu_max'] * 1e3:.3f})")
@@ -452,8 +466,15 @@ def cmd_sweep(args) -> int:
     from .sweep import check_partial, make_plan, partial_path, plot, prepare_plan, read_table, run_sweep, \
         settings_of
 
-    spec, scene = resolve(args)
+    spec, scene = resolve(args, systems=True)
     o = _run_options(args, spec, scene)
+    if spec is None:  # a system scene: its model is built first (its manifest names what varies)
+        from .sweep import system_target
+
+        try:
+            spec = system_target(scene.system)
+        except SpecError as exc:
+            raise SpecError(f"{scene.path}: {exc}") from None
     keep_interval = scene is not None or args.interval is not None
     at = []
     for item in (args.at or "").split(",") if args.at else []:

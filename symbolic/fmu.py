@@ -4,7 +4,9 @@ CMake from the generated kernels, the C runtime and runtime_c/fmi3 (no Python at
 Variables (value references fixed here and passed to the C wrapper in flexsym_fmu_config.h):
 time; the beam parameters and, unless the drive is an input, the manoeuvre parameters
 (tunable); with input="drive" the inputs theta_dot, theta_ddot; the outputs and the
-coordinates, named as the columns of `flexsym run`'s CSV.
+coordinates, named as the columns of `flexsym run`'s CSV. A system (symbolic/sysgen.py): its
+parameters p and drive parameters, its outputs (with the violation column when it has
+constraints) and coordinates; ali3p and genalpha3 too when it has constraints.
 """
 from __future__ import annotations
 
@@ -25,6 +27,7 @@ PLATFORM = "x86_64-linux"
 INPUT_MODES = ("none", "drive")
 METHODS = {"rk4": "FSR_RK4", "genalpha": "FSR_GENALPHA", "newmark": "FSR_NEWMARK",
            "dopri5": "FSR_DOPRI5", "radau5": "FSR_RADAU5"}
+CONSTRAINED = {"ali3p": "FSR_ALI3P", "genalpha3": "FSR_GENALPHA3"}  # systems only
 DRIVE_INPUTS = (("theta_dot", "rad/s", "guided angular rate; held with its slope theta_ddot over a "
                  "communication step"),
                 ("theta_ddot", "rad/s2", "guided angular acceleration, held over a communication step"))
@@ -43,16 +46,21 @@ class FmuOptions:
 
 
 def check_request(opts: FmuOptions, out: Path | None, spec) -> None:
-    """Refuse what the FMU cannot do, before anything is generated, built or written."""
+    """Refuse what the FMU cannot do, before anything is generated, built or written
+    (spec None: a system)."""
     from .maneuver import maneuver_of
 
     if opts.input not in INPUT_MODES:
         raise SpecError(f"--input '{opts.input}': expected one of {', '.join(INPUT_MODES)}")
     if out is not None:
         _check_out(out)
-    if opts.integrator not in METHODS:
-        raise SpecError(f"--integrator {opts.integrator}: an FMU offers {', '.join(METHODS)} (not yet the "
-                        "constrained integrators)")
+    if spec is None and opts.input != "none":
+        raise SpecError(f"--input {opts.input}: a system scene's FMU has no inputs yet (its drivers "
+                        "run as the scene says)")
+    offered = METHODS | (CONSTRAINED if spec is None else {})
+    if opts.integrator not in offered:
+        raise SpecError(f"--integrator {opts.integrator}: an FMU offers {', '.join(offered)}"
+                        + ("" if spec is None else " (ali3p, genalpha3: system scenes only)"))
     if opts.integrator == "dopri5" and opts.tol != 0:
         raise SpecError("--integrator dopri5 adapts its steps; the FMU takes fixed steps of dt: "
                         "use --tol 0 (dopri5 at fixed steps) or another integrator")
@@ -89,8 +97,8 @@ def _num(x: float) -> str:
 def _layout(manifest: dict) -> dict:
     """Value references: time 0, then each group in order (manoeuvre parameters and the drive
     inputs keep their numbers whether or not the FMU declares them)."""
-    np_, nmp = len(manifest["params"]), len(manifest["maneuver"]["params"])
-    ny, nq = len(manifest["outputs"]), len(manifest["coordinates"])
+    np_, nmp = len(manifest["params"]), len(_drive_params(manifest))
+    ny, nq = len(_outputs(manifest)), len(manifest["coordinates"])
     vr = {"TIME": 0, "P": 1, "MP": 1 + np_, "IN": 1 + np_ + nmp, "Y": 3 + np_ + nmp}
     vr["Q"] = vr["Y"] + ny
     return {"vr": vr, "np": np_, "nmp": nmp, "ny": ny, "nq": nq}
@@ -98,8 +106,22 @@ def _layout(manifest: dict) -> dict:
 
 def _starts(manifest: dict, opts: FmuOptions) -> tuple[list[float], list[float]]:
     p = [opts.params.get(x["name"], x["default"]) for x in manifest["params"]]
-    mp = [opts.params.get(x["name"], x["default"]) for x in manifest["maneuver"]["params"]]
+    mp = [opts.params.get(x["name"], x["default"]) for x in _drive_params(manifest)]
     return p, mp
+
+
+def _system(manifest: dict) -> bool:
+    return manifest.get("kind") == "system"
+
+
+def _drive_params(manifest: dict) -> list:
+    return manifest["drive_params"] if _system(manifest) else manifest["maneuver"]["params"]
+
+
+def _outputs(manifest: dict) -> list[str]:
+    """The row's columns before the coordinates: outputs, and violation when a system has
+    constraints (runtime.h)."""
+    return list(manifest["outputs"]) + (["violation"] if manifest.get("constraints") else [])
 
 
 def token(manifest: dict, opts: FmuOptions) -> str:
@@ -113,7 +135,7 @@ def config_header(manifest: dict, opts: FmuOptions) -> str:
     lines = ["/* written by flexsym export-fmu (symbolic/fmu.py); read by runtime_c/fmi3 */",
              f'#define FSU_TOKEN "{token(manifest, opts)}"',
              f"#define FSU_DRIVE_INPUT {int(opts.input == 'drive')}",
-             f"#define FSU_METHOD {METHODS[opts.integrator]}",
+             f"#define FSU_METHOD {(METHODS | CONSTRAINED)[opts.integrator]}",
              f"#define FSU_DT {_num(opts.dt)}",
              f"#define FSU_STEP {_num(opts.step or 0.0)}",
              f"#define FSU_TOL {_num(opts.tol or 0.0)}",
@@ -142,23 +164,29 @@ def model_description(manifest: dict, opts: FmuOptions) -> str:
         var.append(f"    <Float64 {a} description={quoteattr(description)}/>")
 
     f64("time", vr["TIME"], "independent", "continuous", "simulation time [s]")
+    system = _system(manifest)
     for i, (x, v) in enumerate(zip(manifest["params"], p)):
-        f64(x["name"], vr["P"] + i, "parameter", "tunable", f"beam parameter [{x['unit']}]", v, "exact")
+        what = "beam parameter" + (f" [{x['unit']}]" if "unit" in x else " (SI units)")
+        f64(x["name"], vr["P"] + i, "parameter", "tunable", what, v, "exact")
     if not drive:
-        for i, (x, v) in enumerate(zip(manifest["maneuver"]["params"], mp)):
+        of = "a guided joint's manoeuvre" if system else manifest["maneuver"]["name"]
+        for i, (x, v) in enumerate(zip(_drive_params(manifest), mp)):
             f64(x["name"], vr["MP"] + i, "parameter", "tunable",
-                f"manoeuvre parameter [{x['unit']}] of {manifest['maneuver']['name']}", v, "exact")
+                f"manoeuvre parameter [{x['unit']}] of {of}", v, "exact")
     else:
         for i, (name, unit, what) in enumerate(DRIVE_INPUTS):
             f64(name, vr["IN"] + i, "input", "continuous", f"{what} [{unit}]", 0.0)
-    outputs = [(name, vr["Y"] + i, "output quantity") for i, name in enumerate(manifest["outputs"])]
-    outputs += [(c["name"], vr["Q"] + i, f"{c['group']} coordinate: {c['mode']}")
+    quantities = manifest["outputs"] if system else {}
+    outputs = [(name, vr["Y"] + i, quantities.get(name, "output quantity") if name != "violation" else
+                "max |Phi| / length scale (constraint violation)") for i, name in enumerate(_outputs(manifest))]
+    outputs += [(c["name"], vr["Q"] + i, f"{c['group']} coordinate: {c.get('mode', c.get('body', ''))}")
                 for i, c in enumerate(manifest["coordinates"])]
     for name, ref, what in outputs:
         f64(name, ref, "output", "continuous", what)
     structure = [f"    <Output valueReference=\"{ref}\"/>" for _, ref, _ in outputs]
     structure += [f"    <InitialUnknown valueReference=\"{ref}\"/>" for _, ref, _ in outputs]
-    what = "theta_dot, theta_ddot from the importer" if drive else f"manoeuvre {manifest['maneuver']['name']}"
+    what = ("theta_dot, theta_ddot from the importer" if drive else "drivers as in the scene" if system
+            else f"manoeuvre {manifest['maneuver']['name']}")
     desc = f"{manifest.get('description', spec['name'])}; {opts.integrator} at dt = {opts.dt:g} s; {what}"
     return "\n".join([
         '<?xml version="1.0" encoding="UTF-8"?>',

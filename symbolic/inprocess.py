@@ -127,9 +127,13 @@ class InProcessModel:
         self.manifest = read_manifest(gen_dir)
         self.outputs = list(self.manifest["outputs"])
         self.coordinates = [c["name"] for c in self.manifest["coordinates"]]
-        self.columns = self.outputs + self.coordinates
+        # a system with constraints has a violation column in its rows (runtime.h), summarized too
+        violation = ["violation"] if self.manifest.get("constraints") else []
+        self.columns = self.outputs + violation + self.coordinates
         self.params = {p["name"]: p["default"] for p in self.manifest["params"]}
-        self.maneuver_params = {p["name"]: p["default"] for p in self.manifest["maneuver"]["params"]}
+        drive = (self.manifest["drive_params"] if self.manifest.get("kind") == "system"
+                 else self.manifest["maneuver"]["params"])
+        self.maneuver_params = {p["name"]: p["default"] for p in drive}
         self.lib = ctypes.CDLL(str(built.library))
         fn = self.lib.fsr_batch
         fn.restype = ctypes.c_int
@@ -142,8 +146,9 @@ class InProcessModel:
 
     @property
     def run_time_names(self) -> list[str]:
-        """The names batch() varies per run: beam and manoeuvre parameters, and the initial
-        state q0_<coordinate>, qd0_<coordinate> (coordinates not named start at rest)."""
+        """The names batch() varies per run: beam and manoeuvre parameters (a system's p and
+        drive parameters), and the initial state q0_<coordinate>, qd0_<coordinate> (coordinates
+        not named start where the model starts them: a system's joint initial values, else rest)."""
         return (list(self.params) + list(self.maneuver_params) + [f"q0_{c}" for c in self.coordinates]
                 + [f"qd0_{c}" for c in self.coordinates])
 
@@ -247,3 +252,11 @@ def load(spec) -> InProcessModel:
 
     folder = generated_folder(spec)
     return InProcessModel(build(folder), folder, spec)
+
+
+def load_system(system) -> InProcessModel:
+    """Generate and build a system (symbolic/system.py) when needed, and load its library;
+    batch() then takes its p and drive parameter names (e.g. E, or BEAM_E with several beams)."""
+    from .sysgen import prepare_system, system_folder
+
+    return InProcessModel(prepare_system(system), system_folder(system))

@@ -8,7 +8,9 @@ runs are the Cartesian product of all --vary, in the order given (the last varie
 With --samples N every --vary is a range NAME=LO:HI sampled uniformly (random) or by Latin
 hypercube, reproducibly from --seed. NAME is a run-time parameter: beam (rho, E, A, I, L),
 manoeuvre (ws, ts for the spin-up), an initial value (q0_<coordinate>, qd0_<coordinate>) or
-a solver option t_end, dt, step (radau5); mode sets are structural (one model each).
+a solver option t_end, dt, step (radau5); mode sets are structural (one model each). A system
+scene (SystemTarget): its p and drive parameter names (E or BEAM_E, ws or DRIVER_ws), read
+from its built model, and a violation column when it has constraints.
 
 Table (CSV, one row per run, in run order): run, the varied inputs, status (ok | diverged |
 failed), valid (ok and |v| <= 0.1 L for modal models), message, then per output quantity
@@ -32,14 +34,14 @@ import math
 import os
 import re
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from .errors import FlexsymError, SpecError, ToolchainError
 from .progress import Progress
-from .options import API, RunOptions, Where, check_params, validate
+from .options import API, BY_NAME, Option, RunOptions, Where, check_params, validate
 
 SAMPLINGS = ("random", "lhs")
 MAX_RUNS = 10_000_000
@@ -141,10 +143,47 @@ def _label(t: float) -> str:
     return f"{t:g}".replace("-", "m")
 
 
+@dataclass(frozen=True)
+class SystemTarget:
+    """A system scene's model as a sweep target: what a sweep uses of a one-beam VariantSpec
+    (name, outputs, coordinates), with the run-time names read from the built model."""
+    system: object  # system.System
+    name: str
+    outputs: tuple  # the scene's columns, then violation when the system has constraints
+    coordinates: tuple
+    params: tuple  # p (beam parameters, e.g. E or BEAM_E) and drive parameters (e.g. ws)
+    fingerprint: str
+    maneuver = None
+
+
+def system_target(system) -> SystemTarget:
+    """Build (or find) and load the system's model here; its manifest names what can vary."""
+    from .sysgen import fingerprint
+
+    key = fingerprint(system)
+    with _models_lock:
+        if key not in _models:
+            from .inprocess import load_system
+
+            _models[key] = load_system(system)
+        m = _models[key]
+    outputs = tuple(c for c in m.columns if c not in m.coordinates)
+    return SystemTarget(system, system.name, outputs, tuple(m.coordinates),
+                        tuple(m.params) + tuple(m.maneuver_params), key)
+
+
+def _fingerprint(spec) -> str:
+    from .generate import fingerprint
+
+    return spec.fingerprint if isinstance(spec, SystemTarget) else fingerprint(spec)
+
+
 def sweepable(spec) -> list[str]:
     from .energy import BEAM_PARAMS
     from .maneuver import maneuver_of
 
+    if isinstance(spec, SystemTarget):
+        return list(spec.params) + initial_state_names(spec)
     man = [] if spec.maneuver.startswith("expression:") else [p.name for p in maneuver_of(spec.maneuver).params]
     return [p.name for p in BEAM_PARAMS] + man + initial_state_names(spec)
 
@@ -178,6 +217,11 @@ def _check_values(spec, v: Vary, initial, options: list[str], where: Where) -> N
         return  # initial values: any finite number (parse_vary)
     for value in (v.values if v.values is not None else (v.low, v.high)):
         try:
+            if isinstance(spec, SystemTarget):  # BEAM_E, crank_ws: the rule of E (> 0), ws
+                base = v.name.rsplit("_", 1)[-1]
+                rule = BY_NAME.get(base) or Option(v.name, float, None, "", low=0.0, low_open=True)
+                replace(rule, name=v.name).convert(value, API)
+                continue
             check_params({v.name: value}, where, spec.maneuver)
         except SpecError as exc:
             raise _vary_error(v.name, value, exc) from None
@@ -277,15 +321,13 @@ _models_lock = threading.Lock()
 
 def _model(spec):
     """The worker's loaded model for spec (built here if needed), once per process."""
-    from .generate import fingerprint
-
-    key = fingerprint(spec)
+    key = _fingerprint(spec)
     with _models_lock:
         if key not in _models:
-            from .inprocess import load
+            from .inprocess import load, load_system
 
             _restore_malloc_thresholds()
-            _models[key] = load(spec)
+            _models[key] = load_system(spec.system) if isinstance(spec, SystemTarget) else load(spec)
         return _models[key]
 
 
@@ -507,10 +549,8 @@ def read_table(path) -> dict[str, np.ndarray]:
 
 def prepare_plan(plan: SweepPlan) -> SweepPlan:
     """Build (or find) and load the model; note its fingerprint."""
-    from .generate import fingerprint
-
     _model(plan.spec)
-    plan.fingerprint = fingerprint(plan.spec)
+    plan.fingerprint = _fingerprint(plan.spec)
     return plan
 
 

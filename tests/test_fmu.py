@@ -227,7 +227,7 @@ def test_tunable_start_values_match_the_run(exported, tmp_path):
     (["export-fmu", "m3", "--out", "{tmp}/missing/x.fmu"], "does not exist"),
     (["export-fmu", "m3", "--out", "{tmp}/x.zip"], "ends in .fmu"),
     (["export-fmu", "m3", "--integrator", "dopri5", "--out", "{tmp}/x.fmu"], "adapts its steps"),
-    (["export-fmu", "m3", "--integrator", "ali3p", "--out", "{tmp}/x.fmu"], "not yet the constrained"),
+    (["export-fmu", "m3", "--integrator", "ali3p", "--out", "{tmp}/x.fmu"], "system scenes only"),
     (["export-fmu", "m3", "--integrator", "radau5", "--step", "0.2", "--out", "{tmp}/x.fmu"], "--step"),
     (["export-fmu", "m3", "--integrator", "rk4", "--input", "drive", "--out", "{tmp}/x.fmu"],
      "implicit integrator"),

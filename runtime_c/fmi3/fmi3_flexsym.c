@@ -14,11 +14,12 @@
 #include <string.h>
 
 #include "fmi3.h"
-#include "flexsym/model.h"
 #include "flexsym/runtime.h"
+#include "flexsym/system.h"
 #include "flexsym_fmu_config.h"
 
-/* GetFloat64 reads outputs and coordinates as one block of the row */
+/* GetFloat64 reads outputs (with a system's violation column, FSU_NY counts it) and
+ * coordinates as one block of the row */
 typedef char fsu_vr_layout_check[FSU_VR_Q == FSU_VR_Y + FSU_NY ? 1 : -1];
 
 /* Without a stop time the step grid runs to this horizon [s]. */
@@ -31,7 +32,7 @@ typedef struct {
     fmi3LogMessageCallback log;
     char name[128];
     fsu_state state;
-    const fsm_model_info* m;
+    const fsm_system* m;  /* the model as a struct (a one-beam model through model_adapter.c) */
     double p[FSU_NP > 0 ? FSU_NP : 1], mp[FSU_NMP > 0 ? FSU_NMP : 1], drive[2];
     double t_end;
     fsr_options o;
@@ -105,7 +106,8 @@ fmi3Instance fmi3InstantiateCoSimulation(
     probe.env = instanceEnvironment;
     probe.log = logMessage;
     snprintf(probe.name, sizeof probe.name, "%s", instanceName ? instanceName : "?");
-    if (fsm_model()->np != FSU_NP || fsm_model()->nmp != FSU_NMP) {
+    const fsm_system* m = fsm_system_model();
+    if (m->np != FSU_NP || m->nmp != FSU_NMP || m->ny + (m->nc > 0) != FSU_NY || m->nq != FSU_NQ) {
         say(&probe, fmi3Error, "%s: the binary does not match its configuration", probe.name);
         return NULL;
     }
@@ -124,7 +126,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
         return NULL;
     }
     *c = probe;
-    c->m = fsm_model();
+    c->m = m;
     defaults(c);
     c->state = INSTANTIATED;
     return c;
@@ -317,7 +319,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
         case V_MP:
             if (!isfinite(v))
                 return say(c, fmi3Error, "%s: parameter %s must be finite (got %g)", c->name,
-                           c->m->maneuver_param_names[i], v);
+                           c->m->drive_param_names[i], v);
             break;
         case V_IN:
             if (!isfinite(v)) return say(c, fmi3Error, "%s: input %s must be finite (got %g)", c->name,

@@ -3,9 +3,12 @@
  * Every run goes through fsr_simulate with options built exactly as the driver builds them
  * (fsr_default_options, the model's default parameters, then the named inputs), so a run
  * here gives the same rows, bit for bit, as `flexsym_<variant>` with the same options.
- * Initial values q0_<coordinate>, qd0_<coordinate> (not a driver option) start a run away
- * from rest; the coordinates not named start at 0.
- * Summaries are taken over the stored rows (the output grid), so a sweep need not move them.
+ * Initial values q0_<coordinate>, qd0_<coordinate> (not a driver option) start a run from
+ * another state; the coordinates not named start where the model starts them (its
+ * initial_state, e.g. a system's joint `initial` values, else rest).
+ * Summaries are taken over the stored rows (the output grid), so a sweep need not move them;
+ * a model with constraints (nc > 0) has its violation column summarized between the outputs
+ * and the coordinates, as in its rows.
  * A run that fails keeps its status, message and the summaries of the rows it computed;
  * the other runs are not affected.
  */
@@ -90,7 +93,7 @@ static double thread_cpu_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Per column j of the rows (1 .. ny + nq): min, max, their times, time of the peak |y|,
+/* Per column j of the rows (1 .. ny [+ violation] + nq): min, max, their times, time of the peak |y|,
  * final value, then the values at the times `at` (linear between the bracketing rows, exact
  * at a row; NaN past the last row). */
 static void summarize(const fsr_result* r, int ncs, int nat, const double* at, double* out)
@@ -155,17 +158,14 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
         snprintf(messages, FSR_BATCH_MESSAGE, "too many inputs or parameters (at most 64)");
         return -1;
     }
-    if (m->nc > 0) {  /* its rows carry a violation column the summaries do not name */
-        snprintf(messages, FSR_BATCH_MESSAGE, "batch runs take models without constraints (%s has %d)",
-                 m->name, m->nc);
-        return -1;
-    }
     for (int i = 0; i < ninputs; ++i)
         if (!find_input(m, names[i], &slots[i])) {
             snprintf(messages, FSR_BATCH_MESSAGE, "unknown input '%s'", names[i]);
             return -1;
         }
-    int ncs = m->ny + m->nq;
+    int named_y0 = 0;
+    for (int i = 0; i < ninputs; ++i) named_y0 |= slots[i].kind == IN_Y0;
+    int ncs = m->ny + (m->nc > 0) + m->nq;  /* the row's columns after t (violation when nc > 0) */
     double* y0 = calloc((size_t)(2 * m->nq), sizeof(double));
     if (!y0) {
         snprintf(messages, FSR_BATCH_MESSAGE, "out of memory");
@@ -179,8 +179,15 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
         fsr_default_options(&o);
         memcpy(p, m->param_defaults, sizeof(double) * (size_t)m->np);
         memcpy(mp, m->drive_param_defaults, sizeof(double) * (size_t)m->nmp);
+        const double* in = inputs + (size_t)i * (size_t)ninputs;
         for (int j = 0; j < ninputs; ++j)
-            set_input(&slots[j], inputs[(size_t)i * (size_t)ninputs + (size_t)j], &o, p, mp, y0);
+            if (slots[j].kind != IN_Y0) set_input(&slots[j], in[j], &o, p, mp, y0);
+        if (named_y0) {  /* the others from the model's initial state (this run's p, mp), or rest */
+            memset(y0, 0, sizeof(double) * (size_t)(2 * m->nq));
+            if (m->initial_state) m->initial_state(p, mp, y0, y0 + m->nq);
+            for (int j = 0; j < ninputs; ++j)
+                if (slots[j].kind == IN_Y0) set_input(&slots[j], in[j], &o, p, mp, y0);
+        }
         o.p = p;
         o.mp = mp;
         fsr_result r;

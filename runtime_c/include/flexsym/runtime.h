@@ -102,16 +102,16 @@ void fsr_stepper_free(fsr_stepper* p);
  * max_steps, blowup, penalty, a beam/manoeuvre parameter name of the model, or q0_<coordinate> /
  * qd0_<coordinate> for the initial state (the others start at rest). Each run goes through
  * fsr_simulate. Outputs, per run r:
- *   summary[r][j][f]  over the stored rows, column j = 0 .. ny + nq - 1 (outputs, then
- *                     coordinates), f = FSR_SUM_* then the values at the nat times `at`
+ *   summary[r][j][f]  over the stored rows, column j = 0 .. ny + v + nq - 1 (outputs, the
+ *                     violation when nc > 0 (v = 1, else 0), then coordinates), f = FSR_SUM_* then the values at the nat times `at`
  *                     (linear between rows, exact at a row, NaN past the last row);
  *   stats[r][FSR_STAT_*]; status[r] (fsr_status); messages + r * FSR_BATCH_MESSAGE;
- *   bound_weights (ny + nq, may be NULL): FSR_STAT_BOUND_PEAK is the peak over the rows of
+ *   bound_weights (ny + v + nq, may be NULL): FSR_STAT_BOUND_PEAK is the peak over the rows of
  *     sum_j w_j |y_j|, FSR_STAT_BOUND_T the first time it exceeded bound_limit * L (NaN: never);
  *   rows (may be NULL): rows[r] receives run r's rows (FSR_STAT_NROWS x FSR_STAT_NCOLS,
  *     as fsr_result.rows), released with fsr_batch_free.
  * Returns the number of runs that did not end FSR_OK, or -1 (message in messages[0]) when an
- * input name is unknown or the model has constraints (nc > 0). */
+ * input name is unknown. */
 #define FSR_BATCH_MESSAGE 512
 enum { FSR_SUM_MIN, FSR_SUM_MAX, FSR_SUM_T_MIN, FSR_SUM_T_MAX, FSR_SUM_T_PEAK, FSR_SUM_FINAL,
        FSR_SUM_FIELDS };
