@@ -212,7 +212,8 @@ def cmd_select(args) -> int:
         raise SpecError(f"--max-bending must be in 1..5 (got {args.max_bending})")
     scene = load_scene(args.scene)
     print(f"{scene.path}: candidates on outputs {', '.join(scene.spec.outputs)}, tolerance {args.tol:g}")
-    results, best = select(scene, args.tol, max_bending=args.max_bending, repeat=args.repeat)
+    results, best = select(scene, args.tol, max_bending=args.max_bending, repeat=args.repeat,
+                           exact=args.exact)
     print()
     print(table(results, best, args.tol))
     if best is None:
@@ -233,6 +234,15 @@ def cmd_bench(args) -> int:
         if v not in known:
             raise SpecError(f"no benchmark cases for variant '{v}' (have: {', '.join(known)})")
     run_bench(Path(args.out), variants=variants, quick=args.quick, repeat=args.repeat)
+    return 0
+
+
+def cmd_exact_study(args) -> int:
+    from .exact_study import run_study
+
+    if not 1 <= args.max_modes <= 12:
+        raise SpecError(f"--max-modes must be 1..12 (got {args.max_modes})")
+    run_study(Path(args.out), quick=args.quick, max_modes=args.max_modes)
     return 0
 
 
@@ -306,6 +316,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="largest allowed error, relative to each output's peak (e.g. 0.01)")
     p.add_argument("--max-bending", type=int, default=4, help="largest bending set tried (default 4)")
     p.add_argument("--repeat", type=int, default=3, help="repeats for the CPU medians (default 3)")
+    p.add_argument("--exact", action="store_true", help="also try the exact-kinematics model "
+                   "(strain exact, bending cf1..cfK)")
     p.set_defaults(func=cmd_select)
 
     p = sub.add_parser("paper", help="reproduce the paper's Fig. 7-9 and Table 1, with an "
@@ -321,6 +333,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-end-to-end", action="store_true",
                    help="skip timing generation + compilation from scratch")
     p.set_defaults(func=cmd_paper)
+
+    p = sub.add_parser("exact-study", help="the exact-kinematics model against ef: error against "
+                       "the number of modes at omega_s = 6, 10, 20 and the abrupt spin-up")
+    p.add_argument("--out", default="exact_study", help="output folder (default: exact_study)")
+    p.add_argument("--max-modes", type=int, default=6, help="largest mode count (default 6)")
+    p.add_argument("--quick", action="store_true", help="8 s of one case, 2 and 3 modes")
+    p.set_defaults(func=cmd_exact_study)
 
     p = sub.add_parser("variants", help="list built-in variants, strain models and mode families")
     p.set_defaults(func=cmd_variants)

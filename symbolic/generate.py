@@ -100,6 +100,8 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
         "left_out": [{"what": w, "why": y} for w, y in spec.left_out] + der.dropped,
         "modal_integrals": integrals,
     }
+    if getattr(der, "exact", False):
+        manifest["exact_kinematics"] = {"quadrature": der.quadrature.describe()}
     return ctx, manifest, "model.c.j2"
 
 

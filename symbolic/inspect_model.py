@@ -66,8 +66,36 @@ class Report:
         self.add(f"  strain model '{s.strain}': {strain.description}")
         self.add(f"  manoeuvre '{d.maneuver.name}': theta(t) = {d.maneuver.theta}")
         self.add(f"  fingerprint {fingerprint(s)}")
+        if getattr(d, "exact", False):
+            return self._render_exact(sections)
         for section in sections:
             getattr(self, f"_{section}")()
+        return "\n".join(self.lines) + "\n"
+
+    def _render_exact(self, sections) -> str:
+        """Exact kinematics: T, M and f are quadratures (casadi), V is sympy."""
+        from .exact import continuous_formulas
+
+        quad = self.der.quadrature.describe()
+        self.add(f"  quadrature: {quad['segments']} segments x {quad['points_per_segment']} Gauss "
+                 f"points = {quad['points']} ({quad['check']})")
+        if "modes" in sections:
+            self._modes()
+        if "energy" in sections:
+            self.title("Exact kinematics (s = x/L; nothing truncated but the modal expansions)")
+            for what, formula in continuous_formulas().items():
+                self.add(f"{what:18s} {formula}")
+            self.add("")
+            self.add("T is evaluated by the quadrature above (positions are cumulative integrals of "
+                     "cos/sin of the fields); M(q) = d2T/dq'2 and f follow from d'Alembert's principle "
+                     "on the same points")
+            for t in self.der.terms:
+                self.add(f"V_{t.name} ({t.formula}) =")
+                self.add(self.fmt(t.V))
+        if "integrals" in sections:
+            self._integrals()
+        if "ops" in sections:
+            self._ops()
         return "\n".join(self.lines) + "\n"
 
     def _modes(self) -> None:
@@ -152,7 +180,7 @@ class Report:
             self.title("Element energies (geometrically exact: nothing truncated)")
             self.add("axial strain eps = (r_x . r_x - 1)/2:")
             self.add(self.fmt(sp.simplify(d.strain)) if not self.latex else sp.latex(d.strain))
-            self.add("curvature kappa = (r_x x r_xx)/|r_x|^3:")
+            self.add("curvature kappa = (r_x x r_xx)/|r_x|^2 (material, per reference length):")
             self.add(self.fmt(d.curvature))
             self.add(f"V^e = int_0^l (EA eps^2/2 + EI kappa^2/2) dx, Gauss-Legendre with {QUAD_POINTS} points")
             self.add("kinetic energy T^e (exact polynomial integration in xi):")

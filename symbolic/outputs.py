@@ -11,6 +11,7 @@ Methods (spec.stress):
   continuum   N = EA u_o', M = EI v_o''                                  (paper eq. 26)
   element:n   the paper's element method (22)-(25) on n beam elements: nodal u, v, theta
               from the modes, S^e = (K_L^e + P K_GL^e) u_e with P = EA (u2 - u1)/l
+  equilibrium (strain model exact) M(x) = -rho A int_x^L (r - r(x)) x a dx, exact.py
 Axial force source (spec.axial_force):
   constitutive  from the axial strain of the model's axial modes (prestress: N(x) assumed by
                 the model); unavailable without axial modes (foreshortening)
@@ -224,10 +225,16 @@ def _element_method(der, n: int, at, want_N: bool) -> sp.Expr:
 def stress_method(spec) -> tuple[str, int]:
     if spec.stress == "continuum":
         return "continuum", 0
+    if spec.stress == "equilibrium":  # exact kinematics only: exact.py sums the inertial loads
+        if getattr(spec, "strain", None) != "exact":
+            raise SpecError(f"variant '{spec.name}': stress method 'equilibrium' needs the exact "
+                            "kinematics (strain model 'exact'); use 'continuum' or 'element:N'")
+        return "equilibrium", 0
     m = re.match(r"^element:(\d+)$", spec.stress)
     if not m or not 1 <= int(m.group(1)) <= 1000:
         raise SpecError(f"variant '{spec.name}': stress method '{spec.stress}' must be "
-                        "'continuum' or 'element:N' with 1 <= N <= 1000 elements")
+                        "'continuum', 'equilibrium' (strain 'exact') or 'element:N' with "
+                        "1 <= N <= 1000 elements")
     return "element", int(m.group(1))
 
 

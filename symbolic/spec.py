@@ -28,7 +28,7 @@ class VariantSpec:
     bending: tuple[ModeRef, ...]
     maneuver: str = "spin_up"
     outputs: tuple[str, ...] = ("v_tip", "u_tip")
-    stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements)
+    stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements), "equilibrium" (exact)
     axial_force: str = "constitutive"  # or "equilibrium" (from the axial inertial forces)
     points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
     left_out: tuple[tuple[str, str], ...] = ()  # (what, why): decided by a scene, in the manifest
@@ -135,6 +135,11 @@ BUILTIN: tuple[VariantSpec, ...] = tuple(with_default_outputs(v) for v in (
     VariantSpec("prestress", "prestress", (), _refs("bending", PAPER_BENDING),
                 description="bending modes with the centrifugal-prestress geometric stiffness "
                             "w^2 int N(x) v'^2 dx, N(x) = rho A (L^2 - x^2)/2 (not in the paper)"),
+    VariantSpec("exact", "exact", (), _refs("bending", ["cf1", "cf2", "cf3", "cf4", "cf5"]),
+                stress="equilibrium", axial_force="equilibrium",
+                description="exact kinematics: section rotation from the clamped-free modes' "
+                            "slopes, inextensible; N and M from equilibrium; only modal "
+                            "truncation (not in the paper)"),
 )) + (FESpec("ef", 16, description="geometrically exact finite elements (planar ANCF cable "
                                   "elements, 16 by default): the reference"),)
 
