@@ -165,13 +165,15 @@ def markdown(rows, refs) -> str:
                       f"peak abs(M_A) {np.max(np.abs(ref['M_A'])):.2f} N m, "
                       f"peak abs(N_A_clamp) {np.max(np.abs(ref['N_A_clamp'])):.1f} N", "",
                   "| model | coordinates | max abs(Δv_tip) [m] | peak abs(v_tip) | peak abs(M_A) "
-                  "| peak abs(N_A) | last mode's share | status |", "|---|---|---|---|---|---|---|---|"]
+                  "| peak abs(N_A) | last mode's share | quadrature check | status |",
+                  "|---|---|---|---|---|---|---|---|---|"]
         for r in rows:
             if r["case"] == case:
                 err = "-" if math.isnan(r["err_v"]) else f"{r['err_v']:.2e}"
                 lines.append(f"| {r['model']} | {r['coordinates']} | {err} | {_pct(r['peak_v'])} | "
                              f"{_pct(r['err_M_A'])} | {_pct(r['err_N_A'])} | "
                              f"{'-' if math.isnan(r['share']) else format(r['share'], '.3f')} | "
+                             f"{'-' if math.isnan(r['quad_err']) else format(r['quad_err'], '.1e')} | "
                              f"{r['status'][:60]} |")
     return "\n".join(lines).lstrip() + "\n"
 
@@ -183,19 +185,24 @@ def plot(rows, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     cases = list(dict.fromkeys(r["case"] for r in rows))
-    fig, axes = plt.subplots(1, len(cases), figsize=(4.5 * len(cases), 4), squeeze=False)
+    families = list(dict.fromkeys(r["family"] for r in rows))
+    colour = {f: plt.get_cmap("tab10")(i) for i, f in enumerate(families)}
+    fig, axes = plt.subplots(1, len(cases), figsize=(4.5 * len(cases), 4.2), squeeze=False)
     for ax, case in zip(axes[0], cases):
-        for family in dict.fromkeys(r["family"] for r in rows):
-            pts = [(r["coordinates"], r["err_v"]) for r in rows
-                   if r["case"] == case and r["family"] == family and not math.isnan(r["err_v"])]
+        for family in families:
+            pts = [(int(r["coordinates"]), float(r["err_v"])) for r in rows
+                   if r["case"] == case and r["family"] == family and not math.isnan(float(r["err_v"]))]
             if pts:
                 x, y = zip(*sorted(pts))
-                ax.semilogy(x, y, marker="o", ls="-" if family.startswith("exact") else "--", label=family)
+                ax.semilogy(x, y, marker="o", color=colour[family],
+                            ls="-" if family.startswith("exact") else "--", label=family)
         ax.set_title(case)
         ax.set_xlabel("elastic coordinates")
         ax.grid(True, which="both", alpha=0.3)
     axes[0][0].set_ylabel("max |v_tip - v_tip(ef)| [m]")
-    axes[0][-1].legend(fontsize=8)
-    fig.tight_layout()
+    handles = [plt.Line2D([], [], color=colour[f], marker="o", ls="-" if f.startswith("exact") else "--",
+                          label=f) for f in families]
+    fig.legend(handles=handles, loc="lower center", ncol=len(families), fontsize=9)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -209,3 +209,14 @@ def test_agrees_with_ef_on_the_spin_up(small, simulate):
     assert np.max(np.abs(r.minus(ref))) < 1e-4
     assert np.max(np.abs(r["M_A"])) == pytest.approx(np.max(np.abs(ref["M_A_clamp"])), rel=1e-4)
     assert np.max(np.abs(r["N_A"])) == pytest.approx(np.max(np.abs(ref["N_A_clamp"])), rel=1e-4)
+
+
+def test_bad_input_is_refused_with_one_line(capsys):
+    from flexsym.cli import main
+    from flexsym.errors import SpecError
+
+    with pytest.raises(SpecError, match="stress method 'equilibrium' needs the exact kinematics"):
+        customize(builtin("m3"), stress="equilibrium")
+    assert main(["exact-study", "--max-modes", "0", "--out", "unused"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--max-modes" in err[0]
