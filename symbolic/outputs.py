@@ -230,6 +230,9 @@ def stress_method(spec) -> tuple[str, int]:
             raise SpecError(f"variant '{spec.name}': stress method 'equilibrium' needs the exact "
                             "kinematics (strain model 'exact'); use 'continuum' or 'element:N'")
         return "equilibrium", 0
+    if getattr(spec, "strain", None) == "exact" and spec.stress.startswith("element"):
+        raise SpecError(f"variant '{spec.name}': the element method reads small-deflection nodal "
+                        "values; the exact kinematics takes 'continuum' or 'equilibrium'")
     m = re.match(r"^element:(\d+)$", spec.stress)
     if not m or not 1 <= int(m.group(1)) <= 1000:
         raise SpecError(f"variant '{spec.name}': stress method '{spec.stress}' must be "

@@ -217,6 +217,8 @@ def test_bad_input_is_refused_with_one_line(capsys):
 
     with pytest.raises(SpecError, match="stress method 'equilibrium' needs the exact kinematics"):
         customize(builtin("m3"), stress="equilibrium")
+    with pytest.raises(SpecError, match="takes 'continuum' or 'equilibrium'"):
+        customize(builtin("exact"), stress="element:8")
     assert main(["exact-study", "--max-modes", "0", "--out", "unused"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--max-modes" in err[0]
