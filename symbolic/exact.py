@@ -257,6 +257,20 @@ class ExactDerivation(Derivation):
         h = 0.5 * ca.dot(qd, ca.mtimes(M, qd)) - T0 + V
         return M, f, ca.vertcat(T, V, h)
 
+    def residual(self, quad: Quadrature, x: dict, V):
+        """r = M q'' - f in one pass: sum_i m_i J_i^T a_i (with a_i the full acceleration,
+        q'' included) + dV/dq. Equal to M q'' - f, without forming M: its Jacobians (the
+        Newton matrices) cost half as much as differentiating M q'' - f."""
+        q, qdd, drive, p = x["q"], x["qdd"], x["drive"], x["p"]
+        k = self.kinematics(quad, x)
+        phidd, epsdd = self._fields(quad, qdd, p)
+        gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
+        rdd_a, _ = self._cumulative(quad, gdd, k["scale"])
+        acc = self._frame_acceleration(k, k["rdd_v"] + rdd_a, drive, self.maneuver.accelerates)
+        F = p[0] * p[2] * p[4] * acc * ca.repmat(ca.DM(quad.weights), 1, 2)
+        Ft = self._cumulative_transpose(quad, F, k["scale"])
+        return ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]]) + ca.gradient(V, q)
+
     def lagrange_equations(self, quad: Quadrature, x: dict, V):
         """M = d2T/dq'2 and f from Lagrange's equations by casadi AD of T (an independent
         route to the same equations, used by the tests)."""
@@ -402,7 +416,7 @@ def build_exact_kernels(der: ExactDerivation) -> list:
     quad = der.quadrature
     V = _potential(der, tr)
     M, f, en = der.equations(quad, x, V)
-    r = ca.mtimes(M, qdd) - f
+    r = der.residual(quad, x, V)
     ys = []
     for name in der.spec.outputs:
         expr = der.outputs[name]

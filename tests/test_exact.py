@@ -82,7 +82,8 @@ def test_c_matches_casadi(small):
 
 
 def test_dalembert_kernels_match_lagrange_by_ad(small):
-    """The kernels' d'Alembert form against Lagrange's equations by casadi AD of T."""
+    """The kernels' d'Alembert form (M, f and the one-pass residual r = M q'' - f) against
+    Lagrange's equations by casadi AD of T."""
     import casadi as ca
 
     _, der, _ = small
@@ -90,13 +91,16 @@ def test_dalembert_kernels_match_lagrange_by_ad(small):
     V = X._potential(der, tr)
     M, f, _ = der.equations(der.quadrature, x, V)
     M2, f2 = der.lagrange_equations(der.quadrature, x, V)
-    fn = ca.Function("both", [x["q"], x["qd"], x["drive"], x["p"]], [M, f, M2, f2])
+    r = der.residual(der.quadrature, x, V)  # what the Newton Jacobians differentiate
+    fn = ca.Function("both", [x["q"], x["qd"], x["qdd"], x["drive"], x["p"]],
+                     [M, f, M2, f2, r, ca.mtimes(M2, x["qdd"]) - f2])
     rng = np.random.default_rng(3)
     for _ in range(3):
-        q, qd, _, w, a = _random_state(rng)
-        Ma, fa, Mb, fb = [np.array(v.full()) for v in fn(q, qd, [w, a], P0)]
+        q, qd, qdd, w, a = _random_state(rng)
+        Ma, fa, Mb, fb, ra, rb = [np.array(v.full()) for v in fn(q, qd, qdd, [w, a], P0)]
         assert np.max(np.abs(Ma - Mb)) <= 1e-12 * np.max(np.abs(Mb))
         assert np.max(np.abs(fa - fb)) <= 1e-12 * np.max(np.abs(fb))
+        assert np.max(np.abs(ra - rb)) <= 1e-12 * np.max(np.abs(rb))
 
 
 def test_kernels_match_independent_quadrature(small):
