@@ -1,8 +1,13 @@
 # Included by every generated variant's CMakeLists.txt (see templates/CMakeLists.txt.j2).
-# flexsym_add_model(NAME sources...) builds, from the generated sources plus this runtime:
+# flexsym_add_model(NAME [SYSTEM] sources...) builds, from the generated sources plus this runtime:
 #   flexsym_NAME      the command-line driver (src/driver.c)
-#   libflexsym_NAME   a shared library exposing the kernels and fsr_simulate (tests, Python)
+#   libflexsym_NAME   a shared library exposing the kernels, fsr_simulate and fsr_batch (tests, Python)
+# SYSTEM: the sources define fsm_system_model() (system.h); without it, a one-beam model is
+# wrapped into that struct by src/model_adapter.c.
 set(FLEXSYM_RUNTIME_DIR "${CMAKE_CURRENT_LIST_DIR}")
+set(FLEXSYM_RUNTIME_SOURCES "${FLEXSYM_RUNTIME_DIR}/src/simulate.c" "${FLEXSYM_RUNTIME_DIR}/src/linalg.c"
+    "${FLEXSYM_RUNTIME_DIR}/src/constrained.c" "${FLEXSYM_RUNTIME_DIR}/src/ali3p.c"
+    "${FLEXSYM_RUNTIME_DIR}/src/genalpha3.c" "${FLEXSYM_RUNTIME_DIR}/src/batch.c")
 
 if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
   set(CMAKE_BUILD_TYPE Release)
@@ -10,9 +15,13 @@ endif()
 
 function(flexsym_add_model name)
   set(objs flexsym_${name}_objects)
-  add_library(${objs} OBJECT ${ARGN}
-              "${FLEXSYM_RUNTIME_DIR}/src/simulate.c"
-              "${FLEXSYM_RUNTIME_DIR}/src/linalg.c")
+  set(sources ${ARGN})
+  if(sources AND "${ARGV1}" STREQUAL "SYSTEM")
+    list(REMOVE_AT sources 0)
+  else()
+    list(APPEND sources "${FLEXSYM_RUNTIME_DIR}/src/model_adapter.c")
+  endif()
+  add_library(${objs} OBJECT ${sources} ${FLEXSYM_RUNTIME_SOURCES})
   set_target_properties(${objs} PROPERTIES POSITION_INDEPENDENT_CODE ON C_STANDARD 99
                         C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
   target_include_directories(${objs} PUBLIC "${FLEXSYM_RUNTIME_DIR}/include"
@@ -30,4 +39,20 @@ function(flexsym_add_model name)
   add_library(flexsym_${name}_shared SHARED $<TARGET_OBJECTS:${objs}>)
   set_target_properties(flexsym_${name}_shared PROPERTIES OUTPUT_NAME flexsym_${name})
   target_link_libraries(flexsym_${name}_shared PRIVATE m)
+endfunction()
+
+# flexsym_add_fmu(ID CONFIG_DIR sources...) builds ID.so, the binary of an FMI 3.0 Co-Simulation
+# FMU (runtime_c/fmi3, symbolic/fmu.py): the model's sources, this runtime and the fmi3 wrapper,
+# compiled with the flags of flexsym_add_model (so its rows equal the driver's bit for bit);
+# only the fmi3* functions are exported.
+function(flexsym_add_fmu id config_dir)
+  add_library(${id} MODULE ${ARGN} ${FLEXSYM_RUNTIME_SOURCES} "${FLEXSYM_RUNTIME_DIR}/src/model_adapter.c"
+              "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
+  set_target_properties(${id} PROPERTIES PREFIX "" C_STANDARD 99 C_STANDARD_REQUIRED ON
+                        C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden)
+  target_include_directories(${id} PRIVATE "${FLEXSYM_RUNTIME_DIR}/include" "${FLEXSYM_RUNTIME_DIR}/fmi3"
+                             "${config_dir}")
+  target_compile_options(${id} PRIVATE -Wall -Wextra -Werror -pedantic
+                         $<$<C_COMPILER_ID:GNU,Clang,AppleClang>:-fno-tree-vectorize>)
+  target_link_libraries(${id} PRIVATE m)
 endfunction()

@@ -5,6 +5,9 @@
     result = api.run(scene)                 # RunResult: result["v_tip"], result.t, result.columns
     result = api.simulate("m3", ws=4.0, t_end=10.0)
     print(api.inspect("m1", sections="energy"))
+    hub = api.load_scene("scenes/hub.toml")  # a system scene ([[body]] entries): SystemScene
+    result = api.run(hub)                   # columns theta_h, omega_h, v_tip, M_A
+    pendulum = api.system({...})            # the same data as a scene, as a dict: a checked System
 """
 from __future__ import annotations
 
@@ -12,11 +15,13 @@ from pathlib import Path
 
 from .errors import SpecError
 from .pipeline import compiled, generated_folder, prepare
-from .run import RunResult, check_options, run_built
+from .options import API, validate
+from .run import RunResult, check_output_path, run_built
 from .scene import Scene, load_scene
 from .spec import builtin
 
-__all__ = ["load_scene", "variant", "generate", "build", "run", "simulate", "inspect", "kernels"]
+__all__ = ["load_scene", "system", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
+           "inprocess", "sweep"]
 
 
 def variant(name_or_spec, **overrides):
@@ -50,26 +55,41 @@ def kernels(target):
     return compiled(_spec_of(target))
 
 
+def system(data, name: str = "system", t_end: float | None = None):
+    """A System from the data of a system scene as a dict ({"body": [...], "joint": [...],
+    "driver": [...], "output": {"columns": {...}}, ...}), or a System built in Python (e.g. by
+    flexsym.systems_library): checked exactly as a scene file is (one line per problem)."""
+    from .system import System
+    from .system_scene import check_system, system_from_dict
+
+    if isinstance(data, System):
+        return check_system(data, 20.0 if t_end is None else t_end)
+    return system_from_dict(data, name, t_end)
+
+
 def run(scene, out=None) -> RunResult:
-    """Run a scene (a Scene or a path to a .toml file); results as numpy arrays."""
-    if not isinstance(scene, Scene):
+    """Run a scene (a Scene, a SystemScene or a path to a .toml file); results as numpy arrays."""
+    if not isinstance(scene, Scene) and not hasattr(scene, "system"):
         scene = load_scene(scene)
-    return run_built(prepare(scene.spec), t_end=scene.t_end, dt=scene.dt,
-                     integrator=scene.integrator, params=scene.params, out_every=scene.out_every,
-                     tol=scene.tol, step=scene.step, out=out if out is not None else scene.output_file)
+    out = out if out is not None else scene.output_file
+    if out is not None:
+        out = check_output_path(out, "out")
+    if hasattr(scene, "system"):  # a mechanism: symbolic/sysgen.py generates and builds it
+        from .sysgen import prepare_system
+
+        return run_built(prepare_system(scene.system), scene.options, out=out)
+    return run_built(prepare(scene.spec), scene.options, out=out)
 
 
-def simulate(target="m3", *, ws=6.0, ts=15.0, t_end=20.0, dt=1e-3, integrator="genalpha",
-             params=None, out=None, **run_options) -> RunResult:
-    """Run a variant on the spin-up (or its own manoeuvre) with run-time parameters."""
+def simulate(target="m3", *, out=None, **options) -> RunResult:
+    """Run a variant on the spin-up (or its own manoeuvre). Options as `flexsym run` and the
+    table in flexsym.options (t_end, dt, integrator, ws, ts, params={...}, tol, step, ...):
+    checked before anything is generated or built; defaults from the table."""
     spec = _spec_of(target)
-    p = {"ws": ws} | ({"ts": ts} if spec.maneuver == "spin_up" else {})
-    if spec.maneuver.startswith("expression:"):
-        p = {}
-    p |= params or {}
-    check_options(t_end=t_end, dt=dt, integrator=integrator, params=p, spec=spec)
-    return run_built(prepare(spec), t_end=t_end, dt=dt, integrator=integrator, params=p, out=out,
-                     **run_options)
+    o = validate(options, API, spec)
+    if out is not None:
+        out = check_output_path(out, "out")
+    return run_built(prepare(spec), o, out=out)
 
 
 def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,ops", latex=False) -> str:
@@ -80,3 +100,42 @@ def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,op
         if s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
     return Report(_spec_of(target), latex=latex).render(chosen)
+
+
+def inprocess(target):
+    """The built model's library loaded in this process (InProcessModel): model.batch(runs, ...)
+    runs many parameter sets per call and returns arrays (see flexsym.inprocess)."""
+    from .inprocess import load
+
+    return load(_spec_of(target))
+
+
+def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), resume=False,
+          workers=None, dask=None, progress=None, on_chunk=None, **run_options) -> dict:
+    """`flexsym sweep` from Python: vary is a list of "NAME=START:STOP:COUNT" / "NAME=a,b,c" /
+    "NAME=LO:HI" strings, or a dict NAME -> list of values or such a string. Runs a scene with its
+    own settings, or a variant on the spin-up with the run options of simulate() (ws, ts,
+    params={...}, t_end, dt, integrator, tol, step, interval, ...; the option table). dask: a
+    scheduler address or a distributed.Client. Writes the table to out and returns it as
+    column -> numpy array (see flexsym.sweep)."""
+    from .sweep import check_partial, make_plan, prepare_plan, read_table, run_sweep, settings_of
+
+    if isinstance(vary, dict):
+        vary = [f"{k}={v}" if isinstance(v, str) else f"{k}={','.join(repr(float(x)) for x in v)}"
+                for k, v in vary.items()]
+    if isinstance(target, Scene) or (isinstance(target, (str, Path)) and str(target).endswith(".toml")):
+        scene = target if isinstance(target, Scene) else load_scene(target)
+        if run_options:
+            raise SpecError(f"{scene.path}: run options do not combine with a scene: set them in the scene")
+        spec, o, keep_interval = scene.spec, scene.options, True
+    else:
+        spec = _spec_of(target)
+        o = validate(run_options, API, spec)
+        keep_interval = run_options.get("interval") is not None or run_options.get("out_every") is not None
+    plan = make_plan(spec, settings_of(o, keep_interval), o.params, list(vary), samples=samples, seed=seed,
+                     sampling=sampling, at=at)
+    out = check_output_path(out, "out")
+    check_partial(out, resume)
+    prepare_plan(plan)
+    run_sweep(plan, out, resume=resume, workers=workers, dask=dask, progress=progress, on_chunk=on_chunk)
+    return read_table(out)

@@ -25,6 +25,7 @@ import numpy as np
 from .build import build
 from .generate import generate_files, write_folder
 from .pipeline import prepare
+from .progress import Progress
 from .run import run_built
 from .spec import builtin
 
@@ -142,7 +143,10 @@ def run_bench(out: Path, variants=None, quick=False, repeat=None, log=print) -> 
     log(f"model reference: ef, {REF_ELEMENTS} elements, dt = {REF_DT:g} s ...")
     mref = model_reference()
     rows, times = [], {}
+    bar = Progress(sum(len(table.get(name, [])) + 1 for name in variants), "bench")
+    log = bar.wrap(log)
     for name in variants:
+        bar.update()
         spec = builtin(name)
         times[spec.name] = build_times(spec)
         log(f"{spec.name}: generation {times[spec.name][0]:.2f} s, compilation {times[spec.name][1]:.2f} s")
@@ -152,8 +156,10 @@ def run_bench(out: Path, variants=None, quick=False, repeat=None, log=print) -> 
         for c in table.get(name, []):
             row = {"variant": spec.name} | run_case(built, c, iref, mref, reps)
             rows.append(row)
+            bar.update()
             log(f"  {label(c):30s} {row['cpu_s'] * 1e3:9.3f} ms  integration {row['err_integration']:.2e} m"
                 f"  reference {row['err_reference']:.2e} m  {'' if row['status'] == 'ok' else row['status']}")
+    bar.close()
     _write_csv(rows, out / "bench.csv")
     (out / "bench.md").write_text(markdown(rows, times), encoding="utf-8")
     plot(rows, out / "work_precision.png")

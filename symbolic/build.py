@@ -20,6 +20,10 @@ from .generate import folder_hash, read_manifest
 from .paths import cache_dir, file_lock, runtime_dir
 
 COMPLETE = ".complete"
+# A checking build (tests/test_sanitizers.py): every generated variant and the runtime under
+# AddressSanitizer and UndefinedBehaviorSanitizer, float-to-integer overflow included; the
+# first error aborts the run.
+SANITIZE_FLAGS = "-fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer -g"
 
 
 @dataclass(frozen=True)
@@ -66,11 +70,12 @@ def _runtime_hash() -> str:
     return h.hexdigest()
 
 
-def build_key(gen_dir: Path, compiler: str) -> str:
+def build_key(gen_dir: Path, compiler: str, flags: str = "") -> str:
     h = hashlib.sha256()
     h.update(folder_hash(gen_dir).encode())
     h.update(_runtime_hash().encode())
     h.update(compiler.encode())
+    h.update(flags.encode())
     return h.hexdigest()[:20]
 
 
@@ -81,8 +86,9 @@ def _run(cmd: list[str], what: str, cwd: Path | None = None) -> None:
         raise ToolchainError(f"{what} failed (exit {proc.returncode}):\n{tail}")
 
 
-def build(gen_dir: Path, jobs: int = 2, root: Path | None = None) -> Built:
-    """Build (or reuse) gen_dir under root (default: the cache's build folder)."""
+def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool = False) -> Built:
+    """Build (or reuse) gen_dir under root (default: the cache's build folder); sanitize: a
+    separate build with SANITIZE_FLAGS."""
     gen_dir = Path(gen_dir).resolve()
     manifest = read_manifest(gen_dir)
     if manifest is None:
@@ -91,22 +97,26 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None) -> Built:
     compiler = find_compiler()
     cmake = find_cmake()
     root = Path(root) if root is not None else cache_dir() / "build"
-    final = root / f"{name}-{build_key(gen_dir, compiler)}"
+    flags = SANITIZE_FLAGS if sanitize else ""
+    final = root / f"{name}-{'asan-' if sanitize else ''}{build_key(gen_dir, compiler, flags)}"
     built = Built(name, final, final / f"flexsym_{name}", final / f"libflexsym_{name}.so")
     if (final / COMPLETE).exists():
         return built
     with file_lock(root / f".{final.name}.lock"):
         if not (final / COMPLETE).exists():  # not built meanwhile by another process
-            _build_into(gen_dir, final, name, cmake, compiler, jobs)
+            _build_into(gen_dir, final, name, cmake, compiler, jobs, flags)
     return built
 
 
-def _build_into(gen_dir: Path, final: Path, name: str, cmake: str, compiler: str, jobs: int) -> None:
+def _build_into(gen_dir: Path, final: Path, name: str, cmake: str, compiler: str, jobs: int,
+                flags: str = "") -> None:
     root = final.parent
     tmp = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
     try:
         _run([cmake, "-S", str(gen_dir), "-B", str(tmp), f"-DFLEXSYM_RUNTIME_DIR={runtime_dir()}",
-              f"-DCMAKE_C_COMPILER={compiler}", "-DCMAKE_BUILD_TYPE=Release"],
+              f"-DCMAKE_C_COMPILER={compiler}", "-DCMAKE_BUILD_TYPE=Release"]
+             + ([f"-DCMAKE_C_FLAGS={flags}", f"-DCMAKE_EXE_LINKER_FLAGS={flags}",
+                 f"-DCMAKE_SHARED_LINKER_FLAGS={flags}"] if flags else []),
              f"configuring variant '{name}'")
         _run([cmake, "--build", str(tmp), "-j", str(jobs)], f"compiling variant '{name}'")
         (tmp / COMPLETE).write_text(str(gen_dir) + "\n")

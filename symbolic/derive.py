@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from .energy import BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, StrainModel, alpha, build_fields, kinetic_density, w
-from .integrals import IntegralTable
+from .integrals import BodyIntegralTable, IntegralTable
 from .maneuver import Maneuver, maneuver_of
-from .modes import Mode, mode
+from .modes import Mode
 from .outputs import output_expression
 from .spec import VariantSpec
 
@@ -98,7 +98,7 @@ def derive(spec: VariantSpec) -> Derivation:
     spec.validate()
     strain = STRAIN_MODELS[spec.strain]
     maneuver = maneuver_of(spec.maneuver)
-    modes = {r.coordinate: mode(r) for r in spec.modes}
+    modes = {r.coordinate: spec.mode(r) for r in spec.modes}
     groups = {r.coordinate: r.axis for r in spec.modes}
     names = list(modes)
     q = sp.Matrix([sp.Symbol(n, real=True) for n in names])
@@ -106,7 +106,7 @@ def derive(spec: VariantSpec) -> Derivation:
     qdd = sp.Matrix([sp.Symbol(n + "_dd", real=True) for n in names])
     qmap, qdmap, qddmap = dict(zip(names, q)), dict(zip(names, qd)), dict(zip(names, qdd))
 
-    table = IntegralTable(modes)
+    table = IntegralTable(modes) if spec.body is None else BodyIntegralTable(spec.body, modes)
     axial = [modes[r.coordinate] for r in spec.axial]
     bending = [modes[r.coordinate] for r in spec.bending]
     fields = build_fields(axial, bending, qmap, qdmap, table, strain.foreshortening, qddmap)

@@ -46,6 +46,10 @@ class Fields:
     v_dot: sp.Expr
     v_s: sp.Expr
     v_ss: sp.Expr
+    v_dot_s: sp.Expr = sp.Integer(0)  # d/ds of the transverse velocity (rotary inertia)
+    v_ddot: sp.Expr = sp.Integer(0)  # transverse acceleration (moment from equilibrium)
+    v_ddot_s: sp.Expr = sp.Integer(0)
+    weights: dict = None  # section distributions mu, ea, ei, nhat, rot (IntegralTable.weight)
 
 
 def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
@@ -69,12 +73,55 @@ def build_fields(axial: list[Mode], bending: list[Mode], q: dict, qd: dict,
                 u += -h * q[mi.name] * q[mj.name] / (2 * L)
                 u_dot += -h * q[mi.name] * qd[mj.name] / L
                 u_ddot += -h * (qd[mi.name] * qd[mj.name] + q[mi.name] * qdd[mj.name]) / L
-    return Fields(u, u_dot, u_ddot, u_stretch, u_s, v, v_dot, v_s, v_ss)
+    v_dot_s = sum((mv(m.name, 1) * qd[m.name] for m in bending), sp.Integer(0))
+    weights = {k: table.weight(k) for k in ("mu", "ea", "ei", "nhat", "rot")}
+    v_ddot = sum((mv(m.name) * qdd[m.name] for m in bending), sp.Integer(0))
+    v_ddot_s = sum((mv(m.name, 1) * qdd[m.name] for m in bending), sp.Integer(0))
+    return Fields(u, u_dot, u_ddot, u_stretch, u_s, v, v_dot, v_s, v_ss, v_dot_s, v_ddot, v_ddot_s,
+                  weights)
 
 
-def kinetic_density(f: Fields) -> sp.Expr:
-    """T per unit s: 1/2 rho A L [(u' - w v)^2 + (v' + w (x + u))^2], velocities in the moving frame."""
-    return rho * A * L / 2 * ((f.u_dot - w * f.v)**2 + (f.v_dot + w * (L * s + f.u))**2)
+@dataclass(frozen=True)
+class FrameMotion:
+    """The floating frame's motion, in the frame's own components: rate omega = phi' and the
+    velocity (Vx, Vy) = A(phi)^T R' of its origin. The guided hub of a one-beam variant is
+    FrameMotion(w): a frame turning about a fixed point."""
+
+    omega: sp.Expr
+    Vx: sp.Expr = sp.Integer(0)
+    Vy: sp.Expr = sp.Integer(0)
+
+
+def kinetic_density(f: Fields, frame: FrameMotion = FrameMotion(w)) -> sp.Expr:
+    """T per unit s: 1/2 rho A L mu [(Vx + u' - omega v)^2 + (Vy + v' + omega (x + u))^2],
+    velocities in the moving frame (mu = 1 for the uniform beam), plus 1/2 J (omega + v'_x)^2
+    of point rotary inertias."""
+    mu, rot, om = f.weights["mu"], f.weights["rot"], frame.omega
+    T = rho * A * L / 2 * mu * ((frame.Vx + f.u_dot - om * f.v)**2
+                                + (frame.Vy + f.v_dot + om * (L * s + f.u))**2)
+    if rot != 0:
+        T += rho * A * L**3 / 2 * rot * (om + f.v_dot_s / L)**2
+    return T
+
+
+def gravity_density(f: Fields, gx: sp.Expr, gy: sp.Expr) -> sp.Expr:
+    """-rho A L mu g.r per unit s for the part of r in the frame, (x + u, v); (gx, gy) = A^T g
+    (the frame origin's part, -m g.R, is added by the caller)."""
+    return -rho * A * L * f.weights["mu"] * (gx * (L * s + f.u) + gy * f.v)
+
+
+def momentum_density(f: Fields, frame: FrameMotion, Rx: sp.Expr, Ry: sp.Expr) -> sp.Expr:
+    """Angular momentum about the ground origin per unit s, in frame components (a rotation
+    keeps the planar cross product): (R + r) x (V + r' + omega k x r), R = (Rx, Ry) = A^T R,
+    plus the point rotary inertias' J (omega + v'_x)."""
+    om = frame.omega
+    px, py = Rx + L * s + f.u, Ry + f.v
+    vx, vy = frame.Vx + f.u_dot - om * f.v, frame.Vy + f.v_dot + om * (L * s + f.u)
+    h = rho * A * L * f.weights["mu"] * (px * vy - py * vx)
+    rot = f.weights["rot"]
+    if rot != 0:
+        h += rho * A * L**3 * rot * (om + f.v_dot_s / L)
+    return h
 
 
 @dataclass(frozen=True)
@@ -86,20 +133,22 @@ class EnergyTerm:
 
 ENERGY_TERMS: dict[str, EnergyTerm] = {t.name: t for t in (
     EnergyTerm("axial", "EA/2 int (u_x)^2 dx",
-               lambda f: E * A / (2 * L) * f.u_stretch_s**2),
+               lambda f: E * A / (2 * L) * f.weights["ea"] * f.u_stretch_s**2),
     EnergyTerm("bending", "EI/2 int (v_xx)^2 dx",
-               lambda f: E * I / (2 * L**3) * f.v_ss**2),
+               lambda f: E * I / (2 * L**3) * f.weights["ei"] * f.v_ss**2),
     EnergyTerm("cubic", "EA/2 int u_x (v_x)^2 dx",
-               lambda f: E * A / (2 * L**2) * f.u_stretch_s * f.v_s**2),
+               lambda f: E * A / (2 * L**2) * f.weights["ea"] * f.u_stretch_s * f.v_s**2),
     EnergyTerm("quartic", "EA/8 int (v_x)^4 dx",
-               lambda f: E * A / (8 * L**3) * f.v_s**4),
-    EnergyTerm("prestress", "1/2 int N(x) (v_x)^2 dx, N = rho A w^2 (L^2 - x^2)/2",
-               lambda f: rho * A * w**2 * L / 4 * (1 - s**2) * f.v_s**2),
-    # exact kinematics (exact.py): the same quadratic forms, read as eps = u_x, dphi/dx = v_xx
+               lambda f: E * A / (8 * L**3) * f.weights["ea"] * f.v_s**4),
+    EnergyTerm("prestress", "1/2 int N(x) (v_x)^2 dx, N = rho A w^2 (L^2 - x^2)/2 (a body: "
+               "N = w^2 [int_x^L rho A x dx + m_tip L])",
+               lambda f: rho * A * w**2 * L / 4 * f.weights["nhat"] * f.v_s**2),
+    # exact kinematics (exact.py, uniform beams only): the same quadratic forms, read as
+    # eps = u_x, dphi/dx = v_xx
     EnergyTerm("stretch", "EA/2 int eps^2 dx, eps = sum eta_j Phi_j'/L (exact)",
-               lambda f: E * A / (2 * L) * f.u_stretch_s**2),
+               lambda f: E * A / (2 * L) * f.weights["ea"] * f.u_stretch_s**2),
     EnergyTerm("curvature", "EI/2 int (dphi/dx)^2 dx, phi = sum xi_k Phi_k'/L (exact)",
-               lambda f: E * I / (2 * L**3) * f.v_ss**2),
+               lambda f: E * I / (2 * L**3) * f.weights["ei"] * f.v_ss**2),
 )}
 
 

@@ -12,9 +12,9 @@ class SpecError(FlexsymError):
 
 
 class ToolchainError(FlexsymError):
-    """Missing compiler/cmake, or a failed build."""
+    """Missing compiler/cmake, or a failed build: the machine, not the input (exit 5)."""
 
-    exit_code = 2
+    exit_code = 5
 
 
 class SimulationError(FlexsymError):

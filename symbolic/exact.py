@@ -157,7 +157,7 @@ class ExactDerivation(Derivation):
     def _exact_output(self, name: str) -> bool:
         """Outputs from the exact kinematics; the others (M = EI dphi/dx, N = EA eps) are sympy."""
         return (name in ("v_tip", "u_tip") or (name[0] == "N" and self.spec.axial_force == "equilibrium")
-                or (name[0] == "M" and self.spec.stress == "equilibrium"))
+                or (name[0] == "M" and self.spec.moment == "equilibrium"))
 
     # ----- casadi ------------------------------------------------------------------------
     def _fields(self, quad: Quadrature, vec, p, at=None):

@@ -44,6 +44,7 @@ class FESpec:
     left_out: tuple[tuple[str, str], ...] = ()
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
+    body: object = None  # fedata.BeamBody: per-element sections and point masses
     kind = "fe"
 
     @property
@@ -56,7 +57,8 @@ class FESpec:
         return {"name": self.name, "kind": "fe", "formulation": "ancf_cable",
                 "elements": self.elements, "quadrature": QUAD_POINTS, "maneuver": self.maneuver,
                 "outputs": list(self.outputs), "points": [list(p) for p in self.points],
-                "left_out": [list(x) for x in self.left_out]}
+                "left_out": [list(x) for x in self.left_out]} | (
+                    {"body": self.body.to_dict()} if self.body is not None else {})
 
     def validate(self) -> "FESpec":
         from .spec import NAME_RE
@@ -66,9 +68,22 @@ class FESpec:
         if not isinstance(self.elements, int) or not 1 <= self.elements <= 512:
             raise SpecError(f"variant '{self.name}': elements must be an integer in 1..512 "
                             f"(got {self.elements!r})")
+        if self.body is not None:
+            if self.body.elements != self.elements:
+                raise SpecError(f"variant '{self.name}': {self.elements} elements but its body has "
+                                f"{self.body.elements}")
+            if any(m.rotary for m in self.body.masses):
+                raise SpecError(f"variant '{self.name}': point rotary inertia is not modelled in "
+                                "'ef' (its nodes carry slopes, not rotations); modal variants take it")
         maneuver_of(self.maneuver)
         check_output_names(self, extra=CLAMP_OUTPUTS)
         return self
+
+    def node_fractions(self) -> list:
+        """Node positions as exact fractions of L (uniform mesh) or the body's nodes."""
+        if self.body is None:
+            return [sp.Rational(k, self.elements) for k in range(self.elements + 1)]
+        return [sp.Rational(repr(float(x))) for x in self.body.s_nodes]
 
 
 def c_prefix(kernel_name: str) -> str:
@@ -119,6 +134,16 @@ def derive_element(spec: FESpec) -> ElementDerivation:
     f_in = (sp.Matrix([sp.diff(T, x) for x in e]) - p.jacobian(e) * ed - sp.diff(p, w) * alpha)
     f_in = f_in.applyfunc(sp.expand)
 
+    eps, kappa, stretch, V = elastic_element(rx, ry)
+    maneuver = maneuver_of(spec.maneuver)
+    if not maneuver.accelerates:
+        f_in = f_in.xreplace({alpha: 0})
+    return ElementDerivation(spec, maneuver, e, ed, edd, T, M, f_in, V, eps, stretch, kappa)
+
+
+def elastic_element(rx, ry):
+    """(eps, kappa, |r_x|, V^e) of an element whose axis is (rx, ry)(xi): the one place of the
+    strain measures (the one-beam `ef` and efbody.py's `ef` bodies in systems)."""
     # Derivatives along the beam: d/dx = (1/l) d/dxi.
     r1 = sp.Matrix([sp.diff(rx, xi), sp.diff(ry, xi)]) / le
     r2 = sp.Matrix([sp.diff(rx, xi, 2), sp.diff(ry, xi, 2)]) / le**2
@@ -130,10 +155,7 @@ def derive_element(spec: FESpec) -> ElementDerivation:
     for xg, wg in zip(*gauss_legendre(QUAD_POINTS)):
         at = {xi: sp.Float(xg, 30)}
         V += sp.Float(wg, 30) * le * (E * A / 2 * eps.xreplace(at)**2 + E * I / 2 * kappa.xreplace(at)**2)
-    maneuver = maneuver_of(spec.maneuver)
-    if not maneuver.accelerates:
-        f_in = f_in.xreplace({alpha: 0})
-    return ElementDerivation(spec, maneuver, e, ed, edd, T, M, f_in, V, eps, sp.sqrt(r1.dot(r1)), kappa)
+    return eps, kappa, sp.sqrt(r1.dot(r1)), V
 
 
 def build_element_kernels(der: ElementDerivation) -> list:
@@ -183,14 +205,16 @@ def output_plan(spec: FESpec) -> list[dict]:
             plan.append({"name": name, "kind": "clamp", "which": 0 if name.startswith("N") else 1})
         else:
             quantity, at = point_of(name, spec.points)
-            t = at * n
-            k = int(sp.floor(t))
-            if t == k and 0 < k < n:  # an interior node: average the two element ends
-                terms = [(k - 1, 1.0, 0.5), (k, 0.0, 0.5)]
+            sn = spec.node_fractions()
+            side = -1 if name.endswith("_left") else 1 if name.endswith("_right") else 0
+            k = max(i for i in range(n + 1) if sn[i] <= at + sp.Rational(1, 10**12))
+            if abs(sn[k] - at) <= sp.Rational(1, 10**12) and 0 < k < n:  # an interior node
+                terms = {-1: [(k - 1, 1.0, 1.0)], 1: [(k, 0.0, 1.0)],
+                         0: [(k - 1, 1.0, 0.5), (k, 0.0, 0.5)]}[side]  # element ends: a side or the mean
             elif k >= n:
                 terms = [(n - 1, 1.0, 1.0)]
             else:
-                terms = [(k, float(t - k), 1.0)]
+                terms = [(k, float((at - sn[k]) / (sn[k + 1] - sn[k])), 1.0)]
             plan.append({"name": name, "kind": "stress", "which": 0 if quantity == "N" else 1,
                          "terms": [{"element": el, "xi": repr(x), "weight": repr(wt)} for el, x, wt in terms]})
     return plan

@@ -31,9 +31,30 @@ MANIFEST = "manifest.json"
 C_PREFIX = "fsm_"
 
 
+def _versions(spec) -> dict[str, str]:
+    """Tool versions; a body from finite-element data adds numpy and scipy (its eigenvectors)."""
+    versions = tool_versions()
+    if getattr(spec, "body", None) is not None:
+        import numpy
+        import scipy
+
+        versions |= {"numpy": numpy.__version__, "scipy": scipy.__version__}
+    return versions
+
+
+def param_defaults(spec) -> dict[str, float]:
+    """Beam parameters compiled in as defaults: a body's reference (root) section and length."""
+    values = {p.name: p.default for p in BEAM_PARAMS}
+    body = getattr(spec, "body", None)
+    if body is not None:
+        r = body.reference
+        values |= {"rho": r.rho, "E": r.E, "A": r.A, "I": r.I, "L": body.length}
+    return values
+
+
 def fingerprint(spec) -> str:
     """What the generated code depends on: the spec, the generator code and the tool versions."""
-    payload = {"spec": spec.to_dict(), "generator": generator_hash(), "versions": tool_versions()}
+    payload = {"spec": spec.to_dict(), "generator": generator_hash(), "versions": _versions(spec)}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
@@ -51,7 +72,8 @@ def _environment() -> jinja2.Environment:
 
 
 def _common_context(spec, fp: str, maneuver, emitted: list[EmittedKernel]) -> dict:
-    versions = tool_versions()
+    versions = _versions(spec)
+    defaults = param_defaults(spec)
     return {
         "name": spec.name,
         "NAME": spec.name.upper(),
@@ -60,7 +82,7 @@ def _common_context(spec, fp: str, maneuver, emitted: list[EmittedKernel]) -> di
         "fingerprint": fp,
         "header": f"fsm_{spec.name}.h",
         "params": [{"name": p.name, "unit": p.unit, "description": p.description,
-                    "c_default": c_double(p.default)} for p in BEAM_PARAMS],
+                    "c_default": c_double(defaults[p.name])} for p in BEAM_PARAMS],
         "maneuver": {"name": maneuver.name},
         "maneuver_params": [{"name": p.name, "unit": p.unit, "description": p.description,
                              "c_default": c_double(p.default)} for p in maneuver.params],
@@ -86,6 +108,8 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
         "outputs_use_drive": any("drive" in k.used_inputs for k in emitted if k.kernel.name == "outputs"),
     }
     integrals = []
+    if spec.body is not None:
+        ctx["summary"] += " " + spec.body.summary() + " (modes computed from it)."
     for sym in der.table.symbols:
         v = der.table.value(sym)
         integrals.append({"symbol": str(sym), "value": mpmath.nstr(v.value, 20),
@@ -102,7 +126,24 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
     }
     if getattr(der, "exact", False):
         manifest["exact_kinematics"] = {"quadrature": der.quadrature.describe()}
+    if spec.body is not None:
+        manifest["body"] = spec.body.to_dict() | {
+            "modes": [{"coordinate": c, "description": der.modes[c].description} for c in der.coords],
+            "invariants": "fe_gauss: Gauss-Legendre per element (exact for the piecewise "
+                          "polynomial shapes) in double precision, rounded to 13 digits"}
     return ctx, manifest, "model.c.j2"
+
+
+def _fe_body(body) -> dict | None:
+    """Per-element ratios to the reference section, node fractions, point masses (ef)."""
+    if body is None:
+        return None
+    r, L = body.reference, body.length
+    rows = [[c_double(v) for v in (s.rho / r.rho, s.E / r.E, s.A / r.A, s.I / r.I, (b - a) / L)]
+            for s, a, b in zip(body.sections, body.nodes, body.nodes[1:])]
+    masses = [{"node": body.node_index(m.x), "ratio": c_double(m.mass / (r.rho * r.A * L))}
+              for m in body.masses if body.node_index(m.x) > 0 and m.mass > 0]
+    return {"elements": rows, "nodes": [c_double(x) for x in body.s_nodes], "masses": masses}
 
 
 def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
@@ -129,6 +170,7 @@ def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
         "plan": output_plan(spec),
         "needs_clamp": needs_clamp,
         "needs_stress": any(o not in CLAMP_OUTPUTS and o not in ("v_tip", "u_tip") for o in spec.outputs),
+        "body": _fe_body(spec.body),
     }
     manifest = {
         "coordinates": [{"name": c["name"], "group": "node", "mode": c["description"]} for c in ctx["coords"]],
@@ -162,7 +204,8 @@ def generate_files(spec) -> dict[str, str]:
         "spec": spec.to_dict(),
         "description": spec.description,
         "outputs": list(spec.outputs),
-        "params": [{"name": p.name, "default": p.default, "unit": p.unit} for p in BEAM_PARAMS],
+        "params": [{"name": p.name, "default": v, "unit": p.unit}
+                   for p, v in zip(BEAM_PARAMS, param_defaults(spec).values())],
         "maneuver": {"name": maneuver.name, "theta": str(maneuver.theta),
                      "params": [{"name": p.name, "default": p.default, "unit": p.unit}
                                 for p in maneuver.params]},

@@ -135,7 +135,8 @@ class Report:
         for sym in self.der.table.symbols:
             v = self.der.table.value(sym)
             how = f"exact = {v.exact}" if v.method == "exact" else \
-                f"Gauss-Legendre n={v.nodes}, est. error {v.error:.1e}"
+                f"Gauss-Legendre n={v.nodes}{' per element, double' if v.method == 'fe_gauss' else ''}, " \
+                f"est. error {v.error:.1e}"
             self.add(f"{str(sym):48s} {mpmath.nstr(v.value, 17):>26s}  {how}")
 
     def _mass(self) -> None:
@@ -230,3 +231,34 @@ def savings(spec, full) -> str:
         saved = base[k] - mine.get(k, 0)
         lines.append(f"{k:16s} {base[k]:10d} {mine.get(k, 0):10d} {saved:8d}")
     return "\n".join(lines) + "\n"
+
+
+def plot_modes(der: Derivation, path) -> None:
+    """The mode shapes over s = x/L (a body's: its element interpolation), axial and bending."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from .fedata import BodyMode, evaluate
+    from .modes import s
+
+    x = np.linspace(0.0, 1.0, 401)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharex=True)
+    for name, m in der.modes.items():
+        if isinstance(m, BodyMode):
+            y = evaluate(m.body, m.shape, 0, x)
+        else:
+            y = np.broadcast_to(sp.lambdify(s, m.expr, "numpy")(x), x.shape)
+        axes[0 if der.groups[name] == "axial" else 1].plot(x, y, label=name)
+    for ax, title in zip(axes, ("axial modes", "bending modes")):
+        ax.set_title(title)
+        ax.set_xlabel("s = x/L")
+        ax.grid(True, alpha=0.3)
+        if ax.lines:
+            ax.legend(fontsize=8)
+    fig.suptitle(der.spec.name)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

@@ -34,7 +34,7 @@ N_MAX = 384
 class Factor:
     """A function of s: d^order/ds^order of mode `a`, or (kind 'fs') H_ab(s)."""
 
-    kind: str  # 'mode' | 'fs'
+    kind: str  # 'mode' | 'fs' | 'weight' (a section distribution of a body: mu, ea, ei, nhat, rot)
     a: str
     b: str = ""
     order: int = 0
@@ -43,6 +43,8 @@ class Factor:
     def label(self) -> str:
         if self.kind == "fs":
             return f"H[{self.a},{self.b}]"
+        if self.kind == "weight":
+            return self.a
         return "phi_" + self.a + "'" * self.order
 
 
@@ -117,6 +119,15 @@ class IntegralTable:
     @property
     def placeholders(self) -> list[sp.Symbol]:
         return list(self._placeholders.values())
+
+    # ----- section distributions (relative to the reference section p = [rho, E, A, I, L]) --
+    def weight(self, kind: str) -> sp.Expr:
+        """mu = rho A, ea = E A, ei = E I, nhat = centrifugal prestress N / (rho A w^2 L^2 / 2),
+        rot = rotary inertia of point masses: for the uniform beam 1, 1, 1, 1 - s^2, 0."""
+        return UNIFORM_WEIGHTS[kind]
+
+    def weight_at(self, kind: str, at) -> sp.Expr:
+        return UNIFORM_WEIGHTS[kind].subs(s, at) if kind == "nhat" else UNIFORM_WEIGHTS[kind]
 
     # ----- integration of a density ---------------------------------------------------
     def integrate(self, density: sp.Expr, a=0, b=1) -> sp.Expr:
@@ -245,6 +256,116 @@ class IntegralTable:
             prev = val
             n *= 2
         return IntegralValue(val, "gauss", float(abs(val - prev)), float(scale), None, n // 2)
+
+
+UNIFORM_WEIGHTS = {"mu": sp.Integer(1), "ea": sp.Integer(1), "ei": sp.Integer(1),
+                   "nhat": 1 - s**2, "rot": sp.Integer(0)}
+
+
+class BodyIntegralTable(IntegralTable):
+    """The same named invariants for a body from finite-element data: weights are the body's
+    section distributions (point masses as Dirac terms of mu and rot), modes are piecewise
+    polynomial (element interpolation), so Gauss-Legendre per element is exact; values are
+    doubles (eigenvectors), rounded to fedata.SIG_DIGITS significant digits."""
+
+    def __init__(self, body, modes):
+        super().__init__(modes)
+        self.body = body
+
+    def weight(self, kind: str) -> sp.Expr:
+        if kind == "rot" and not any(m.rotary for m in self.body.masses):
+            return sp.Integer(0)
+        return self.factor(Factor("weight", kind))
+
+    def weight_at(self, kind: str, at) -> sp.Expr:
+        import numpy as np
+
+        from . import fedata
+
+        body, x = self.body, float(at)
+        if kind == "nhat":
+            return sp.Float(repr(fedata.round_sig(float(fedata.nhat(body, x)[0]))), 17)
+        if kind == "rot":
+            return sp.Integer(0)
+        e = int(fedata.locate(body, np.array([x]))[0])
+        return sp.Float(repr(float(body.ratios()[kind][e])), 17)
+
+    def _factor_values(self, f: Factor, elem, pts):
+        """The factor at points pts, each inside element elem[i]."""
+        import numpy as np
+
+        from . import fedata
+
+        body = self.body
+        if f.kind == "weight":
+            if f.a == "nhat":
+                return fedata.nhat(body, pts, elem)
+            if f.a == "rot":
+                return np.zeros_like(pts)
+            return body.ratios()[f.a][elem]
+        if f.kind == "mode":
+            m = self.modes[f.a]
+            return fedata.evaluate(body, m.shape, f.order, pts, elem)
+        # H_ab(s) = int_0^s a' b': whole elements before, then a Gauss rule on [s_e, s]
+        ma, mb = self.modes[f.a], self.modes[f.b]
+        sn = body.s_nodes
+        gx, gw = fedata.gauss()
+        ne = body.elements
+        ee = np.arange(ne)
+        inner = sn[:-1, None] + (sn[1:] - sn[:-1])[:, None] * gx[None, :]
+        eg = np.repeat(ee, len(gx))
+        prod = (fedata.evaluate(body, ma.shape, 1, inner.ravel(), eg)
+                * fedata.evaluate(body, mb.shape, 1, inner.ravel(), eg)).reshape(ne, -1)
+        whole = (prod * gw[None, :]).sum(axis=1) * (sn[1:] - sn[:-1])
+        start = np.concatenate([[0.0], np.cumsum(whole)[:-1]])
+        s0 = sn[elem]
+        sub = s0[:, None] + (pts - s0)[:, None] * gx[None, :]
+        es = np.repeat(elem, len(gx))
+        p2 = (fedata.evaluate(body, ma.shape, 1, sub.ravel(), es)
+              * fedata.evaluate(body, mb.shape, 1, sub.ravel(), es)).reshape(len(pts), -1)
+        return start[elem] + (p2 * gw[None, :]).sum(axis=1) * (pts - s0)
+
+    def _evaluate(self, a, b, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
+        import numpy as np
+
+        from . import fedata
+
+        body = self.body
+        a, b = float(a), float(b)
+        sn = body.s_nodes
+        gx, gw = fedata.gauss()
+        lo, hi = np.maximum(a, sn[:-1]), np.minimum(b, sn[1:])
+        elems = np.nonzero(hi > lo)[0]
+        pts = (lo[elems, None] + (hi - lo)[elems, None] * gx[None, :]).ravel()
+        wts = ((hi - lo)[elems, None] * gw[None, :]).ravel()
+        elem = np.repeat(elems, len(gx))
+        terms = wts * pts**s_pow
+        for f in factors:
+            terms = terms * self._factor_values(f, elem, pts)
+        total, scale = float(terms.sum()), float(np.abs(terms).sum())
+        # point masses (Dirac terms of mu and rot) in (a, b], or at a = 0
+        weights = [f.a for f in factors if f.kind == "weight" and f.a in ("mu", "rot")]
+        if weights:
+            ref, L = body.reference, body.length
+            for pm in body.masses:
+                sk = pm.x / L
+                if not (a < sk <= b or sk == a == 0.0):
+                    continue
+                c = (pm.mass / (ref.rho * ref.A * L) if weights[0] == "mu"
+                     else pm.rotary / (ref.rho * ref.A * L**3))
+                at = np.array([sk])
+                el = fedata.locate(body, at)
+                term = c * sk**s_pow
+                for f in factors:
+                    if f.kind != "weight":
+                        term = term * float(self._factor_values(f, el, at)[0])
+                total += term
+                scale += abs(term)
+        value = fedata.round_sig(total)
+        if abs(total) <= fedata.ORTHO_TOL * scale:
+            value = 0.0
+        return IntegralValue(mpmath.mpf(repr(value)), "fe_gauss", 1e-15 * scale, scale or 1.0,
+                             None, fedata.GAUSS_POINTS)
 
 
 def _nodes(n: int, a, b):

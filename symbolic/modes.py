@@ -200,7 +200,7 @@ _TOKEN = re.compile(r"^([a-z_]+?)(\d*)$")
 
 def parse_mode_token(axis: str, token: str) -> ModeRef:
     """'static', 'sin2', 'cp1', 'clamped_pinned3' -> ModeRef."""
-    m = _TOKEN.match(token.strip())
+    m = _TOKEN.fullmatch(token.strip())
     if not m:
         raise SpecError(f"cannot read {axis} mode '{token}' (expected e.g. static, sin1, cp2)")
     name, digits = m.group(1), m.group(2)

@@ -11,7 +11,10 @@ Methods (spec.stress):
   continuum   N = EA u_o', M = EI v_o''                                  (paper eq. 26)
   element:n   the paper's element method (22)-(25) on n beam elements: nodal u, v, theta
               from the modes, S^e = (K_L^e + P K_GL^e) u_e with P = EA (u2 - u1)/l
-  equilibrium (strain model exact) M(x) = -rho A int_x^L (r - r(x)) x a dx, exact.py
+Moment source (spec.moment):
+  constitutive  the method above
+  equilibrium   M(x) from the inertial loads of the part beyond x (the strain model exact
+                evaluates both equilibrium sources on its exact kinematics, exact.py)
 Axial force source (spec.axial_force):
   constitutive  from the axial strain of the model's axial modes (prestress: N(x) assumed by
                 the model); unavailable without axial modes (foreshortening)
@@ -45,7 +48,7 @@ class OutputInfo:
 def canonical_output(token: str) -> str:
     """'N@0.25' -> 'N_s0p25'; names already canonical are returned unchanged."""
     token = token.strip()
-    m = _AT_RE.match(token)
+    m = _AT_RE.fullmatch(token)
     if m:
         frac = sp.nsimplify(m.group(2))
         if not 0 <= frac <= 1:
@@ -67,7 +70,7 @@ def point_of(name: str, points=()):
         for label, frac in points:
             if name[2:] == label:
                 return name[0], sp.Rational(frac)
-    m = _POINT_RE.match(name)
+    m = _POINT_RE.fullmatch(name)
     if not m:
         return None
     where = m.group(2)
@@ -89,7 +92,7 @@ def info(name: str, points=()) -> OutputInfo:
 
 def check_output_names(spec, extra=()) -> None:
     for label, frac in spec.points:
-        if not LABEL_RE.match(label) or label in POINTS or re.match(r"^s\d", label):
+        if not LABEL_RE.fullmatch(label) or label in POINTS or re.match(r"s\d", label):
             raise SpecError(f"variant '{spec.name}': position name '{label}' must be letters, digits "
                             "and _ (it reaches generated C), start with a letter, and not be A, B, C")
         try:
@@ -138,6 +141,8 @@ def field_at(der, expr: sp.Expr, at) -> sp.Expr:
         f: Factor = table._factor_of[ph]
         if f.kind == "mode":
             subs[ph] = der.modes[f.a].value_at(f.order, at)
+        elif f.kind == "weight":
+            subs[ph] = table.weight_at(f.a, at)
         elif at == 0:
             subs[ph] = sp.Integer(0)
         else:  # H_ab(at) = int_0^at a' b' ds: an ordinary modal integral on [0, at]
@@ -154,24 +159,43 @@ def _continuum_M(der, at) -> sp.Expr:
     return E * I / L**2 * field_at(der, der.fields.v_ss, at)
 
 
-def _prestress_N(at) -> sp.Expr:
-    return rho * A * w**2 * L**2 * (1 - at**2) / 2
+def _prestress_N(der, at) -> sp.Expr:
+    return rho * A * w**2 * L**2 * der.table.weight_at("nhat", at) / 2
 
 
 def _equilibrium_N(der, at) -> sp.Expr:
-    """N(x) = -rho A int_x^L a_x dx with a_x the axial (moving x) inertial acceleration."""
+    """N(x) = -int_x^L rho A a_x dx (with the point masses beyond x), a_x the axial (moving x)
+    inertial acceleration."""
     f = der.fields
     a_x = f.u_ddot - 2 * w * f.v_dot - alpha * f.v - w**2 * (L * s + f.u)
-    return -rho * A * L * der.table.integrate(a_x, at, 1)
+    return -rho * A * L * der.table.integrate(f.weights["mu"] * a_x, at, 1)
 
 
-def element_matrices(le):
+def _equilibrium_M(der, at) -> sp.Expr:
+    """M(x) from the equilibrium of the part beyond x: the moment about the section of its
+    inertial loads q = -rho A a (a in the moving frame, point masses included) and of the
+    inertial couples -J (theta'' + v'') of point rotary inertias:
+    M(x) = int_x^L [(xb + u(xb) - x - u(x)) q_y - (v(xb) - v(x)) q_x] dxb."""
+    f = der.fields
+    x_abs = L * s + f.u
+    a_x = f.u_ddot - 2 * w * f.v_dot - alpha * f.v - w**2 * x_abs
+    a_y = f.v_ddot + 2 * w * f.u_dot + alpha * x_abs - w**2 * f.v
+    dx = x_abs - L * at - field_at(der, f.u, at)
+    dy = f.v - field_at(der, f.v, at)
+    M = -rho * A * L * der.table.integrate(f.weights["mu"] * (dx * a_y - dy * a_x), at, 1)
+    rot = f.weights["rot"]
+    if rot != 0:
+        M -= rho * A * L**3 * der.table.integrate(rot * (alpha + f.v_ddot_s / L), at, 1)
+    return M
+
+
+def element_matrices(le, EA=E * A, EI=E * I):
     """The paper's K_L^e (7) and K_GL^e (8) for dofs (u1, v1, th1, u2, v2, th2).
 
     K_GL^e[th1, th2] is -le/30: the paper prints +le/30, a sign misprint (the integral of the
     cubic energy term for Hermite shapes gives -le/30; tests/test_integrals.py).
     """
-    a, b = E * A / le, E * I
+    a, b = EA / le, EI
     KL = sp.Matrix([
         [a, 0, 0, -a, 0, 0],
         [0, 12 * b / le**3, 6 * b / le**2, 0, -12 * b / le**3, 6 * b / le**2],
@@ -192,15 +216,19 @@ def element_matrices(le):
 
 def _element_end_values(der, n: int, e: int, want_N: bool):
     """(N or M at the left end, at the right end) of element e of n, from (23)-(25)."""
-    le = L / n
+    return _element_ends(der, (sp.Rational(e, n), sp.Rational(e + 1, n)), 1, 1, want_N)
+
+
+def _element_ends(der, nodes, ea, ei, want_N: bool):
+    """End values of the element between s = nodes[0] and nodes[1] with section ratios ea, ei."""
+    le = L * (nodes[1] - nodes[0])
     f = der.fields
-    nodes = (sp.Rational(e, n), sp.Rational(e + 1, n))
     u_hat = []
     for at in nodes:
         u_hat += [field_at(der, f.u_stretch, at), field_at(der, f.v, at), field_at(der, f.v_s, at) / L]
     u_hat = sp.Matrix(u_hat)
-    KL, KG = element_matrices(le)
-    P = E * A / le * (u_hat[3] - u_hat[0])
+    KL, KG = element_matrices(le, E * A * ea, E * I * ei)
+    P = E * A * ea / le * (u_hat[3] - u_hat[0])
     S = (KL + P * KG) * u_hat
     if want_N:
         return -S[0], S[3]
@@ -222,22 +250,54 @@ def _element_method(der, n: int, at, want_N: bool) -> sp.Expr:
     return sp.expand((1 - xi) * left + xi * right)
 
 
+def _body_element_method(der, at, want_N: bool, side: int = 0) -> sp.Expr:
+    """The element method (23)-(25) on the body's own elements and sections. At a node: the
+    end value of the element on the left (side -1), on the right (+1), or their mean (0)."""
+    import numpy as np
+
+    from .fedata import locate
+
+    body = der.spec.body
+    sn = [sp.Float(repr(float(x)), 17) for x in body.s_nodes]
+    ratios = body.ratios()
+    x = float(at)
+
+    def ends(e):
+        return _element_ends(der, (sn[e], sn[e + 1]), sp.Float(repr(float(ratios["ea"][e])), 17),
+                             sp.Float(repr(float(ratios["ei"][e])), 17), want_N)
+
+    node = body.node_index(x * body.length)
+    if node is None:
+        e = int(locate(body, np.array([x]))[0])
+        left, right = ends(e)
+        xi = (x - float(body.s_nodes[e])) / float(body.s_nodes[e + 1] - body.s_nodes[e])
+        return sp.expand((1 - sp.Float(repr(xi), 17)) * left + sp.Float(repr(xi), 17) * right)
+    vals = []
+    if node > 0 and side <= 0:
+        vals.append(ends(node - 1)[1])
+    if node < body.elements and side >= 0:
+        vals.append(ends(node)[0])
+    if not vals:  # the root asked from the left, or the tip from the right
+        raise SpecError(f"no element on that side of x = {x * body.length:g} m")
+    return sp.expand(sp.Add(*vals) / len(vals))
+
+
 def stress_method(spec) -> tuple[str, int]:
+    if getattr(spec, "body", None) is not None:
+        if spec.stress != "continuum":
+            raise SpecError(f"variant '{spec.name}': a body from finite-element data recovers "
+                            "stresses on its own elements; --stress does not apply")
+        return "body", 0
     if spec.stress == "continuum":
         return "continuum", 0
-    if spec.stress == "equilibrium":  # exact kinematics only: exact.py sums the inertial loads
-        if getattr(spec, "strain", None) != "exact":
-            raise SpecError(f"variant '{spec.name}': stress method 'equilibrium' needs the exact "
-                            "kinematics (strain model 'exact'); use 'continuum' or 'element:N'")
-        return "equilibrium", 0
-    if getattr(spec, "strain", None) == "exact" and spec.stress.startswith("element"):
+    if getattr(spec, "strain", None) == "exact" and spec.stress != "continuum":
         raise SpecError(f"variant '{spec.name}': the element method reads small-deflection nodal "
-                        "values; the exact kinematics takes 'continuum' or 'equilibrium'")
-    m = re.match(r"^element:(\d+)$", spec.stress)
+                        "values; the exact kinematics takes --stress continuum (and --moment / "
+                        "--axial-force equilibrium for the resultants from the inertial loads)")
+    m = re.fullmatch(r"element:(\d+)", spec.stress)
     if not m or not 1 <= int(m.group(1)) <= 1000:
         raise SpecError(f"variant '{spec.name}': stress method '{spec.stress}' must be "
-                        "'continuum', 'equilibrium' (strain 'exact') or 'element:N' with "
-                        "1 <= N <= 1000 elements")
+                        "'continuum' or 'element:N' with 1 <= N <= 1000 elements")
     return "element", int(m.group(1))
 
 
@@ -249,13 +309,23 @@ def output_expression(der, name: str) -> sp.Expr:
         return field_at(der, der.fields.u, 1)
     quantity, at = point_of(name, spec.points)
     method, n = stress_method(spec)
+    # a body's node: a position named *_left / *_right takes that side's element
+    side = -1 if name.endswith("_left") else 1 if name.endswith("_right") else 0
+
+    def from_modes(want_N):
+        if method == "body":
+            return _body_element_method(der, at, want_N, side)
+        if method == "element":
+            return _element_method(der, n, at, want_N)
+        return _continuum_N(der, at) if want_N else _continuum_M(der, at)
+
     if quantity == "M":
-        return _element_method(der, n, at, False) if method == "element" else _continuum_M(der, at)
+        return _equilibrium_M(der, at) if spec.moment == "equilibrium" else from_modes(False)
     if spec.axial_force == "equilibrium":
         return _equilibrium_N(der, at)
     N = sp.Integer(0)
     if spec.axial:
-        N = _element_method(der, n, at, True) if method == "element" else _continuum_N(der, at)
+        N = from_modes(True)
     if spec.strain == "prestress":
-        N += _prestress_N(at)
+        N += _prestress_N(der, at)
     return N

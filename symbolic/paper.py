@@ -12,6 +12,7 @@ import numpy as np
 from .build import build
 from .generate import generate_files, write_folder
 from .pipeline import prepare
+from .progress import Progress
 from .run import RunResult, run_built
 from .spec import builtin, customize
 
@@ -64,7 +65,10 @@ def run_paper(out: Path, *, ws: float = 6.0, ts: float = 15.0, t_end: float = 20
     entries = []
     log("[2/3] models (each: a 20 s run for the figures, repeated 15 s runs for the CPU table, "
         "and generation + compilation from scratch)")
-    for spec in _models():
+    models = _models()
+    bar = Progress(len(models), "paper")
+    log = bar.wrap(log)
+    for spec in models:
         label = PAPER_LABEL.get(spec.name, "#3, N from equilibrium")
         built = prepare(spec, log=log)
         res = run_built(built, t_end=t_end, dt=dt, params=params, out=out / f"{spec.name}.csv",
@@ -75,6 +79,8 @@ def run_paper(out: Path, *, ws: float = 6.0, ts: float = 15.0, t_end: float = 20
         e2e = _end_to_end(spec, dict(t_end=t_cpu, dt=dt, params=params)) if end_to_end else float("nan")
         entries.append(Entry(label, spec, res, cpu, e2e))
         log(f"      {spec.name}: integration {cpu * 1e3:.2f} ms CPU for 15 s; end to end {e2e:.1f} s")
+        bar.update()
+    bar.close()
     log("[3/3] figures and report")
     _figures(entries, ref, out, ws, ts)
     text = _report(entries, ref, ref_spec, ref_dt, ws, ts, t_end, dt)

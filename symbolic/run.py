@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import tempfile
 from dataclasses import dataclass, field
@@ -11,9 +12,15 @@ import numpy as np
 
 from .build import Built
 from .errors import FlexsymError, SimulationError, SpecError
+from .options import API, INTEGRATORS, RunOptions, validate
 
-INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5")
-NEWTON = ("modified", "full")
+__all__ = ["INTEGRATORS", "RunResult", "run_built", "check_options", "check_output_path"]
+
+
+def check_options(*, spec=None, **given) -> RunOptions:
+    """Refuse bad run options before anything is generated, built or written: the option table
+    (flexsym.options.validate) with keyword names; returns the validated options."""
+    return validate(given, API, spec)
 
 
 @dataclass
@@ -26,6 +33,7 @@ class RunResult:
     data: np.ndarray  # rows x columns
     csv: Path | None = None
     options: dict = field(default_factory=dict)
+    written: str = "none"  # what happened to the output file: complete | truncated | none
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
@@ -50,104 +58,86 @@ class RunResult:
         return self[col] - ref[col][idx]
 
 
-def _positive(name: str, value) -> None:
-    if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0
-            and np.isfinite(value)):
-        raise SpecError(f"{name} must be a positive number (got {value!r})")
+def check_output_path(path, label: str, suffixes: tuple[str, ...] | None = None) -> Path:
+    """Refuse, before any work, an output file that could not be written: its directory must
+    exist and be writable (it is never created), and the path must not be a directory."""
+    path = Path(path)
+    if str(path).strip() == "" or path.name in ("", ".", ".."):
+        raise SpecError(f"{label} '{path}': not a file name")
+    if suffixes is not None and path.suffix.lower() not in suffixes:
+        raise SpecError(f"{label} {path}: unsupported file type '{path.suffix}' "
+                        f"(use {', '.join(suffixes)})")
+    parent = path.parent
+    if not parent.is_dir():
+        raise SpecError(f"{label} {path}: directory {parent} does not exist (it is not created)")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise SpecError(f"{label} {path}: directory {parent} is not writable")
+    if path.is_dir():
+        raise SpecError(f"{label} {path}: is a directory")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise SpecError(f"{label} {path}: the file exists and is read-only")
+    return path
 
 
-def check_options(*, t_end, dt, integrator, params: dict, spec=None, tol=None, newton=None,
-                  step=None) -> None:
-    """Refuse bad run options before anything is generated, built or written."""
-    from .energy import BEAM_PARAMS
-    from .maneuver import MANEUVERS, maneuver_of
-
-    if integrator not in INTEGRATORS:
-        raise SpecError(f"unknown integrator '{integrator}' (known: {', '.join(INTEGRATORS)})")
-    _positive("t_end", t_end)
-    _positive("dt", dt)
-    if tol is not None and not (isinstance(tol, (int, float)) and not isinstance(tol, bool)
-                                and 0 <= tol < 1):
-        raise SpecError(f"tol must be a number in [0, 1) (got {tol!r}; 0 = fixed steps dt)")
-    if step is not None:
-        _positive("step", step)
-        if integrator != "radau5":
-            raise SpecError(f"step is for radau5 (its step, rows every dt); {integrator} steps at dt")
-    if newton is not None and newton not in NEWTON:
-        raise SpecError(f"unknown newton '{newton}' (known: {', '.join(NEWTON)})")
-    beam = {p.name for p in BEAM_PARAMS}
-    man = {p.name for p in maneuver_of(spec.maneuver).params} if spec else \
-        {p.name for m in MANEUVERS.values() for p in m.params}
-    for name, value in params.items():
-        if name not in beam | man:
-            raise SpecError(f"unknown parameter '{name}' (beam: {', '.join(sorted(beam))}; "
-                            f"manoeuvre: {', '.join(sorted(man))})")
-        if name in beam:
-            _positive(name, value)
-        elif not (isinstance(value, (int, float)) and np.isfinite(value)):
-            raise SpecError(f"{name} must be a finite number (got {value!r})")
-    if "ts" in params and params["ts"] <= 0:
-        raise SpecError(f"ts must be a positive number (got {params['ts']!r})")
+def check_output_dir(path, label: str) -> Path:
+    """An output folder: created if missing, so its nearest existing ancestor must be a
+    writable directory; an existing path must be a directory."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise SpecError(f"{label} {path}: exists and is not a directory")
+    probe = path
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
+        raise SpecError(f"{label} {path}: {probe} is not a writable directory")
+    return path
 
 
-def run_built(built: Built, *, t_end: float = 20.0, dt: float = 1e-3, integrator: str = "genalpha",
-              params: dict | None = None, out: Path | None = None, out_every: int | None = None,
-              repeat: int = 1, rho_inf: float | None = None, newmark: tuple | None = None,
-              blowup: float | None = None, newton_tol: float | None = None,
-              tol: float | None = None, max_steps: int | None = None, newton: str | None = None,
-              energy: bool = False, step: float | None = None,
-              raise_on_failure: bool = False) -> RunResult:
-    """Integrate with the built driver. dt is the step of the fixed-step integrators (rk4,
-    genalpha, newmark, radau5); for dopri5 (steps adapted to tol, default 1e-6; tol=0: fixed
-    steps dt), and for radau5 given a step, it sets the output grid (rows from the method's
-    dense output).
-    Rows are written every out_every * dt (default: about every 0.01 s) and at t_end.
-    newton: 'modified' (default, reuses the iteration matrix) or 'full'."""
-    check_options(t_end=t_end, dt=dt, integrator=integrator, params=params or {}, tol=tol,
-                  newton=newton, step=step)
-    if out_every is None:  # about 100 rows per second of simulated time
-        out_every = max(1, int(round(0.01 / dt)))
-    cmd = [str(built.executable), "--t-end", repr(float(t_end)), "--dt", repr(float(dt)),
-           "--integrator", integrator, "--out-every", str(out_every), "--repeat", str(repeat)]
-    for name, value in (params or {}).items():
-        cmd += ["--param", f"{name}={float(value)!r}"]
-    if rho_inf is not None:
-        cmd += ["--rho-inf", repr(float(rho_inf))]
-    if newmark is not None:
-        cmd += ["--newmark-gamma", repr(float(newmark[0])), "--newmark-beta", repr(float(newmark[1]))]
-    if blowup is not None:
-        cmd += ["--blowup", repr(float(blowup))]
-    if newton_tol is not None:
-        cmd += ["--newton-tol", repr(float(newton_tol))]
-    if tol is not None:
-        cmd += ["--tol", repr(float(tol))]
-    if step is not None:
-        cmd += ["--step", repr(float(step))]
-    if max_steps is not None:
-        cmd += ["--max-steps", str(int(max_steps))]
-    if newton is not None:
-        cmd += ["--newton", newton]
-    if energy:
-        cmd += ["--energy"]
+def _driver(cmd: list[str]) -> subprocess.CompletedProcess:
+    """Run the driver; it ends with this process (FLEXSYM_PARENT_PID, see driver.c), and an
+    exception here (a signal turned into one by the CLI, Ctrl-C) kills it before it returns."""
+    env = dict(os.environ, FLEXSYM_PARENT_PID=str(os.getpid()))
+    return subprocess.run(cmd, capture_output=True, text=True, env=env)
 
-    with tempfile.TemporaryDirectory(prefix="flexsym-run-") as tmp:
-        csv = Path(out) if out is not None else Path(tmp) / "out.csv"
-        if out is not None:
-            csv.parent.mkdir(parents=True, exist_ok=True)
-        proc = subprocess.run(cmd + ["--out", str(csv)], capture_output=True, text=True)
-        if proc.returncode == 2:
+
+def run_built(built: Built, options: RunOptions | None = None, *, out: Path | None = None,
+              raise_on_failure: bool = False, **given) -> RunResult:
+    """Integrate with the built driver. Options are a RunOptions from `options.validate`, or
+    keywords checked here against the same table (t_end, dt, integrator, params, tol, step,
+    out_every, repeat, newton, energy, ...; see flexsym.options.OPTIONS).
+    dt is the step of the fixed-step integrators (rk4, genalpha, newmark, radau5); for dopri5
+    (steps adapted to tol) and for radau5 given a step, it sets the output grid.
+    out: the CSV is replaced only by a completed run or, when the run stopped after at least
+    one step, by the rows computed until then (result.written says which); a run that stops
+    before its first step leaves it untouched."""
+    o = options if options is not None else validate(given, API)
+    if options is not None and given:
+        raise TypeError(f"run_built: give either options or keywords, not both ({', '.join(given)})")
+    if out is not None:
+        out = check_output_path(out, "output file")
+    cmd = [str(built.executable)] + o.driver_args()
+    where = out.parent if out is not None else None
+    with tempfile.TemporaryDirectory(prefix=".flexsym-run-", dir=where) as tmp:
+        csv = Path(tmp) / "out.csv"
+        proc = _driver(cmd + ["--out", str(csv)])
+        if proc.returncode == 2:  # the runtime's own last-line check refused an option
             raise SpecError(proc.stderr.strip().removeprefix("flexsym runtime: ") or "invalid run options")
         if proc.returncode not in (0, 3):
-            raise FlexsymError(f"{built.executable.name} failed (exit {proc.returncode}): "
-                               f"{proc.stderr.strip()}")
+            why = (f"killed by signal {-proc.returncode}" if proc.returncode < 0
+                   else f"exit {proc.returncode}")
+            raise FlexsymError(f"{built.executable.name} failed ({why}): {proc.stderr.strip()}")
         summary = json.loads(proc.stdout.strip().splitlines()[-1])
         with open(csv, encoding="utf-8") as fh:
             columns = fh.readline().strip().split(",")
         data = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2)
+        written = "none"
+        if out is not None and (summary["status"] == "ok" or summary["steps"] > 0):
+            os.replace(csv, out)  # same directory: atomic
+            written = "complete" if summary["status"] == "ok" else "truncated"
     result = RunResult(built.name, summary["status"], summary["message"], summary, columns, data,
-                       Path(out) if out is not None else None,
-                       {"t_end": t_end, "dt": dt, "integrator": integrator, "params": params or {},
-                        "tol": tol, "newton": newton, "step": step})
+                       out if written != "none" else None,
+                       {"t_end": o.t_end, "dt": o.dt, "integrator": o.integrator, "params": o.params,
+                        "tol": o.tol, "newton": o.newton, "step": o.step}, written)
     if raise_on_failure and not result.ok:
         raise SimulationError(f"{built.name}: {result.message}", result)
     return result

@@ -2,6 +2,9 @@
 simulation, turned into exactly the variant that scene needs.
 
     [beam]      length, density, youngs_modulus, area, inertia            (SI units)
+    [body]      instead of [beam]: a body from finite-element data: segments (length and
+                section each), point_masses, elements (for its modes), ef_elements, or
+                folder (an imported one; fedata.scene_body, feimport)
     [maneuver]  kind = "spin-up" (omega, duration) | "constant" (omega) | "expression" (theta)
     [model]     variant = "m3"  or  strain + axial + bending (mode lists); optional stress,
                 axial_force, elements (ef), keep_axial, name
@@ -25,34 +28,46 @@ import sympy as sp
 
 from .errors import SpecError
 from .maneuver import EXPRESSION_PREFIX, parse_theta
-from .run import INTEGRATORS
+from .options import OPTIONS, RunOptions, Where, validate
 
+# Keys of each table; run options (solver, output, manoeuvre values) come from the option table.
+_RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene}
 TABLES = {
     "beam": {"length", "density", "youngs_modulus", "area", "inertia"},
-    "maneuver": {"kind", "omega", "duration", "theta"},
-    "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "elements",
+    "body": {"segments", "point_masses", "elements", "ef_elements", "folder"},
+    "maneuver": {"kind", "theta"},
+    "model": {"variant", "strain", "axial", "bending", "stress", "axial_force", "moment", "elements",
               "keep_axial", "name"},
-    "solver": {"integrator", "dt", "t_end", "tol", "step"},
-    "output": {"file", "quantities", "positions", "interval"},
+    "solver": set(),
+    "output": {"file", "quantities", "positions"},
 }
+for _key in _RUN_KEYS:
+    TABLES[_key.split(".")[0]].add(_key.split(".")[1])
 BEAM_KEYS = {"density": "rho", "youngs_modulus": "E", "area": "A", "inertia": "I", "length": "L"}
-_QUANTITY = re.compile(r"^([NM])\(\s*([^()]+?)\s*\)$")
+_QUANTITY = re.compile(r"([NM])\(\s*([^()]+?)\s*\)")
 
 
 @dataclass
 class Scene:
     path: Path
     spec: object  # VariantSpec | FESpec
-    params: dict  # run-time parameters: beam (rho, E, A, I, L) and manoeuvre (ws, ts)
-    integrator: str
-    dt: float
-    t_end: float
-    out_every: int  # steps between output rows
+    options: RunOptions  # validated: solver, output interval, beam and manoeuvre parameters
     output_file: Path | None
-    tol: float | None
-    step: float | None = None  # radau5's step, when not dt
     columns: dict = field(default_factory=dict)  # scene quantity -> result column
     full_spec: object = None  # the same model without the scene's reductions (for comparison)
+
+    # the run options most callers read
+    params = property(lambda self: self.options.params)
+    integrator = property(lambda self: self.options.integrator)
+    dt = property(lambda self: self.options.dt)
+    t_end = property(lambda self: self.options.t_end)
+    out_every = property(lambda self: self.options.out_every)
+    tol = property(lambda self: self.options.tol)
+    step = property(lambda self: self.options.step)
+
+
+class _SceneError(SpecError):
+    """Already names the file and the key: not to be wrapped again."""
 
 
 class _Reader:
@@ -62,7 +77,7 @@ class _Reader:
         self.path, self.data = path, data
 
     def fail(self, where: str, msg: str):
-        raise SpecError(f"{self.path}: {where}: {msg}")
+        raise _SceneError(f"{self.path}: {where}: {msg}")
 
     def table(self, name: str, required: bool = True) -> dict:
         tab = self.data.get(name)
@@ -112,7 +127,9 @@ class _Reader:
         return val
 
 
-def load_scene(path) -> Scene:
+def load_scene(path, model: str | None = None):
+    """A Scene, or a SystemScene for a mechanism. model: a variant name that replaces the
+    scene's [model] (flexsym run --model), or every flexible body's model in a system."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -122,48 +139,62 @@ def load_scene(path) -> Scene:
         raise SpecError(f"{path}: cannot read: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"{path}: not valid TOML: {exc}") from None
+    from .system_scene import is_system_scene, load_system_scene
+
+    if is_system_scene(data):  # a mechanism ([[body]] entries): symbolic/system_scene.py
+        return load_system_scene(path, data, model)
     r = _Reader(path, data)
     unknown = sorted(set(data) - set(TABLES))
     if unknown:
         r.fail(unknown[0], f"unknown table (known: {', '.join(TABLES)})")
+    if model is not None:
+        if not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model):
+            r.fail("--model", f"'{model}' is not a variant name")
+        data["model"] = {"variant": model, "name": f"{_default_name(path)}_{model}"[:48]}
+        from .outputs import axial_force_available
+        from .spec import builtin
+
+        try:
+            base = builtin(model)
+        except SpecError as exc:
+            r.fail("--model", str(exc))
+        if base.kind == "modal" and not axial_force_available(base):
+            data["model"]["axial_force"] = "equilibrium"  # its only way to give the scene's N
     for name in TABLES:
-        r.table(name, required=name in ("beam", "maneuver", "model", "solver"))
+        r.table(name, required=name in ("maneuver", "model", "solver"))
 
-    beam = {BEAM_KEYS[k]: r.number("beam", k, positive=True) for k in BEAM_KEYS}
-    maneuver, mparams = _maneuver(r)
-    integrator = r.string("solver", "integrator", required=False, default="genalpha")
-    if integrator not in INTEGRATORS:
-        r.fail("[solver] integrator", f"unknown integrator '{integrator}' (known: {', '.join(INTEGRATORS)})")
-    tol = None
-    if integrator == "dopri5":
-        tol = r.number("solver", "tol", required=False, default=1e-6)
-        if not 0 <= tol < 1:
-            r.fail("[solver] tol", f"must be in [0, 1) (got {tol!r}; 0 = fixed steps dt)")
-    elif "tol" in data["solver"]:
-        r.fail("[solver] tol", f"integrator '{integrator}' is fixed-step: give dt (tol is for dopri5)")
-    step = None
-    if "step" in data["solver"]:
-        if integrator != "radau5":
-            r.fail("[solver] step", f"is for radau5 (integrator '{integrator}' steps at dt)")
-        step = r.number("solver", "step", positive=True)
-    dt = r.number("solver", "dt", positive=True)
-    t_end = r.number("solver", "t_end", positive=True)
-    if dt > t_end:
-        r.fail("[solver] dt", f"is larger than t_end ({dt:g} > {t_end:g})")
+    body = None
+    if "body" in data:
+        if "beam" in data:
+            r.fail("[body]", "give either [beam] (a uniform beam) or [body] (finite-element data), not both")
+        from .fedata import scene_body
 
-    interval = r.number("output", "interval", positive=True, required=False, default=max(dt, 0.01))
-    out_every = round(interval / dt)
-    if out_every < 1 or abs(out_every * dt - interval) > 1e-9 * interval:
-        r.fail("[output] interval", f"must be a whole number of steps dt = {dt:g} s (got {interval:g})")
+        body = scene_body(r)
+        ref = body.reference
+        beam = {"rho": ref.rho, "E": ref.E, "A": ref.A, "I": ref.I, "L": body.length}
+    else:
+        r.table("beam")
+        beam = {BEAM_KEYS[k]: r.number("beam", k, positive=True) for k in BEAM_KEYS}
+    maneuver = _maneuver(r)
+    for key in ("solver.dt", "solver.t_end"):
+        table, name = key.split(".")
+        if name not in data[table]:
+            r.fail(f"[{table}] {name}", "missing")
+    given = {name: data.get(key.split(".")[0], {}).get(key.split(".")[1]) for key, name in _RUN_KEYS.items()}
     output_file = r.string("output", "file", required=False)
-    quantities = r.strings("output", "quantities", required=False) or ["v_tip"]
-    points, outputs, columns = _outputs(r, quantities, beam["L"])
-    spec, full = _spec(r, maneuver, outputs, points)
-    return Scene(path, spec, beam | mparams, integrator, dt, t_end, out_every,
-                 Path(output_file) if output_file else None, tol, step, columns, full)
+    if output_file is not None and not output_file.strip():
+        r.fail("[output] file", "is empty (leave the key out for no file)")
+    quantities = r.strings("output", "quantities", required=False)
+    if quantities is not None and not quantities:
+        r.fail("[output] quantities", "is empty (leave the key out for v_tip only)")
+    points, outputs, columns = _outputs(r, quantities or ["v_tip"], beam["L"])
+    spec, full = _spec(r, maneuver, outputs, points, body)
+    options = validate(given | {"params": beam}, Where("scene", path), spec)
+    return Scene(path, spec, options, Path(output_file) if output_file else None, columns, full)
 
 
-def _maneuver(r: _Reader) -> tuple[str, dict]:
+def _maneuver(r: _Reader) -> str:
+    """The manoeuvre's name; its values (omega, duration) are run options (options.py)."""
     kind = r.string("maneuver", "kind")
     tab = r.data["maneuver"]
     allowed = {"spin-up": {"kind", "omega", "duration"}, "constant": {"kind", "omega"},
@@ -173,17 +204,17 @@ def _maneuver(r: _Reader) -> tuple[str, dict]:
     extra = sorted(set(tab) - allowed[kind])
     if extra:
         r.fail(f"[maneuver] {extra[0]}", f"does not apply to kind '{kind}'")
-    if kind == "spin-up":
-        return "spin_up", {"ws": r.number("maneuver", "omega"),
-                           "ts": r.number("maneuver", "duration", positive=True)}
-    if kind == "constant":
-        return "constant", {"ws": r.number("maneuver", "omega")}
-    theta = r.string("maneuver", "theta")
-    try:
-        parse_theta(theta)
-    except SpecError as exc:
-        r.fail("[maneuver] theta", str(exc))
-    return EXPRESSION_PREFIX + theta, {}
+    for key in sorted(allowed[kind] - {"kind"}):
+        if key not in tab:
+            r.fail(f"[maneuver] {key}", "missing")
+    if kind == "expression":
+        theta = r.string("maneuver", "theta")
+        try:
+            parse_theta(theta)
+        except SpecError as exc:
+            r.fail("[maneuver] theta", str(exc))
+        return EXPRESSION_PREFIX + theta
+    return {"spin-up": "spin_up", "constant": "constant"}[kind]
 
 
 def _number_label(x: float) -> str:
@@ -207,16 +238,16 @@ def _outputs(r: _Reader, quantities: list[str], length: float):
         points[label] = str(sp.nsimplify(repr(float(x))) / sp.nsimplify(repr(float(length))))
 
     for label, x in named.items():
-        if not LABEL_RE.match(label) or label in POINTS:
+        if not isinstance(label, str) or not LABEL_RE.fullmatch(label) or label in POINTS:
             r.fail(f"[output] positions.{label}", "a position name must be letters, digits and _, "
                    "start with a letter (it reaches generated C) and not be A, B or C")
         position(label, x)
     for q in quantities:
         q = q.strip()
-        if q in ("v_tip", "u_tip") or re.match(r"^[NM]_[A-C]$", q):
+        if q in ("v_tip", "u_tip") or re.fullmatch(r"[NM]_[A-C]", q):
             name = q
         else:
-            m = _QUANTITY.match(q)
+            m = _QUANTITY.fullmatch(q)
             if not m:
                 r.fail("[output] quantities", f"unknown quantity '{q}' (v_tip, u_tip, N(x), M(x) "
                        "with x a position name, A, B, C or metres)")
@@ -242,7 +273,7 @@ def _outputs(r: _Reader, quantities: list[str], length: float):
     return tuple((k, v) for k, v in points.items() if k in used), tuple(outputs), columns
 
 
-def _spec(r: _Reader, maneuver: str, outputs, points):
+def _spec(r: _Reader, maneuver: str, outputs, points, body=None):
     from .spec import VariantSpec, _refs, builtin, customize
 
     tab = r.data["model"]
@@ -266,14 +297,25 @@ def _spec(r: _Reader, maneuver: str, outputs, points):
                 r.fail("[model] elements", f"must be an integer (got {elements!r})")
         stress = r.string("model", "stress", required=False)
         axial_force = r.string("model", "axial_force", required=False)
+        moment = r.string("model", "moment", required=False)
         keep_axial = tab.get("keep_axial", False)
         if not isinstance(keep_axial, bool):
             r.fail("[model] keep_axial", f"must be true or false (got {keep_axial!r})")
         name = name or _default_name(r.path)
+        if body is not None:  # the body replaces the uniform beam of every model
+            if base.kind == "fe":
+                n = elements if elements is not None else r.data["body"].get("ef_elements", 32)
+                base, elements = replace(base, body=body.remeshed(n), elements=None), None
+                base = replace(base, elements=base.body.elements)
+            else:
+                base = replace(base, body=body)
         spec = customize(base, name=name, outputs=list(outputs), maneuver=maneuver, stress=stress,
-                         axial_force=axial_force, elements=elements, points=points)
+                         axial_force=axial_force, elements=elements, points=points, moment=moment)
         full = customize(base, name=name, maneuver="spin_up", stress=stress, axial_force=axial_force,
+                         moment=moment,
                          elements=elements)
+    except _SceneError:
+        raise
     except SpecError as exc:
         r.fail("[model]", str(exc))
     if spec.kind == "modal" and not keep_axial:

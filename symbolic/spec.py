@@ -14,7 +14,7 @@ from .errors import SpecError
 from .fe import FESpec
 from .modes import ModeRef, mode, parse_mode_token
 
-NAME_RE = re.compile(r"^[a-z][a-z0-9_]{0,47}$")
+NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")  # used with match: \Z, not $ (a trailing newline)
 
 
 @dataclass(frozen=True)
@@ -28,12 +28,22 @@ class VariantSpec:
     bending: tuple[ModeRef, ...]
     maneuver: str = "spin_up"
     outputs: tuple[str, ...] = ("v_tip", "u_tip")
-    stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements), "equilibrium" (exact)
+    stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements)
     axial_force: str = "constitutive"  # or "equilibrium" (from the axial inertial forces)
+    moment: str = "constitutive"  # or "equilibrium" (M from the inertial loads beyond the station)
     points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
     left_out: tuple[tuple[str, str], ...] = ()  # (what, why): decided by a scene, in the manifest
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
+    body: object = None  # fedata.BeamBody: modes computed from finite-element data
+
+    def mode(self, ref: ModeRef):
+        """The shape of a mode: the library's analytic one, or the body's computed one."""
+        if self.body is None:
+            return mode(ref)
+        from .fedata import body_mode
+
+        return body_mode(self.body, ref)
 
     @property
     def modes(self) -> tuple[ModeRef, ...]:
@@ -56,13 +66,14 @@ class VariantSpec:
             "axial_force": self.axial_force,
             "points": [list(p) for p in self.points],
             "left_out": [list(x) for x in self.left_out],
-        }
+        } | ({"body": self.body.to_dict()} if self.body is not None else {}) | (
+            {"moment": self.moment} if self.moment != "constitutive" else {})
 
     def validate(self) -> "VariantSpec":
         from .energy import STRAIN_MODELS  # the physics owns the list of strain models
 
-        if not NAME_RE.match(self.name):
-            raise SpecError(f"variant name '{self.name}': use lower-case letters, digits and _ "
+        if not isinstance(self.name, str) or not NAME_RE.match(self.name):
+            raise SpecError(f"variant name {self.name!r}: use lower-case letters, digits and _ "
                             "(it becomes a C identifier), starting with a letter")
         model = STRAIN_MODELS.get(self.strain)
         if model is None:
@@ -73,16 +84,19 @@ class VariantSpec:
             for r in refs:
                 if r.axis != axis:
                     raise SpecError(f"variant '{self.name}': mode {r.token} is not a {axis} mode")
-                mode(r)  # validates family and index
+                self.mode(r)  # validates family and index (and computes a body's mode)
                 if r in seen:
                     raise SpecError(f"variant '{self.name}': duplicate {axis} mode '{r.token}'")
                 seen.add(r)
         if not self.bending:
             raise SpecError(f"variant '{self.name}': at least one bending mode is required")
+        if model.kinematics == "exact" and self.body is not None:
+            raise SpecError(f"variant '{self.name}': the exact kinematics integrates a uniform beam; "
+                            "a [body] from finite-element data needs another strain model")
         if model.needs_axial and not self.axial:
             raise SpecError(f"variant '{self.name}': strain model '{self.strain}' needs at least "
                             "one axial mode (its stiffening term is linear in the axial amplitudes)")
-        if "v_tip" in self.outputs and all(mode(r).value_at(0, 1) == 0 for r in self.bending):
+        if "v_tip" in self.outputs and all(self.mode(r).value_at(0, 1) == 0 for r in self.bending):
             raise SpecError(f"variant '{self.name}': no bending mode moves the tip, so v_tip would "
                             "be identically zero (add the static mode or a clamped-free mode)")
         from .maneuver import maneuver_of
@@ -93,6 +107,9 @@ class VariantSpec:
             raise SpecError(f"variant '{self.name}': {exc}") from None
         if not self.outputs:
             raise SpecError(f"variant '{self.name}': no outputs requested")
+        if self.moment not in ("constitutive", "equilibrium"):
+            raise SpecError(f"variant '{self.name}': moment '{self.moment}' must be "
+                            "'constitutive' or 'equilibrium'")
         if self.axial_force not in ("constitutive", "equilibrium"):
             raise SpecError(f"variant '{self.name}': axial force '{self.axial_force}' must be "
                             "'constitutive' or 'equilibrium'")
@@ -104,8 +121,10 @@ class VariantSpec:
 
 
 def _refs(axis: str, tokens) -> tuple[ModeRef, ...]:
-    if isinstance(tokens, str):
-        tokens = [t for t in tokens.split(",") if t.strip()]
+    if isinstance(tokens, str):  # "" is the empty set; an empty name inside a list is a mistake
+        tokens = [t.strip() for t in tokens.split(",")] if tokens.strip() else []
+        if not all(tokens):
+            raise SpecError(f"{axis} modes: empty name in the list")
     return tuple(parse_mode_token(axis, t) for t in tokens)
 
 
@@ -136,7 +155,7 @@ BUILTIN: tuple[VariantSpec, ...] = tuple(with_default_outputs(v) for v in (
                 description="bending modes with the centrifugal-prestress geometric stiffness "
                             "w^2 int N(x) v'^2 dx, N(x) = rho A (L^2 - x^2)/2 (not in the paper)"),
     VariantSpec("exact", "exact", (), _refs("bending", ["cf1", "cf2", "cf3", "cf4", "cf5"]),
-                stress="equilibrium", axial_force="equilibrium",
+                moment="equilibrium", axial_force="equilibrium",
                 description="exact kinematics: section rotation from the clamped-free modes' "
                             "slopes, inextensible; N and M from equilibrium; only modal "
                             "truncation (not in the paper)"),
@@ -148,21 +167,27 @@ def builtin(name: str) -> VariantSpec:
     for v in BUILTIN:
         if name == v.name or name in v.aliases:
             return v
-    known = ", ".join(f"{v.name} ({'/'.join(v.aliases)})" for v in BUILTIN)
+    known = ", ".join(f"{v.name} ({'/'.join(v.aliases)})" if v.aliases else v.name for v in BUILTIN)
     raise SpecError(f"unknown variant '{name}' (built-in: {known})")
 
 
 def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs=None,
-              maneuver=None, stress=None, axial_force=None, elements=None, points=None):
+              maneuver=None, stress=None, axial_force=None, elements=None, points=None, moment=None):
     """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...').
     Outputs not given explicitly are the defaults of the new variant."""
     from .outputs import canonical_output
 
     if isinstance(outputs, str):
-        outputs = [o for o in outputs.split(",") if o.strip()]
+        outputs = [o.strip() for o in outputs.split(",")]
+    if outputs is not None and (not outputs or not all(outputs)):
+        raise SpecError(f"outputs {','.join(outputs)!r}: empty name in the list (give at least one "
+                        "output, e.g. v_tip)")
+    if elements is not None and (isinstance(elements, bool) or not isinstance(elements, int)
+                                 or not 1 <= elements <= 512):
+        raise SpecError(f"elements must be a whole number in 1..512 (got {elements!r})")
     if base.kind == "fe":
         modal_only = {"strain": strain, "axial": axial, "bending": bending, "stress": stress,
-                      "axial_force": axial_force}
+                      "axial_force": axial_force, "moment": moment}
         given = [k for k, v in modal_only.items() if v is not None]
         if given:
             raise SpecError(f"--{given[0].replace('_', '-')} does not apply to the finite-element "
@@ -188,6 +213,7 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
     if outputs is not None:
         changes["outputs"] = tuple(canonical_output(o) for o in outputs)
     for key, val in (("maneuver", maneuver), ("stress", stress), ("axial_force", axial_force),
+                     ("moment", moment),
                      ("points", points)):
         if val is not None:
             changes[key] = val

@@ -85,17 +85,33 @@ def plot(summaries: list[Summary], path: Path, title: str) -> None:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    _save_atomically(fig, Path(path))
     plt.close(fig)
 
 
-def describe(r: RunResult, outputs) -> str:
-    """Per output column: extremes with their times and the final value."""
+def _save_atomically(fig, path: Path) -> None:
+    """Into a temporary file next to path, then renamed: an existing plot is replaced by a
+    complete one or not at all. The directory must exist (it is not created)."""
+    import os
+    import tempfile
+
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=120, format=path.suffix.lstrip(".").lower() or "png")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def describe(r: RunResult, outputs, status: str | None = None) -> str:
+    """Per output column: extremes with their times and the final value. status: the
+    verdict on the result (validity.assess), else the run's own status."""
     rows = ["| quantity | min | at t [s] | max | at t [s] | final |", "|---|---|---|---|---|---|"]
     for c in outputs:
         y = r[c]
         i, j = int(np.argmin(y)), int(np.argmax(y))
         rows.append(f"| {c} | {y[i]:.6g} | {r.t[i]:.3f} | {y[j]:.6g} | {r.t[j]:.3f} | {y[-1]:.6g} |")
-    status = "ok" if r.ok else r.message
+    status = status if status is not None else ("ok" if r.ok else r.message)
     return "\n".join(rows) + f"\n\nstatus: {status}; integration CPU {r.summary['cpu_median'] * 1e3:.2f} ms"

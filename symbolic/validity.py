@@ -77,6 +77,18 @@ def truncation_share(spec, result) -> np.ndarray:
     return share
 
 
+def deflection_weights(spec, columns) -> list[float] | None:
+    """Weights w over `columns` with sum_j w_j |y_j| = the quantity deflection_bound() uses
+    (for the C batch, which has no rows to hand back); None when the model has no limit (ef; the
+    exact kinematics, whose truncation share needs the rows: assess() on a run with rows)."""
+    if spec.kind != "modal" or getattr(spec, "strain", None) == "exact":
+        return None
+    if "v_tip" in columns:
+        return [float(c == "v_tip") for c in columns]
+    peaks = {m.coordinate: _mode_peak(m) for m in spec.bending}
+    return [peaks.get(c, 0.0) for c in columns]
+
+
 def assess(spec, result, params: dict | None = None) -> Assessment:
     length = (params or {}).get("L", 10.0)
     a = Assessment(True)
@@ -106,6 +118,18 @@ def assess(spec, result, params: dict | None = None) -> Assessment:
     return a
 
 
+BETA1 = 1.8751040687119611  # first root of 1 + cos(b) cosh(b) = 0 (clamped-free beam)
+
+
+def first_bending_frequency(params: dict) -> float:
+    """omega_1 = beta_1^2 sqrt(EI / (rho A L^4)) of the clamped-free Euler-Bernoulli beam with
+    the run's parameters (defaults: the paper's beam, 3.798 rad/s)."""
+    from .energy import BEAM_PARAMS
+
+    p = {q.name: q.default for q in BEAM_PARAMS} | dict(params)
+    return BETA1**2 * (p["E"] * p["I"] / (p["rho"] * p["A"] * p["L"] ** 4)) ** 0.5
+
+
 def diagnose(spec, result) -> str:
     """Why a known model collapses, stated with the numbers of this run."""
     strain = getattr(spec, "strain", None)
@@ -118,8 +142,9 @@ def diagnose(spec, result) -> str:
                 "into compression" + (f" ({', '.join(compressed)} at the end)" if compressed else "")
                 + "; the paper's #1/#2 use eq. (18)-(19) instead (strain model geometric_stiffness)")
     if strain == "linear":
-        return ("no geometric stiffening: above the first bending frequency (3.8 rad/s for the paper's "
-                "beam) centrifugal softening makes the bending stiffness negative")
+        w1 = first_bending_frequency(result.options.get("params") or {})
+        return (f"no geometric stiffening: above the first bending frequency of this beam ({w1:.3g} "
+                "rad/s, clamped-free) centrifugal softening makes the bending stiffness negative")
     if strain == "geometric_stiffness":
         return ("the elastic force of eq. (18)-(19) is not a potential force (the axial equation does "
                 "not see the bending): at large deflection it can feed energy into the motion")

@@ -219,13 +219,25 @@ def test_bad_input_is_refused_with_one_line(capsys):
     from flexsym.cli import main
     from flexsym.errors import SpecError
 
-    with pytest.raises(SpecError, match="stress method 'equilibrium' needs the exact kinematics"):
+    with pytest.raises(SpecError, match="stress method 'equilibrium' must be 'continuum' or 'element:N'"):
         customize(builtin("m3"), stress="equilibrium")
-    with pytest.raises(SpecError, match="takes 'continuum' or 'equilibrium'"):
+    with pytest.raises(SpecError, match="the exact kinematics takes --stress continuum"):
         customize(builtin("exact"), stress="element:8")
     assert main(["exact-study", "--max-modes", "0", "--out", "unused"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--max-modes" in err[0]
+
+    # a uniform beam on a guided hub only: bodies from FE data and system bodies are refused
+    from pathlib import Path
+
+    scenes = Path(__file__).resolve().parents[1] / "scenes"
+    for argv, fragment in (
+            (["select", str(scenes / "stepped_blade.toml"), "--tol", "0.01", "--exact"], "--exact: the exact"),
+            (["run", str(scenes / "stepped_blade.toml"), "--model", "exact"], "integrates a uniform beam"),
+            (["run", str(scenes / "hub.toml"), "--model", "exact"], "derived for a guided hub only")):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and fragment in err[0], err
 
 
 def test_jacobi_integral_is_conserved_at_large_deflection(small):

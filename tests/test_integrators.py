@@ -189,7 +189,7 @@ def test_radau5_dense_output_has_order_4(simulate, name):
 def test_step_is_refused_for_other_integrators(capsys):
     code = main(["run", "m3", "--integrator", "genalpha", "--step", "0.1", "--t-end", "1"])
     assert code == 2
-    assert "step is for radau5" in capsys.readouterr().err
+    assert "--step: applies to radau5, not to integrator genalpha" in capsys.readouterr().err
 
 
 def test_cli_runs_radau5(capsys, tmp_path):

@@ -1,20 +1,27 @@
 /* Command-line driver: integrate a generated model, write CSV, report a JSON summary.
  *
- *   flexsym_<variant> [--t-end T] [--dt H] [--integrator rk4|dopri5|genalpha|newmark|radau5]
+ *   flexsym_<variant> [--t-end T] [--dt H]
+ *                     [--integrator rk4|dopri5|genalpha|newmark|radau5|ali3p|genalpha3]
  *                     [--step H] [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
  *                     [--newmark-beta B] [--newton modified|full] [--newton-tol TOL]
  *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
- *                     [--repeat N] [--blowup F] [--energy] [--info]
+ *                     [--repeat N] [--blowup F] [--penalty KAPPA] [--energy] [--info]
  *
  * dopri5 adapts its step to --tol (0: fixed steps --dt); its rows are at the output grid,
  * multiples of out_every * dt, from its dense output. radau5 steps by --step (default --dt)
  * and writes rows every --dt from its collocation polynomial. --energy appends columns T, V, h
- * (kinetic and potential energy, Jacobi integral) to every row.
+ * (kinetic and potential energy, Jacobi integral) to every row. ali3p and genalpha3 integrate
+ * models with constraints (a column `violation` after the outputs when the model has any).
  *
  * stdout: one JSON line (status, steps, CPU time of the integration alone).
- * stderr: one line naming what went wrong. Exit: 0 ok, 2 usage, 3 simulation stopped, 4 I/O.
+ * stderr: one line naming what went wrong. Exit: 0 ok, 2 usage or an assembly that cannot
+ * close, 3 simulation stopped, 4 I/O.
  * The CSV is written to a temporary file and renamed, so an existing file is replaced
  * only by a complete one; after a divergence it holds the rows computed up to then.
+ * Limits and defaults come from flexsym/limits.h (written from symbolic/options.py); flexsym
+ * checks every option before starting the driver, so these checks are a last line of defence.
+ * With FLEXSYM_PARENT_PID set (flexsym sets it), the driver ends when that process does
+ * (Linux: PR_SET_PDEATHSIG), so a killed run leaves no orphan that writes later.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
@@ -24,11 +31,16 @@
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
+#ifdef __linux__
+#include <signal.h>
+#include <sys/prctl.h>
+#endif
 
-#include "flexsym/model.h"
+#include "flexsym/limits.h"
 #include "flexsym/runtime.h"
+#include "flexsym/system.h"
 
-#define MAX_REPEAT 1000
+#define MAX_REPEAT FSR_MAX_REPEAT
 
 static int usage(const char* msg, const char* arg)
 {
@@ -84,10 +96,10 @@ static void json_names(FILE* f, const char* key, const char* const* names, int n
     fputs("]", f);
 }
 
-static void print_info(const fsm_model_info* m)
+static void print_info(const fsm_system* m)
 {
     printf("{\"variant\": ");
-    json_string(stdout, m->variant);
+    json_string(stdout, m->name);
     printf(", \"fingerprint\": ");
     json_string(stdout, m->fingerprint);
     printf(", \"generator\": ");
@@ -99,11 +111,11 @@ static void print_info(const fsm_model_info* m)
     printf(", ");
     json_names(stdout, "params", m->param_names, m->np);
     printf(", ");
-    json_names(stdout, "maneuver_params", m->maneuver_param_names, m->nmp);
+    json_names(stdout, "maneuver_params", m->drive_param_names, m->nmp);
     printf("}\n");
 }
 
-static int set_param(const fsm_model_info* m, double* p, double* mp, const char* arg)
+static int set_param(const fsm_system* m, double* p, double* mp, const char* arg)
 {
     const char* eq = strchr(arg, '=');
     if (!eq) return 0;
@@ -113,14 +125,14 @@ static int set_param(const fsm_model_info* m, double* p, double* mp, const char*
     for (int i = 0; i < m->np; ++i)
         if (strlen(m->param_names[i]) == len && !strncmp(arg, m->param_names[i], len)) { p[i] = v; return 1; }
     for (int i = 0; i < m->nmp; ++i)
-        if (strlen(m->maneuver_param_names[i]) == len && !strncmp(arg, m->maneuver_param_names[i], len)) {
+        if (strlen(m->drive_param_names[i]) == len && !strncmp(arg, m->drive_param_names[i], len)) {
             mp[i] = v;
             return 1;
         }
     return 0;
 }
 
-static int write_csv(const char* path, const fsm_model_info* m, const fsr_result* r)
+static int write_csv(const char* path, const fsm_system* m, const fsr_result* r)
 {
     char tmp[4096];
     if (snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid()) >= (int)sizeof tmp) {
@@ -133,9 +145,11 @@ static int write_csv(const char* path, const fsm_model_info* m, const fsr_result
         return 0;
     }
     fputs("t", f);
+    int violation = m->nc > 0;
     for (int i = 0; i < m->ny; ++i) fprintf(f, ",%s", m->output_names[i]);
+    if (violation) fputs(",violation", f);
     for (int i = 0; i < m->nq; ++i) fprintf(f, ",%s", m->coord_names[i]);
-    if (r->ncols > 1 + m->ny + m->nq) fputs(",T,V,h", f);
+    if (r->ncols > 1 + m->ny + violation + m->nq) fputs(",T,V,h", f);
     fputc('\n', f);
     for (int k = 0; k < r->nrows; ++k) {
         const double* row = r->rows + (size_t)k * (size_t)r->ncols;
@@ -158,15 +172,28 @@ static int cmp_double(const void* a, const void* b)
     return (x > y) - (x < y);
 }
 
+/* End with the parent: SIGTERM when it dies, and now if it died before we got here. */
+static void die_with_parent(void)
+{
+#ifdef __linux__
+    const char* pp = getenv("FLEXSYM_PARENT_PID");
+    long want;
+    if (!pp || !parse_int(pp, &want)) return;
+    if (prctl(PR_SET_PDEATHSIG, SIGTERM) != 0) return;
+    if ((long)getppid() != want) _exit(143);
+#endif
+}
+
 int main(int argc, char** argv)
 {
-    const fsm_model_info* m = fsm_model();
+    die_with_parent();
+    const fsm_system* m = fsm_system_model();
     fsr_options o;
     fsr_default_options(&o);
     double p[64], mp[64];
     if (m->np > 64 || m->nmp > 64) return usage("model has too many parameters", NULL);
     memcpy(p, m->param_defaults, sizeof(double) * (size_t)m->np);
-    memcpy(mp, m->maneuver_param_defaults, sizeof(double) * (size_t)m->nmp);
+    memcpy(mp, m->drive_param_defaults, sizeof(double) * (size_t)m->nmp);
     o.p = p;
     o.mp = mp;
     const char* out = NULL;
@@ -185,6 +212,7 @@ int main(int argc, char** argv)
         else if (!strcmp(a, "--newmark-gamma")) { if (!parse_double(val, &o.nm_gamma)) return usage("bad --newmark-gamma", val); }
         else if (!strcmp(a, "--newmark-beta")) { if (!parse_double(val, &o.nm_beta)) return usage("bad --newmark-beta", val); }
         else if (!strcmp(a, "--blowup")) { if (!parse_double(val, &o.blowup)) return usage("bad --blowup", val); }
+        else if (!strcmp(a, "--penalty")) { if (!parse_double(val, &o.penalty)) return usage("bad --penalty", val); }
         else if (!strcmp(a, "--newton-tol")) { if (!parse_double(val, &o.newton_tol)) return usage("bad --newton-tol", val); }
         else if (!strcmp(a, "--step")) { if (!parse_double(val, &o.step)) return usage("bad --step", val); }
         else if (!strcmp(a, "--tol")) { if (!parse_double(val, &o.tol)) return usage("bad --tol", val); }
@@ -197,17 +225,19 @@ int main(int argc, char** argv)
         }
         else if (!strcmp(a, "--out")) out = val;
         else if (!strcmp(a, "--out-every")) {
-            if (!parse_int(val, &lv) || lv < 1 || lv > 1000000000L) return usage("bad --out-every", val);
+            if (!parse_int(val, &lv) || lv < 1 || lv > FSR_MAX_STEPS) return usage("bad --out-every (rows every K steps)", val);
             o.out_every = (int)lv;
         } else if (!strcmp(a, "--repeat")) {
-            if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (1..1000)", val);
+            if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (runs, 1 to FSR_MAX_REPEAT of flexsym/limits.h)", val);
         } else if (!strcmp(a, "--integrator")) {
             if (!strcmp(val, "rk4")) o.method = FSR_RK4;
             else if (!strcmp(val, "genalpha")) o.method = FSR_GENALPHA;
             else if (!strcmp(val, "newmark")) o.method = FSR_NEWMARK;
             else if (!strcmp(val, "dopri5")) o.method = FSR_DOPRI5;
             else if (!strcmp(val, "radau5")) o.method = FSR_RADAU5;
-            else return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5)", val);
+            else if (!strcmp(val, "ali3p")) o.method = FSR_ALI3P;
+            else if (!strcmp(val, "genalpha3")) o.method = FSR_GENALPHA3;
+            else return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5, ali3p, genalpha3)", val);
         } else if (!strcmp(a, "--param")) {
             if (!set_param(m, p, mp, val)) return usage("bad --param (NAME=VALUE with a known name)", val);
         } else return usage("unknown option", a);
@@ -225,7 +255,7 @@ int main(int argc, char** argv)
         if (repeat == 1 || k > 0) times[repeat == 1 ? 0 : k - 1] = t1 - t0;
         if (r.status != FSR_OK) { repeat = 1; times[0] = t1 - t0; break; }
     }
-    if (r.status == FSR_BAD_OPTIONS) {
+    if (r.status == FSR_BAD_OPTIONS || r.status == FSR_ASSEMBLY) {
         fsr_free(&r);
         return usage(r.message, NULL);
     }

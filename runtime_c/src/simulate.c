@@ -6,6 +6,9 @@
  * Workspace is allocated once before the step loop; the loop itself never allocates.
  * Divergence (non-finite state, or a coordinate beyond blowup * L) stops the run with a
  * message naming the time; the rows stored up to then are kept.
+ * A run is resumable step by step (sim_open, sim_begin, sim_step; each method carries its state
+ * in sim between steps): fsr_simulate runs it to t_end, fsr_stepper to times the caller asks
+ * for (an FMU's communication points), so both give the same rows bit for bit.
  */
 #include "flexsym/runtime.h"
 
@@ -16,7 +19,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "flexsym/model.h"
+#include "constrained.h"
+#include "flexsym/limits.h"
+#include "flexsym/system.h"
 #include "linalg.h"
 
 /* Modified Newton: rebuild the iteration matrix when an iteration contracts the update by
@@ -69,8 +74,26 @@ static const erk_tableau DOPRI5 = {
      -10690763975.0 / 1880347072.0, 701980252875.0 / 199316789632.0,
      -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0}};
 
+/* Modified Newton: the factored iteration matrix is kept across iterations and steps. */
 typedef struct {
-    const fsm_model_info* m;
+    double h;          /* step it was built for; 0: none */
+    double theta;      /* contraction |dq_k| / |dq_k-1| last measured with it; < 0: unknown */
+    long theta_step;   /* the step of that measurement */
+} newton_state;
+
+enum { RADAU_STAGES = 3 };  /* radau5: see radau_step */
+
+typedef struct {
+    double c[RADAU_STAGES];
+    double a[RADAU_STAGES][RADAU_STAGES];
+    double aa[RADAU_STAGES][RADAU_STAGES];  /* a a: the displacement coefficients */
+    double e[RADAU_STAGES][RADAU_STAGES];   /* predictor: A at c_i + 1 from the last step's A */
+    double x[RADAU_STAGES + 1];             /* dense output: the nodes 0, c_1, c_2, c_3 */
+    double wden[RADAU_STAGES + 1];          /* 1 / prod_{l != j} (x_j - x_l) */
+} radau_tableau;
+
+typedef struct {
+    const fsm_system* m;  /* the model (system.h; a one-beam model through model_adapter.c) */
     const fsr_options* o;
     fsr_result* r;
     int n;
@@ -96,26 +119,45 @@ typedef struct {
     double* dense; /* 2n: a state between steps, for rows */
     int* piv;
     int mass_have, mass_factored; /* only trusted when the mass is constant */
-    double drive_t[2], drive_v[2][2];
+    int nd;        /* drive vector d = [t, theta, theta', theta'', ...] */
+    double* dw;    /* drive vectors of the callers: DW_ACCEL, DW_ROW, DW_STEP (+ stage), nd each */
+    double drive_t[2], *drive_v[2];
     int drive_valid[2], drive_next;
+    int drive_held;   /* drive from the caller (fsr_stepper_set_drive), not the manoeuvre: */
+    double hold_t, hold[2], hold_theta;  /* theta' = hold[0] + hold[1] (t - hold_t), theta'' =
+                                            hold[1], theta = hold_theta + its integral */
     long capacity; /* rows */
+    /* the run, resumable step by step (sim_step): the state and what a method carries over */
+    double* state; /* [q, q'] */
+    long k;        /* steps taken (fixed steps) */
+    long msteps;   /* steps of the method: nsteps, or radau5's own with --step */
+    int done;
+    newton_state ns;
+    double am, af, gam, bet, ra, pa, pb; /* generalized-alpha / Newmark coefficients */
+    int extrapolate;
+    radau_tableau rt;
+    double H, h_prev;                    /* radau5: step length, last step */
+    const erk_tableau* T;                /* explicit: tableau, adaptive step control */
+    int adaptive, have_k0, rejected;
+    double t, h, err_old;
 } sim;
 
 void fsr_default_options(fsr_options* o)
 {
     memset(o, 0, sizeof *o);
     o->method = FSR_GENALPHA;
-    o->t_end = 20.0;
-    o->dt = 1e-3;
+    o->t_end = FSR_DEFAULT_T_END;
+    o->dt = FSR_DEFAULT_DT;
     o->out_every = 1;
-    o->rho_inf = 0.9;
-    o->nm_gamma = 0.5;
-    o->nm_beta = 0.25;
-    o->newton_tol = 1e-12;
+    o->rho_inf = FSR_DEFAULT_RHO_INF;
+    o->nm_gamma = FSR_DEFAULT_NEWMARK_GAMMA;
+    o->nm_beta = FSR_DEFAULT_NEWMARK_BETA;
+    o->newton_tol = FSR_DEFAULT_NEWTON_TOL;
     o->newton_max = 25;
-    o->tol = 1e-6;
-    o->max_steps = 1000000;
-    o->blowup = 10.0;
+    o->tol = FSR_DEFAULT_TOL;
+    o->max_steps = FSR_DEFAULT_MAX_STEPS;
+    o->blowup = FSR_DEFAULT_BLOWUP;
+    o->penalty = FSR_DEFAULT_PENALTY;
 }
 
 const char* fsr_method_name(fsr_method m)
@@ -126,8 +168,21 @@ const char* fsr_method_name(fsr_method m)
     case FSR_NEWMARK: return "newmark";
     case FSR_DOPRI5: return "dopri5";
     case FSR_RADAU5: return "radau5";
+    case FSR_ALI3P: return "ali3p";
+    case FSR_GENALPHA3: return "genalpha3";
     }
     return "?";
+}
+
+/* r->message from fmt, r->status = st; returns st (shared with constrained.c). */
+fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->message, sizeof r->message, fmt, ap);
+    va_end(ap);
+    r->status = st;
+    return st;
 }
 
 static fsr_status fail(sim* s, fsr_status st, const char* fmt, ...)
@@ -147,32 +202,40 @@ static double max_abs(double m, double x)
     return x > m ? x : m;
 }
 
-/* drive = [theta', theta''] at t. The last two times are cached: RK stages and output rows
- * ask for the same time repeatedly, and the manoeuvre costs a sin and a cos. */
-static void drive_at(sim* s, double t, double* drive)
+enum { DW_ACCEL = 0, DW_ROW = 1, DW_STEP = 2, DW_COUNT = 2 + 3 };  /* DW_STEP: 3 radau stages */
+
+/* The drive vector d (nd) at t into d. The last two times are cached: RK stages and output
+ * rows ask for the same time repeatedly, and the manoeuvre costs a sin and a cos. */
+static void drive_at(sim* s, double t, double* d)
 {
+    if (s->drive_held) {  /* one guided joint (nd = 4, checked by fsr_stepper_new) */
+        double tau = t - s->hold_t;
+        d[0] = t;
+        d[1] = s->hold_theta + tau * (s->hold[0] + 0.5 * s->hold[1] * tau);
+        d[2] = s->hold[0] + s->hold[1] * (t - s->hold_t);
+        d[3] = s->hold[1];
+        return;
+    }
+    const int nd = s->nd;  /* a loop, not memcpy: a call to it cost 4-10 % on #3 and prestress */
     for (int i = 0; i < 2; ++i)
         if (s->drive_valid[i] && s->drive_t[i] == t) {
-            drive[0] = s->drive_v[i][0];
-            drive[1] = s->drive_v[i][1];
+            for (int j = 0; j < nd; ++j) d[j] = s->drive_v[i][j];
             return;
         }
-    double d3[3];
-    fsm_maneuver(&t, s->o->mp, d3);
     int k = s->drive_next;
     s->drive_next = 1 - k;
     s->drive_valid[k] = 1;
     s->drive_t[k] = t;
-    drive[0] = s->drive_v[k][0] = d3[1];
-    drive[1] = s->drive_v[k][1] = d3[2];
+    s->m->drive(&t, s->o->mp, s->drive_v[k]);
+    for (int j = 0; j < nd; ++j) d[j] = s->drive_v[k][j];
 }
 
-/* M(q) into Mraw and, with factor, its Cholesky factor into Mfac; once when M is constant. */
-static fsr_status mass_at(sim* s, double t, const double* q, int factor)
+/* M(q, d) into Mraw and, with factor, its Cholesky factor into Mfac; once when M is constant. */
+static fsr_status mass_at(sim* s, double t, const double* q, const double* d, int factor)
 {
     int n = s->n, constant = s->m->mass_constant;
     if (!constant || !s->mass_have) {
-        fsm_mass(q, s->o->p, s->Mraw);
+        s->m->mass(q, d, s->o->p, s->Mraw);
         s->mass_have = 1;
         s->mass_factored = 0;
     }
@@ -195,11 +258,11 @@ static void apply_inverse(sim* s, const double* Ainv, int dim, double* x)
 
 static fsr_status accel(sim* s, double t, const double* q, const double* v, double* a)
 {
-    double drive[2];
-    fsr_status st = mass_at(s, t, q, 1);
-    if (st) return st;
+    double* drive = s->dw + DW_ACCEL * s->nd;
     drive_at(s, t, drive);
-    fsm_force(q, v, drive, s->o->p, a);
+    fsr_status st = mass_at(s, t, q, drive, 1);
+    if (st) return st;
+    s->m->force(q, v, drive, s->o->p, a);
     s->r->force_evaluations++;
     if (s->m->mass_constant && s->bw < 0) apply_inverse(s, s->Minv, s->n, a);
     else fsr_chol_solve(s->Mfac, s->n, a);
@@ -235,7 +298,7 @@ static fsr_status store(sim* s, double t, const double* q, const double* v, cons
     fsr_result* r = s->r;
     if (r->nrows >= s->capacity) return FSR_OK;
     double* row = r->rows + (size_t)r->nrows * (size_t)r->ncols;
-    double drive[2] = {0.0, 0.0};
+    double* drive = s->dw + DW_ROW * s->nd;  /* zeros unless something reads it */
     const double* qdd = s->qdd;
     if (s->m->outputs_use_drive || s->o->energy) drive_at(s, t, drive);
     if (s->m->outputs_use_acceleration) {
@@ -246,10 +309,10 @@ static fsr_status store(sim* s, double t, const double* q, const double* v, cons
         }
     }
     row[0] = t;
-    fsm_outputs(q, v, qdd, drive, s->o->p, s->y);
+    s->m->outputs(q, v, qdd, s->zero, drive, s->o->p, s->y);  /* no multipliers: nc = 0 */
     memcpy(row + 1, s->y, sizeof(double) * (size_t)s->m->ny);
     memcpy(row + 1 + s->m->ny, q, sizeof(double) * (size_t)s->n);
-    if (s->o->energy) fsm_energy(q, v, drive, s->o->p, row + 1 + s->m->ny + s->n);
+    if (s->o->energy) s->m->energy(q, v, drive, s->o->p, row + 1 + s->m->ny + s->n);
     r->nrows++;
     return FSR_OK;
 }
@@ -408,64 +471,76 @@ static fsr_status initial_step(sim* s, const double* y, const double* k0, double
 #define FAC_MIN 0.2
 #define FAC_MAX 10.0
 
-static fsr_status run_erk(sim* s, const erk_tableau* T, double* y)
+static fsr_status erk_begin(sim* s, const erk_tableau* T)
+{
+    int m = 2 * s->n;
+    double *k = s->work, *y1 = k + (size_t)MAX_STAGES * (size_t)m, *ys = y1 + m;
+    s->T = T;
+    s->adaptive = T->embedded && s->o->tol > 0.0;
+    s->t = 0.0;
+    s->h = s->o->dt;
+    s->err_old = 1e-4;
+    s->have_k0 = s->rejected = 0;
+    s->done = s->msteps < 1;
+    if (!s->adaptive) return FSR_OK;
+    fsr_status st = deriv(s, 0.0, s->state, k);
+    if (st) return st;
+    s->have_k0 = 1;
+    return initial_step(s, s->state, k, k + m, ys, &s->h);
+}
+
+/* One step (accepted, or rejected by the adaptive step control). */
+static fsr_status erk_advance(sim* s)
 {
     const fsr_options* o = s->o;
-    int m = 2 * s->n, adaptive = T->embedded && o->tol > 0.0;
-    double *k = s->work, *y1 = k + (size_t)MAX_STAGES * (size_t)m, *ys = y1 + m;
-    double t = 0.0, h = o->dt, err_old = 1e-4;
-    int have_k0 = 0, rejected = 0;
+    const erk_tableau* T = s->T;
+    int m = 2 * s->n, adaptive = s->adaptive;
+    double *y = s->state, *k = s->work, *y1 = k + (size_t)MAX_STAGES * (size_t)m, *ys = y1 + m;
+    double t = s->t, h = s->h, t1;
     fsr_status st;
     if (adaptive) {
-        if ((st = deriv(s, 0.0, y, k))) return st;
-        have_k0 = 1;
-        if ((st = initial_step(s, y, k, k + m, ys, &h))) return st;
+        if (s->r->steps + s->r->rejected_steps >= o->max_steps)
+            return fail(s, FSR_STEP_FAILED,
+                        "%s gave up at t = %.6g s after %ld steps (step %.3g s = %.2g / omega_max, "
+                        "omega_max = %.1f rad/s: stiff for explicit steps); use an implicit "
+                        "integrator, a looser --tol or a larger --max-steps", T->name, t,
+                        o->max_steps, h, h * s->r->omega_max, s->r->omega_max);
+        if (t + 1.01 * h >= o->t_end) h = o->t_end - t;
+        t1 = t + h >= o->t_end ? o->t_end : t + h;
+        if (h <= 16.0 * DBL_EPSILON * fmax(1.0, t))
+            return fail(s, FSR_STEP_FAILED, "%s step size underflow at t = %.6g s (h = %.3g s)", T->name, t, h);
+    } else {
+        t1 = time_of(s, s->k + 1);
     }
-    for (long step = 0; adaptive ? t < o->t_end : step < s->nsteps;) {
-        double t1;
-        if (adaptive) {
-            if (s->r->steps + s->r->rejected_steps >= o->max_steps)
-                return fail(s, FSR_STEP_FAILED,
-                            "%s gave up at t = %.6g s after %ld steps (step %.3g s = %.2g / omega_max, "
-                            "omega_max = %.1f rad/s: stiff for explicit steps); use an implicit "
-                            "integrator, a looser --tol or a larger --max-steps", T->name, t,
-                            o->max_steps, h, h * s->r->omega_max, s->r->omega_max);
-            if (t + 1.01 * h >= o->t_end) h = o->t_end - t;
-            t1 = t + h >= o->t_end ? o->t_end : t + h;
-            if (h <= 16.0 * DBL_EPSILON * fmax(1.0, t))
-                return fail(s, FSR_STEP_FAILED, "%s step size underflow at t = %.6g s (h = %.3g s)", T->name, t, h);
-        } else {
-            t1 = time_of(s, step + 1);
+    if (!s->have_k0 && (st = deriv(s, t, y, k))) return st;
+    if ((st = erk_step(s, T, t, t1, y, k, y1, ys))) return st;
+    double h_next = h;
+    if (adaptive) {
+        double err = error_norm(s, T, t1 - t, k, y, y1);
+        double fac11 = pow(err, 0.2 - 0.75 * PI_BETA);
+        if (!(err <= 1.0)) {  /* rejected (also NaN): shrink, keep k[0] = f(t, y) */
+            s->r->rejected_steps++;
+            s->rejected = 1;
+            s->h = h / fmin(1.0 / FAC_MIN, fac11 / SAFETY);
+            return FSR_OK;
         }
-        if (!have_k0 && (st = deriv(s, t, y, k))) return st;
-        if ((st = erk_step(s, T, t, t1, y, k, y1, ys))) return st;
-        double h_next = h;
-        if (adaptive) {
-            double err = error_norm(s, T, t1 - t, k, y, y1);
-            double fac11 = pow(err, 0.2 - 0.75 * PI_BETA);
-            if (!(err <= 1.0)) {  /* rejected (also NaN): shrink, keep k[0] = f(t, y) */
-                s->r->rejected_steps++;
-                rejected = 1;
-                h /= fmin(1.0 / FAC_MIN, fac11 / SAFETY);
-                continue;
-            }
-            double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, fac11 / pow(err_old, PI_BETA) / SAFETY));
-            h_next = (t1 - t) / fac;
-            if (rejected) h_next = fmin(h_next, t1 - t);
-            err_old = fmax(err, 1e-4);
-            rejected = 0;
-        }
-        const double* klast = k + (size_t)(T->stages - 1) * (size_t)m;
-        dense_step d = {erk_dense, T, m, t, t1 - t, y, k};
-        if ((st = accept(s, t1, t1 - t, y1, T->fsal ? klast + s->n : NULL, adaptive ? &d : NULL)))
-            return st;
-        memcpy(y, y1, sizeof(double) * (size_t)m);
-        if (T->fsal) memcpy(k, klast, sizeof(double) * (size_t)m);
-        have_k0 = T->fsal;
-        t = t1;
-        h = h_next;
-        ++step;
+        double fac = fmax(1.0 / FAC_MAX, fmin(1.0 / FAC_MIN, fac11 / pow(s->err_old, PI_BETA) / SAFETY));
+        h_next = (t1 - t) / fac;
+        if (s->rejected) h_next = fmin(h_next, t1 - t);
+        s->err_old = fmax(err, 1e-4);
+        s->rejected = 0;
     }
+    const double* klast = k + (size_t)(T->stages - 1) * (size_t)m;
+    dense_step d = {erk_dense, T, m, t, t1 - t, y, k};
+    if ((st = accept(s, t1, t1 - t, y1, T->fsal ? klast + s->n : NULL, adaptive ? &d : NULL)))
+        return st;
+    memcpy(y, y1, sizeof(double) * (size_t)m);
+    if (T->fsal) memcpy(k, klast, sizeof(double) * (size_t)m);
+    s->have_k0 = T->fsal;
+    s->t = t1;
+    s->h = h_next;
+    ++s->k;
+    s->done = adaptive ? !(t1 < o->t_end) : s->k >= s->msteps;
     return FSR_OK;
 }
 
@@ -476,14 +551,15 @@ static fsr_status run_erk(sim* s, const erk_tableau* T, double* y)
 static fsr_status estimate_omega_max(sim* s, double* omega)
 {
     int n = s->n;
-    double *x = s->work, *z = x + n, lam = 0.0;
-    fsr_status st = mass_at(s, 0.0, s->zero, 1);
+    double *x = s->work, *z = x + n, lam = 0.0, *drive = s->dw + DW_STEP * s->nd;
+    drive_at(s, 0.0, drive);
+    fsr_status st = mass_at(s, 0.0, s->zero, drive, 1);
     if (st) return st;
     for (int i = 0; i < n; ++i) x[i] = (1.0 + 0.1 * i) / sqrt((double)n);
     for (int sample = 0; sample < 5; ++sample) {
-        double drive[2], est = 0.0;
+        double est = 0.0;
         drive_at(s, s->o->t_end * sample / 4.0, drive);
-        fsm_residual_jac(s->zero, s->zero, s->zero, drive, s->o->p, s->Jq, s->Jv);
+        s->m->residual_jac(s->zero, s->zero, s->zero, drive, s->o->p, s->Jq, s->Jv);
         for (int it = 0; it < 1000; ++it) {
             fsr_matvec(s->Jq, n, -1, x, z);
             fsr_chol_solve(s->Mfac, n, z);
@@ -558,13 +634,6 @@ static void newton_solve(sim* s, double* x)
     else apply_inverse(s, s->Sinv, s->N, x);
 }
 
-/* Modified Newton: the factored iteration matrix is kept across iterations and steps. */
-typedef struct {
-    double h;          /* step it was built for; 0: none */
-    double theta;      /* contraction |dq_k| / |dq_k-1| last measured with it; < 0: unknown */
-    long theta_step;   /* the step of that measurement */
-} newton_state;
-
 /* Converged when the update is below tol, or (modified Newton) when the error it leaves,
  * theta / (1 - theta) |dq| for a contraction theta measured in the last NEWTON_THETA_AGE steps,
  * is (Hairer & Wanner II, IV.8): usually after one iteration instead of two. */
@@ -623,87 +692,101 @@ static int extrapolation_wins(int n, const double* a1, const double* a, const do
  * Newmark(gamma, beta) is the special case am = af = 0. The iteration matrix is rebuilt (at
  * the current iterate) when the step size changes or an iteration contracts the update by
  * less than NEWTON_THETA_MAX; every iteration with newton_full. */
-static fsr_status run_alpha(sim* s, double* q)
+static fsr_status alpha_begin(sim* s)
 {
     const fsr_options* o = s->o;
     int n = s->n;
-    double am, af, gam, bet;
     if (o->method == FSR_NEWMARK) {
-        am = af = 0.0;
-        gam = o->nm_gamma;
-        bet = o->nm_beta;
+        s->am = s->af = 0.0;
+        s->gam = o->nm_gamma;
+        s->bet = o->nm_beta;
     } else {
         double r = o->rho_inf;
-        am = (2.0 * r - 1.0) / (r + 1.0);
-        af = r / (r + 1.0);
-        gam = 0.5 + af - am;
-        bet = 0.25 * (gam + 0.5) * (gam + 0.5);
+        s->am = (2.0 * r - 1.0) / (r + 1.0);
+        s->af = r / (r + 1.0);
+        s->gam = 0.5 + s->af - s->am;
+        s->bet = 0.25 * (s->gam + 0.5) * (s->gam + 0.5);
     }
-    double* v = q + n;
+    s->ra = (1.0 - s->af) / (1.0 - s->am);
+    s->pa = s->af / (1.0 - s->am);
+    s->pb = -s->am / (1.0 - s->am);
+    s->ns = (newton_state){0.0, -1.0, 0};
+    s->extrapolate = 0;
+    s->done = s->msteps < 1;
+    /* work: a, ab, a1, q1, v1, res, ma, a_old (see alpha_step) */
+    double *q = s->state, *a = s->work, *ab = a + n, *a_old = ab + 6 * n;
+    fsr_status st = accel(s, 0.0, q, q + n, a);
+    if (st) return st;
+    memcpy(ab, a, sizeof(double) * (size_t)n);
+    memcpy(a_old, a, sizeof(double) * (size_t)n);
+    return FSR_OK;
+}
+
+static fsr_status alpha_step(sim* s)
+{
+    const fsr_options* o = s->o;
+    int n = s->n;
+    const double bet = s->bet, gam = s->gam, ra = s->ra, pa = s->pa, pb = s->pb;
+    double *q = s->state, *v = q + n;
     /* a: acceleration, ab: the algorithmic acceleration; 1: their values at t1 */
     double *a = s->work, *ab = a + n, *a1 = ab + n, *q1 = a1 + n, *v1 = q1 + n, *res = v1 + n, *ma = res + n;
     double* a_old = ma + n;
-    double drive[2], tol = o->newton_tol * s->L, ra = (1.0 - af) / (1.0 - am);
-    double pa = af / (1.0 - am), pb = -am / (1.0 - am);
-    newton_state ns = {0.0, -1.0, 0};
-    int extrapolate = 0;
+    double *drive = s->dw + DW_STEP * s->nd, tol = o->newton_tol * s->L;
+    newton_state* ns = &s->ns;
     fsr_status st;
-    if ((st = accel(s, 0.0, q, v, a))) return st;
-    memcpy(ab, a, sizeof(double) * (size_t)n);
-    memcpy(a_old, a, sizeof(double) * (size_t)n);
-    for (long k = 0; k < s->nsteps; ++k) {
-        double t = time_of(s, k), t1 = time_of(s, k + 1), h = t1 - t;
-        double cb = h * h * bet * ra, cg = h * gam * ra, h2 = h * h;
-        for (int i = 0; i < n; ++i) {  /* predictor a1; ab becomes ab(t1) - ra a1 */
-            double abo = ab[i], abp = pa * a[i] + pb * abo;
-            a1[i] = extrapolate ? 2.0 * a[i] - a_old[i] : a[i];
-            double ab1 = abp + ra * a1[i];
-            ab[i] = abp;
-            q1[i] = q[i] + h * v[i] + h2 * ((0.5 - bet) * abo + bet * ab1);
-            v1[i] = v[i] + h * ((1.0 - gam) * abo + gam * ab1);
-        }
-        drive_at(s, t1, drive);
-        /* a new matrix for a new step size, not for the rounding of t1 - t */
-        int rebuild = o->newton_full || fabs(h - ns.h) > 1e-6 * h;
-        double dq = 0.0, dq_prev = -1.0;
-        for (int it = 0;; ++it) {
-            if (it == o->newton_max) return newton_failed(s, t1, dq, it);
-            if ((st = mass_at(s, t1, q1, 0))) return st;
-            fsm_force(q1, v1, drive, o->p, res);
-            s->r->force_evaluations++;
-            fsr_matvec(s->Mraw, n, s->bw, a1, ma);
-            for (int i = 0; i < n; ++i) res[i] -= ma[i];  /* -(M a1 - f) */
-            if (rebuild) {
-                fsm_residual_jac(q1, v1, a1, drive, o->p, s->Jq, s->Jv);
-                newton_rows(s, 0, &cb, &cg);
-                if ((st = newton_factor(s, t1))) return st;
-                ns.h = h;
-                ns.theta = dq_prev = -1.0;
-                rebuild = o->newton_full;
-            }
-            newton_solve(s, res);
-            dq = 0.0;
-            for (int i = 0; i < n; ++i) {
-                a1[i] += res[i];
-                q1[i] += cb * res[i];
-                v1[i] += cg * res[i];
-                dq = max_abs(dq, cb * res[i]);
-            }
-            s->r->newton_iterations++;
-            if (!isfinite(dq)) return newton_diverged(s, t1, q1, v1, n);
-            int slow = newton_contraction(&ns, k, dq, dq_prev, NEWTON_THETA_MAX);
-            if (newton_converged(s, &ns, k, dq, tol)) break;
-            if (slow) rebuild = 1;
-            dq_prev = dq;
-        }
-        for (int i = 0; i < n; ++i) ab[i] += ra * a1[i];
-        extrapolate = extrapolation_wins(n, a1, a, a_old);
-        memcpy(a_old, a, sizeof(double) * (size_t)n);
-        memcpy(a, a1, sizeof(double) * (size_t)n);
-        memcpy(q, q1, sizeof(double) * (size_t)(2 * n));  /* q1, v1 are contiguous, as q, v */
-        if ((st = accept(s, t1, h, q, a, NULL))) return st;
+    long k = s->k;
+    double t = time_of(s, k), t1 = time_of(s, k + 1), h = t1 - t;
+    double cb = h * h * bet * ra, cg = h * gam * ra, h2 = h * h;
+    for (int i = 0; i < n; ++i) {  /* predictor a1; ab becomes ab(t1) - ra a1 */
+        double abo = ab[i], abp = pa * a[i] + pb * abo;
+        a1[i] = s->extrapolate ? 2.0 * a[i] - a_old[i] : a[i];
+        double ab1 = abp + ra * a1[i];
+        ab[i] = abp;
+        q1[i] = q[i] + h * v[i] + h2 * ((0.5 - bet) * abo + bet * ab1);
+        v1[i] = v[i] + h * ((1.0 - gam) * abo + gam * ab1);
     }
-    return FSR_OK;
+    drive_at(s, t1, drive);
+    /* a new matrix for a new step size, not for the rounding of t1 - t */
+    int rebuild = o->newton_full || fabs(h - ns->h) > 1e-6 * h;
+    double dq = 0.0, dq_prev = -1.0;
+    for (int it = 0;; ++it) {
+        if (it == o->newton_max) return newton_failed(s, t1, dq, it);
+        if ((st = mass_at(s, t1, q1, drive, 0))) return st;
+        s->m->force(q1, v1, drive, o->p, res);
+        s->r->force_evaluations++;
+        fsr_matvec(s->Mraw, n, s->bw, a1, ma);
+        for (int i = 0; i < n; ++i) res[i] -= ma[i];  /* -(M a1 - f) */
+        if (rebuild) {
+            s->m->residual_jac(q1, v1, a1, drive, o->p, s->Jq, s->Jv);
+            newton_rows(s, 0, &cb, &cg);
+            if ((st = newton_factor(s, t1))) return st;
+            ns->h = h;
+            ns->theta = dq_prev = -1.0;
+            rebuild = o->newton_full;
+        }
+        newton_solve(s, res);
+        dq = 0.0;
+        for (int i = 0; i < n; ++i) {
+            a1[i] += res[i];
+            q1[i] += cb * res[i];
+            v1[i] += cg * res[i];
+            dq = max_abs(dq, cb * res[i]);
+        }
+        s->r->newton_iterations++;
+        if (!isfinite(dq)) return newton_diverged(s, t1, q1, v1, n);
+        int slow = newton_contraction(ns, k, dq, dq_prev, NEWTON_THETA_MAX);
+        if (newton_converged(s, ns, k, dq, tol)) break;
+        if (slow) rebuild = 1;
+        dq_prev = dq;
+    }
+    for (int i = 0; i < n; ++i) ab[i] += ra * a1[i];
+    s->extrapolate = extrapolation_wins(n, a1, a, a_old);
+    memcpy(a_old, a, sizeof(double) * (size_t)n);
+    memcpy(a, a1, sizeof(double) * (size_t)n);
+    memcpy(q, q1, sizeof(double) * (size_t)(2 * n));  /* q1, v1 are contiguous, as q, v */
+    s->k = k + 1;
+    s->done = s->k >= s->msteps;
+    return accept(s, t1, h, q, a, NULL);
 }
 
 /* ------------------------------------------------------------------ Radau IIA, 3 stages */
@@ -715,7 +798,6 @@ static fsr_status run_alpha(sim* s, double* q)
  * matrix blocks (i, j) = [i == j] M + h^2 (a a)_ij dr/dq + h a_ij dr/dq' (newton_rows). The
  * method is stiffly accurate (c_3 = 1): q1 = Q_3, q1' = V_3, and A_3 is the acceleration at t1.
  * L-stability damps the stiff axial and high element modes that the step does not resolve. */
-enum { RADAU_STAGES = 3 };
 
 /* Rebuild radau5's iteration matrix when an iteration contracts by less than this, and at the
  * start of a step when the last one did (the first iteration is not spent on a stale matrix).
@@ -739,15 +821,6 @@ static int radau_converged(const sim* s, double dq, double tol, double theta_hi,
     if (s->o->newton_full || ratios < 2 || !(theta_hi < 1.0)) return 0;
     return theta_hi / (1.0 - theta_hi) * dq <= tol;
 }
-
-typedef struct {
-    double c[RADAU_STAGES];
-    double a[RADAU_STAGES][RADAU_STAGES];
-    double aa[RADAU_STAGES][RADAU_STAGES];  /* a a: the displacement coefficients */
-    double e[RADAU_STAGES][RADAU_STAGES];   /* predictor: A at c_i + 1 from the last step's A */
-    double x[RADAU_STAGES + 1];             /* dense output: the nodes 0, c_1, c_2, c_3 */
-    double wden[RADAU_STAGES + 1];          /* 1 / prod_{l != j} (x_j - x_l) */
-} radau_tableau;
 
 static void radau_init(radau_tableau* T)
 {
@@ -850,83 +923,121 @@ static void radau_dense(const dense_step* d, double theta, const double* y1, dou
  * size or a contraction slower than RADAU_THETA_MAX; stopping test: radau_converged (3 or 4
  * iterations at large steps, 2 or 3 at small ones). newton_full: each block row from its own stage's
  * Jacobians, rebuilt every iteration (the exact Newton matrix), stopping on |dq| <= tol. */
-static fsr_status run_radau(sim* s, double* y)
+static fsr_status radau_begin(sim* s)
+{
+    const fsr_options* o = s->o;
+    const int n = s->n;
+    double *q = s->state, *A = s->work;
+    radau_init(&s->rt);
+    s->h_prev = 0.0;
+    s->H = o->step > 0.0 ? o->step : o->dt;
+    s->msteps = (long)ceil(o->t_end / s->H - 1e-9);
+    if (s->msteps < 1) s->msteps = 1;
+    s->ns = (newton_state){0.0, -1.0, 0};
+    s->done = 0;
+    fsr_status st = accel(s, 0.0, q, q + n, A);
+    if (st) return st;
+    for (int i = 1; i < RADAU_STAGES; ++i) memcpy(A + i * n, A, sizeof(double) * (size_t)n);
+    return FSR_OK;
+}
+
+static fsr_status radau_step(sim* s)
 {
     const fsr_options* o = s->o;
     const int n = s->n, m = RADAU_STAGES * n, last = RADAU_STAGES - 1;
-    radau_tableau T;
-    radau_init(&T);
-    double *q = y, *v = y + n;
+    const radau_tableau* T = &s->rt;
+    double *y = s->state, *q = y, *v = y + n;
     double *A = s->work, *Q = A + m, *V = Q + m, *res = V + m, *f = res + m, *ma = f + n;
     double* y0 = ma + n;  /* [q, q'] at the start of the step, for rows inside it */
-    double drive[RADAU_STAGES][2], tol = o->newton_tol * s->L, h_prev = 0.0;
-    const double H = o->step > 0.0 ? o->step : o->dt;
-    long nsteps = (long)ceil(o->t_end / H - 1e-9);
-    if (nsteps < 1) nsteps = 1;
-    newton_state ns = {0.0, -1.0, 0};
+    double* drive[RADAU_STAGES];
+    double tol = o->newton_tol * s->L;
+    const double H = s->H;
+    const long nsteps = s->msteps, k = s->k;
+    newton_state* ns = &s->ns;
     fsr_status st;
-    if ((st = accel(s, 0.0, q, v, A))) return st;
-    for (int i = 1; i < RADAU_STAGES; ++i) memcpy(A + i * n, A, sizeof(double) * (size_t)n);
-    for (long k = 0; k < nsteps; ++k) {
-        double t = (double)k * H, t1 = k + 1 >= nsteps ? o->t_end : (double)(k + 1) * H, h = t1 - t;
-        double cq[RADAU_STAGES][RADAU_STAGES], cv[RADAU_STAGES][RADAU_STAGES];
-        for (int i = 0; i < RADAU_STAGES; ++i) {
-            drive_at(s, i == last ? t1 : t + T.c[i] * h, drive[i]);
-            for (int j = 0; j < RADAU_STAGES; ++j) {
-                cq[i][j] = h * h * T.aa[i][j];
-                cv[i][j] = h * T.a[i][j];
-            }
+    double t = (double)k * H, t1 = k + 1 >= nsteps ? o->t_end : (double)(k + 1) * H, h = t1 - t;
+    double cq[RADAU_STAGES][RADAU_STAGES], cv[RADAU_STAGES][RADAU_STAGES];
+    for (int i = 0; i < RADAU_STAGES; ++i) {
+        drive[i] = s->dw + (DW_STEP + i) * s->nd;
+        drive_at(s, i == last ? t1 : t + T->c[i] * h, drive[i]);
+        for (int j = 0; j < RADAU_STAGES; ++j) {
+            cq[i][j] = h * h * T->aa[i][j];
+            cv[i][j] = h * T->a[i][j];
         }
-        if (k > 0) radau_predict(&T, n, fabs(h - h_prev) <= 1e-6 * h, A);
-        for (int i = 0; i < RADAU_STAGES; ++i)
-            for (int r = 0; r < n; ++r) {
-                Q[i * n + r] = q[r] + T.c[i] * h * v[r];
-                V[i * n + r] = v[r];
-            }
-        radau_move(n, cq, cv, A, 1, n, Q, V);
-        int rebuild = o->newton_full || fabs(h - ns.h) > 1e-6 * h || ns.theta > RADAU_THETA_MAX;
-        double dq = 0.0, dq_prev = -1.0, theta_hi = 0.0;
-        int ratios = 0;
-        for (int it = 0;; ++it) {
-            if (it == o->newton_max) return newton_failed(s, t1, dq, it);
-            for (int i = 0; i < RADAU_STAGES; ++i) {  /* res = -(M(Q_i) A_i - f_i), interleaved */
-                const double *Qi = Q + i * n, *Vi = V + i * n, *Ai = A + i * n;
-                if ((st = mass_at(s, t + T.c[i] * h, Qi, 0))) return st;
-                fsm_force(Qi, Vi, drive[i], o->p, f);
-                s->r->force_evaluations++;
-                fsr_matvec(s->Mraw, n, s->bw, Ai, ma);
-                for (int r = 0; r < n; ++r) res[r * RADAU_STAGES + i] = f[r] - ma[r];
-                if (rebuild && (o->newton_full || i == last)) {
-                    fsm_residual_jac(Qi, Vi, Ai, drive[i], o->p, s->Jq, s->Jv);
-                    for (int b = o->newton_full ? i : 0; b <= i; ++b) newton_rows(s, b, cq[b], cv[b]);
-                }
-            }
-            if (rebuild) {
-                if ((st = newton_factor(s, t1))) return st;
-                ns.h = h;
-                ns.theta = dq_prev = -1.0;
-                ratios = 0;
-                rebuild = o->newton_full;
-            }
-            newton_solve(s, res);
-            for (int r = 0; r < n; ++r)
-                for (int i = 0; i < RADAU_STAGES; ++i) A[i * n + r] += res[r * RADAU_STAGES + i];
-            dq = radau_move(n, cq, cv, res, RADAU_STAGES, 1, Q, V);
-            s->r->newton_iterations++;
-            if (!isfinite(dq)) return newton_diverged(s, t1, Q, V, m);
-            int slow = newton_contraction(&ns, k, dq, dq_prev, RADAU_THETA_MAX);
-            if (dq_prev > 0.0) theta_hi = ratios++ ? max_abs(theta_hi, ns.theta) : ns.theta;
-            if (radau_converged(s, dq, tol, theta_hi, ratios)) break;
-            if (slow) rebuild = 1;
-            dq_prev = dq;
-        }
-        memcpy(y0, y, sizeof(double) * (size_t)(2 * n));
-        memcpy(q, Q + last * n, sizeof(double) * (size_t)n);
-        memcpy(v, V + last * n, sizeof(double) * (size_t)n);
-        h_prev = h;
-        dense_step d = {radau_dense, &T, 2 * n, t, h, y0, Q};
-        if ((st = accept(s, t1, h, y, A + last * n, &d))) return st;
     }
+    if (k > 0) radau_predict(T, n, fabs(h - s->h_prev) <= 1e-6 * h, A);
+    for (int i = 0; i < RADAU_STAGES; ++i)
+        for (int r = 0; r < n; ++r) {
+            Q[i * n + r] = q[r] + T->c[i] * h * v[r];
+            V[i * n + r] = v[r];
+        }
+    radau_move(n, cq, cv, A, 1, n, Q, V);
+    int rebuild = o->newton_full || fabs(h - ns->h) > 1e-6 * h || ns->theta > RADAU_THETA_MAX;
+    double dq = 0.0, dq_prev = -1.0, theta_hi = 0.0;
+    int ratios = 0;
+    for (int it = 0;; ++it) {
+        if (it == o->newton_max) return newton_failed(s, t1, dq, it);
+        for (int i = 0; i < RADAU_STAGES; ++i) {  /* res = -(M(Q_i) A_i - f_i), interleaved */
+            const double *Qi = Q + i * n, *Vi = V + i * n, *Ai = A + i * n;
+            if ((st = mass_at(s, t + T->c[i] * h, Qi, drive[i], 0))) return st;
+            s->m->force(Qi, Vi, drive[i], o->p, f);
+            s->r->force_evaluations++;
+            fsr_matvec(s->Mraw, n, s->bw, Ai, ma);
+            for (int r = 0; r < n; ++r) res[r * RADAU_STAGES + i] = f[r] - ma[r];
+            if (rebuild && (o->newton_full || i == last)) {
+                s->m->residual_jac(Qi, Vi, Ai, drive[i], o->p, s->Jq, s->Jv);
+                for (int b = o->newton_full ? i : 0; b <= i; ++b) newton_rows(s, b, cq[b], cv[b]);
+            }
+        }
+        if (rebuild) {
+            if ((st = newton_factor(s, t1))) return st;
+            ns->h = h;
+            ns->theta = dq_prev = -1.0;
+            ratios = 0;
+            rebuild = o->newton_full;
+        }
+        newton_solve(s, res);
+        for (int r = 0; r < n; ++r)
+            for (int i = 0; i < RADAU_STAGES; ++i) A[i * n + r] += res[r * RADAU_STAGES + i];
+        dq = radau_move(n, cq, cv, res, RADAU_STAGES, 1, Q, V);
+        s->r->newton_iterations++;
+        if (!isfinite(dq)) return newton_diverged(s, t1, Q, V, m);
+        int slow = newton_contraction(ns, k, dq, dq_prev, RADAU_THETA_MAX);
+        if (dq_prev > 0.0) theta_hi = ratios++ ? max_abs(theta_hi, ns->theta) : ns->theta;
+        if (radau_converged(s, dq, tol, theta_hi, ratios)) break;
+        if (slow) rebuild = 1;
+        dq_prev = dq;
+    }
+    memcpy(y0, y, sizeof(double) * (size_t)(2 * n));
+    memcpy(q, Q + last * n, sizeof(double) * (size_t)n);
+    memcpy(v, V + last * n, sizeof(double) * (size_t)n);
+    s->h_prev = h;
+    s->k = k + 1;
+    s->done = s->k >= nsteps;
+    dense_step d = {radau_dense, T, 2 * n, t, h, y0, Q};
+    return accept(s, t1, h, y, A + last * n, &d);
+}
+
+/* What every run checks (shared with constrained.c): a finite initial state and the run-size
+ * limits of limits.h (r->ncols set). Counts are checked as doubles before any conversion to
+ * long (no overflow, no UB). */
+fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r)
+{
+    const int n = m->nq;
+    for (int i = 0; o->y0 && i < 2 * n; ++i)
+        if (!isfinite(o->y0[i]))
+            return fsr_fail(r, FSR_BAD_OPTIONS, "initial %s of %s is not finite", i < n ? "value" : "rate",
+                            m->coord_names[i % n]);
+    double grid = o->t_end / o->dt, radau = o->step > 0.0 ? o->t_end / o->step : grid;
+    if (!(grid <= (double)FSR_MAX_STEPS) || !(radau <= (double)FSR_MAX_STEPS))
+        return fsr_fail(r, FSR_BAD_OPTIONS, "t_end / dt = %.3g steps exceeds the limit of %ld",
+                        grid > radau ? grid : radau, FSR_MAX_STEPS);
+    if (o->max_steps > FSR_MAX_STEPS)
+        return fsr_fail(r, FSR_BAD_OPTIONS, "max_steps %ld exceeds the limit of %ld", o->max_steps, FSR_MAX_STEPS);
+    double rows = floor(grid / o->out_every) + 2.0;
+    if (rows > (double)FSR_MAX_ROWS || rows * r->ncols * 8.0 > (double)FSR_MAX_ROW_BYTES)
+        return fsr_fail(r, FSR_BAD_OPTIONS, "%.3g output rows of %d columns exceed the limits (%ld rows, "
+                        "%ld bytes)", rows, r->ncols, FSR_MAX_ROWS, FSR_MAX_ROW_BYTES);
     return FSR_OK;
 }
 
@@ -953,6 +1064,7 @@ static fsr_status check_options(sim* s)
         return fail(s, FSR_BAD_OPTIONS, "step must be >= 0 (got %g; 0 = steps of dt)", o->step);
     if (o->step > 0.0 && o->method != FSR_RADAU5)
         return fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)", fsr_method_name(o->method));
+    if (fsr_check_run(o, s->m, s->r)) return s->r->status;
     for (int i = 0; i < s->m->np; ++i)
         if (!(o->p[i] > 0.0) || !isfinite(o->p[i]))
             return fail(s, FSR_BAD_OPTIONS, "beam parameter %s must be a positive number (got %g)",
@@ -960,80 +1072,278 @@ static fsr_status check_options(sim* s)
     for (int i = 0; i < s->m->nmp; ++i)
         if (!isfinite(o->mp[i]))
             return fail(s, FSR_BAD_OPTIONS, "manoeuvre parameter %s must be finite",
-                        s->m->maneuver_param_names[i]);
+                        s->m->drive_param_names[i]);
     return FSR_OK;
 }
 
-static fsr_status integrate(sim* s, double* y)
+/* Everything before the first step: the method's starting values and, for explicit methods,
+ * the stability check. */
+static fsr_status sim_begin(sim* s)
 {
     fsr_method method = s->o->method;
-    if (method == FSR_GENALPHA || method == FSR_NEWMARK) return run_alpha(s, y);
-    if (method == FSR_RADAU5) return run_radau(s, y);
+    if (method == FSR_GENALPHA || method == FSR_NEWMARK) return alpha_begin(s);
+    if (method == FSR_RADAU5) return radau_begin(s);
     const erk_tableau* T = method == FSR_RK4 ? &RK4 : &DOPRI5;
     int fixed = !T->embedded || s->o->tol == 0.0;
     fsr_status st = estimate_omega_max(s, &s->r->omega_max);
     if (!st && fixed) st = check_fixed_step(s, T);
-    if (!st) st = run_erk(s, T, y);
+    if (!st) st = erk_begin(s, T);
     return st;
+}
+
+/* One step of the method (an adaptive one may be rejected); s->done after the last. */
+static fsr_status sim_step(sim* s)
+{
+    fsr_method method = s->o->method;
+    if (method == FSR_GENALPHA || method == FSR_NEWMARK) return alpha_step(s);
+    if (method == FSR_RADAU5) return radau_step(s);
+    return erk_advance(s);
+}
+
+/* Check the options and allocate a run with room for `capacity` rows (0: every row of the
+ * run); the state starts at o->y0, else at the model's initial_state, else at rest.
+ * sim_close releases it. */
+static fsr_status sim_open(sim* s, const fsr_options* o, fsr_result* r, long capacity)
+{
+    const fsm_system* m = fsm_system_model();
+    memset(s, 0, sizeof *s);
+    memset(r, 0, sizeof *r);
+    s->m = m;
+    s->o = o;
+    s->r = r;
+    s->n = m->nq;
+    r->ncols = 1 + m->ny + m->nq + (o->energy ? 3 : 0);
+    fsr_status st = check_options(s);
+    if (!st && m->nc > 0)
+        st = fail(s, FSR_BAD_OPTIONS, "%s: this model has %d constraint equations: use ali3p or genalpha3",
+                  fsr_method_name(o->method), m->nc);
+    if (st) return st;
+    int n = s->n;
+    s->nd = m->nd;
+    s->L = m->length_param >= 0 ? o->p[m->length_param] : m->length_scale;
+    s->bw = m->bandwidth >= 0 && 2 * m->bandwidth + 1 < n ? m->bandwidth : -1;
+    s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
+    if (s->nsteps < 1) s->nsteps = 1;
+    s->msteps = s->nsteps;
+    s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
+    s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
+    /* the Newton system: nst stages of n coordinates, interleaved (see newton_rows) */
+    s->nst = o->method == FSR_RADAU5 ? RADAU_STAGES : 1;
+    s->N = s->nst * n;
+    s->kb = s->bw >= 0 && 2 * (s->nst * (s->bw + 1) - 1) + 1 < s->N ? s->nst * (s->bw + 1) - 1 : -1;
+    /* work: alpha 8 n; radau5 16 n; explicit 18 n (7 stages, y1 and a stage of 2n); + 2n dense rows */
+    size_t nn = (size_t)n * (size_t)n, NN = (size_t)s->N * (size_t)s->N;
+    size_t work = (size_t)(2 * MAX_STAGES + 4) * (size_t)n + 2 * (size_t)n;
+    r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
+    size_t base = 5 * nn + 2 * NN + (size_t)m->ny + (size_t)s->N + 4 * (size_t)n + work;
+    size_t drives = (size_t)(DW_COUNT + 2) * (size_t)m->nd;  /* after the rest, at mem + base */
+    double* mem = malloc(sizeof(double) * (base + drives));
+    s->piv = malloc(sizeof(int) * (size_t)s->N);
+    if (!r->rows || !mem || !s->piv) {
+        free(mem);
+        free(s->piv);
+        s->piv = NULL;
+        return fail(s, FSR_NO_MEMORY, "out of memory for %ld output rows", s->capacity);
+    }
+    s->Mraw = mem;
+    s->Mfac = mem + nn;
+    s->Jq = mem + 2 * nn;
+    s->Jv = mem + 3 * nn;
+    s->Minv = mem + 4 * nn;
+    s->S = mem + 5 * nn;
+    s->Sinv = s->S + NN;
+    s->y = s->Sinv + NN;
+    s->tmp = s->y + m->ny;
+    s->qdd = s->tmp + s->N;
+    s->zero = s->qdd + n;
+    s->state = s->zero + n;  /* [q, q'] */
+    s->dense = s->state + 2 * n;
+    s->work = s->dense + 2 * n;
+    s->dw = mem + base;
+    s->drive_v[0] = s->dw + DW_COUNT * m->nd;
+    s->drive_v[1] = s->drive_v[0] + m->nd;
+    memset(s->dw, 0, sizeof(double) * drives);
+    memset(s->qdd, 0, sizeof(double) * (size_t)(4 * n));
+    memset(s->S, 0, sizeof(double) * NN);
+    if (o->y0) memcpy(s->state, o->y0, sizeof(double) * (size_t)(2 * n));
+    else if (m->initial_state) m->initial_state(o->p, o->mp, s->state, s->state + n);
+    return FSR_OK;
+}
+
+static void sim_close(sim* s)
+{
+    free(s->Mraw);  /* the start of the workspace */
+    free(s->piv);
+    s->Mraw = NULL;
+    s->piv = NULL;
+}
+
+static int constrained_method(fsr_method m)
+{
+    return m == FSR_ALI3P || m == FSR_GENALPHA3;
 }
 
 fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
 {
-    const fsm_model_info* m = fsm_model();
+    /* the constrained integrators take the model as a struct (constrained.c, system.h) */
+    if (constrained_method(o->method)) return fsr_simulate_system(fsm_system_model(), o, r);
     sim s;
-    memset(&s, 0, sizeof s);
-    memset(r, 0, sizeof *r);
-    s.m = m;
-    s.o = o;
-    s.r = r;
-    s.n = m->nq;
-    r->ncols = 1 + m->ny + m->nq + (o->energy ? 3 : 0);
-    fsr_status st = check_options(&s);
-    if (st) return st;
-    int n = s.n;
-    s.L = o->p[m->length_param];
-    s.bw = m->bandwidth >= 0 && 2 * m->bandwidth + 1 < n ? m->bandwidth : -1;
-    s.nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
-    if (s.nsteps < 1) s.nsteps = 1;
-    s.next_row = o->out_every < s.nsteps ? o->out_every : s.nsteps;
-    s.capacity = s.nsteps / o->out_every + 2;
-    /* the Newton system: nst stages of n coordinates, interleaved (see newton_rows) */
-    s.nst = o->method == FSR_RADAU5 ? RADAU_STAGES : 1;
-    s.N = s.nst * n;
-    s.kb = s.bw >= 0 && 2 * (s.nst * (s.bw + 1) - 1) + 1 < s.N ? s.nst * (s.bw + 1) - 1 : -1;
-    /* work: alpha 8 n; radau5 16 n; explicit 18 n (7 stages, y1 and a stage of 2n); + 2n dense rows */
-    size_t nn = (size_t)n * (size_t)n, NN = (size_t)s.N * (size_t)s.N;
-    size_t work = (size_t)(2 * MAX_STAGES + 4) * (size_t)n + 2 * (size_t)n;
-    r->rows = malloc(sizeof(double) * (size_t)s.capacity * (size_t)r->ncols);
-    double* mem = malloc(sizeof(double) * (5 * nn + 2 * NN + (size_t)m->ny + (size_t)s.N + 4 * (size_t)n + work));
-    s.piv = malloc(sizeof(int) * (size_t)s.N);
-    if (!r->rows || !mem || !s.piv) {
-        free(mem);
-        free(s.piv);
-        return fail(&s, FSR_NO_MEMORY, "out of memory for %ld output rows", s.capacity);
-    }
-    s.Mraw = mem;
-    s.Mfac = mem + nn;
-    s.Jq = mem + 2 * nn;
-    s.Jv = mem + 3 * nn;
-    s.Minv = mem + 4 * nn;
-    s.S = mem + 5 * nn;
-    s.Sinv = s.S + NN;
-    s.y = s.Sinv + NN;
-    s.tmp = s.y + m->ny;
-    s.qdd = s.tmp + s.N;
-    s.zero = s.qdd + n;
-    double* y = s.zero + n;  /* [q, q'] */
-    s.dense = y + 2 * n;
-    s.work = s.dense + 2 * n;
-    memset(s.qdd, 0, sizeof(double) * (size_t)(4 * n));
-    memset(s.S, 0, sizeof(double) * NN);
-    st = store(&s, 0.0, y, y + n, NULL);
-    if (!st) st = integrate(&s, y);
-    free(mem);
-    free(s.piv);
+    fsr_status st = sim_open(&s, o, r, 0);
+    if (!st) st = store(&s, 0.0, s.state, s.state + s.n, NULL);
+    if (!st) st = sim_begin(&s);
+    while (!st && !s.done) st = sim_step(&s);
+    sim_close(&s);
     r->status = st;
     return st;
+}
+
+/* ------------------------------------------------------------ a run advanced by the caller */
+
+struct fsr_stepper {
+    sim s;
+    csim c;         /* instead of s for ali3p and genalpha3 (constrained.c) */
+    int constrained;
+    fsr_options o;  /* a copy; p and mp still point to the caller's arrays */
+    fsr_result r;   /* status, message, counters; rows: the one row at the current time */
+};
+
+fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
+{
+    fsr_stepper* p = calloc(1, sizeof *p);
+    if (!p) return NULL;
+    sim* s = &p->s;
+    p->o = *o;
+    p->o.out_every = 1;  /* any grid point may be asked for */
+    if (constrained_method(o->method)) {
+        csim* c = &p->c;
+        p->constrained = 1;
+        fsr_status st = cs_open(c, fsm_system_model(), &p->o, &p->r, 1);
+        if (!st && drive)
+            st = cs_fail(c, FSR_BAD_OPTIONS, "%s: no drive given step by step (the model's drive runs)",
+                         fsr_method_name(o->method));
+        if (!st) st = cs_start(c);
+        p->r.status = st;
+        return p;
+    }
+    fsr_status st = sim_open(s, &p->o, &p->r, 1);
+    if (!st && !(o->method == FSR_GENALPHA || o->method == FSR_NEWMARK || o->method == FSR_RK4
+                 || (o->method == FSR_DOPRI5 && o->tol == 0.0)
+                 || (o->method == FSR_RADAU5 && (o->step == 0.0 || o->step == o->dt))))
+        st = fail(s, FSR_BAD_OPTIONS, "%s: the stepper takes fixed steps of dt (dopri5 needs tol = 0, "
+                  "radau5 no step other than dt)", fsr_method_name(o->method));
+    if (!st && drive && (o->method == FSR_RK4 || o->method == FSR_DOPRI5))
+        st = fail(s, FSR_BAD_OPTIONS, "%s: a drive given step by step needs an implicit method (the "
+                  "stability limit of explicit steps depends on the drive to come)",
+                  fsr_method_name(o->method));
+    if (!st && drive && s->nd != 4)
+        st = fail(s, FSR_BAD_OPTIONS, "a drive given step by step needs a model with one guided joint "
+                  "(this one has %d drive values)", s->nd);
+    if (!st && drive) {
+        s->drive_held = 1;
+        s->hold_t = 0.0;
+        s->hold_theta = 0.0;
+        s->hold[0] = drive[0];
+        s->hold[1] = drive[1];
+    }
+    if (!st) st = store(s, 0.0, s->state, s->state + s->n, NULL);
+    if (!st) st = sim_begin(s);
+    p->r.status = st;
+    return p;
+}
+
+const fsr_result* fsr_stepper_result(const fsr_stepper* p)
+{
+    return &p->r;
+}
+
+double fsr_stepper_time(const fsr_stepper* p)
+{
+    return p->constrained ? cs_time(&p->c, p->c.k) : time_of(&p->s, p->s.k);
+}
+
+/* A refused request leaves the run as it was: the message says why, the status stays. */
+static fsr_status refuse(fsr_stepper* p, const char* fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(p->r.message, sizeof p->r.message, fmt, ap);
+    va_end(ap);
+    return FSR_BAD_OPTIONS;
+}
+
+fsr_status fsr_stepper_advance(fsr_stepper* p, double t)
+{
+    sim* s = &p->s;
+    csim* c = &p->c;
+    fsr_result* r = &p->r;
+    const fsr_options* o = &p->o;
+    if (r->status) return r->status;
+    long now = p->constrained ? c->k : s->k, nsteps = p->constrained ? c->nsteps : s->nsteps;
+    double dt = o->dt, x = t / dt;
+    if (!(x > (double)now && x < (double)nsteps + 0.5))
+        return refuse(p, "t = %.17g s is not after the current time %.17g s and up to t_end = %.17g s", t,
+                      fsr_stepper_time(p), o->t_end);
+    double eps = 1e-9 * (dt > fabs(t) ? dt : fabs(t));
+    long k = fabs(t - o->t_end) <= eps ? nsteps : (long)floor(x + 0.5);
+    if (k > nsteps) k = nsteps;
+    double tk = k >= nsteps ? o->t_end : (double)k * dt;
+    if (k <= now || !(fabs(tk - t) <= eps))
+        return refuse(p, "t = %.17g s is not on the step grid (multiples of dt = %.17g s, and t_end)", t, dt);
+    r->nrows = 0;
+    fsr_status st = FSR_OK;
+    if (p->constrained) {
+        c->next_row = k;
+        while (!st && c->k < k) st = cs_step(c);
+    } else {
+        s->next_row = k;
+        while (!st && s->k < k) st = sim_step(s);
+    }
+    r->nrows = 1;  /* the row at t_k; after a failure, the last row stored */
+    r->status = st;
+    return st;
+}
+
+fsr_status fsr_stepper_set_drive(fsr_stepper* p, double theta_d, double theta_dd)
+{
+    sim* s = &p->s;
+    if (!s->drive_held) return refuse(p, "this run takes its drive from the manoeuvre");
+    if (!isfinite(theta_d) || !isfinite(theta_dd)) return refuse(p, "drive values must be finite");
+    double now = time_of(s, s->k), tau = now - s->hold_t;
+    s->hold_theta += tau * (s->hold[0] + 0.5 * s->hold[1] * tau);  /* theta continues */
+    s->hold_t = now;
+    s->hold[0] = theta_d;
+    s->hold[1] = theta_dd;
+    return FSR_OK;
+}
+
+fsr_status fsr_stepper_retune(fsr_stepper* p)
+{
+    sim* s = &p->s;
+    fsr_result* r = &p->r;
+    if (r->status) return r->status;
+    if (p->constrained) return refuse(p, "%s: retuning is not available yet", fsr_method_name(p->o.method));
+    fsr_status st = check_options(s);
+    if (st) return st;
+    s->L = s->m->length_param >= 0 ? s->o->p[s->m->length_param] : s->m->length_scale;
+    s->mass_have = s->mass_factored = 0;     /* M(p) again, factored */
+    s->drive_valid[0] = s->drive_valid[1] = 0;  /* the manoeuvre at the new mp */
+    s->ns.h = 0.0;                            /* a new Newton matrix at the next step */
+    if (s->T) {                               /* explicit: the stability limit may have moved */
+        st = estimate_omega_max(s, &r->omega_max);
+        if (!st && !s->adaptive) st = check_fixed_step(s, s->T);
+        s->have_k0 = 0;                       /* k[0] and the work space were overwritten */
+    }
+    r->status = st;
+    return st;
+}
+
+void fsr_stepper_free(fsr_stepper* p)
+{
+    if (!p) return;
+    if (p->constrained) cs_close(&p->c);
+    else sim_close(&p->s);
+    fsr_free(&p->r);
+    free(p);
 }
 
 void fsr_free(fsr_result* r)

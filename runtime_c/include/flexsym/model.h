@@ -1,4 +1,6 @@
-/* The interface every generated flexsym model implements.
+/* The interface every one-beam flexsym model generated before systems implements. The runtime
+ * reads it through the struct of system.h (runtime_c/src/model_adapter.c); FMU export reads
+ * the names and defaults here.
  *
  * A model is a set of kernels over the elastic coordinates q (size nq) of one beam in a
  * frame that rotates with the guided angle theta(t):

@@ -2,7 +2,12 @@
 #ifndef FLEXSYM_RUNTIME_H
 #define FLEXSYM_RUNTIME_H
 
-typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4 } fsr_method;
+#include "flexsym/system.h"
+
+/* ali3p, genalpha3: the constrained integrators (ali3p.c, genalpha3.c); they also run models
+ * without constraints (nc = 0). */
+typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4,
+               FSR_ALI3P = 5, FSR_GENALPHA3 = 6 } fsr_method;
 
 typedef enum {
     FSR_OK = 0,
@@ -12,7 +17,8 @@ typedef enum {
     FSR_BAD_OPTIONS = 4,
     FSR_NO_MEMORY = 5,
     FSR_UNSTABLE_STEP = 6,   /* fixed explicit step above the stability limit: refused */
-    FSR_STEP_FAILED = 7      /* adaptive step control gave up (too many steps, step underflow) */
+    FSR_STEP_FAILED = 7,     /* adaptive step control gave up (too many steps, step underflow) */
+    FSR_ASSEMBLY = 8         /* constraints cannot be satisfied at t = 0: refused before any step */
 } fsr_status;
 
 typedef struct {
@@ -33,8 +39,11 @@ typedef struct {
     long max_steps;          /* dopri5: accepted + rejected steps before giving up */
     double blowup;           /* diverged when any |q_i| or |v_tip| exceeds blowup * L */
     int energy;              /* 1: rows end with T, V and the Jacobi integral h (fsm_energy) */
+    double penalty;          /* ali3p: kappa, the penalty term's weight against the mass matrix
+                                (alpha = kappa (4 / dt^2) tr M / |Phi_q|_F^2 at t = 0) */
     const double* p;         /* beam parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
+    const double* y0;        /* initial state [q, q'] (2 nq values); NULL: at rest */
 } fsr_options;
 
 typedef struct {
@@ -48,7 +57,8 @@ typedef struct {
     long jacobian_evaluations; /* iteration matrices built (and factored) */
     long force_evaluations;
     double omega_max;        /* explicit methods: stability estimate [rad/s], else 0 */
-    int ncols;               /* 1 + ny + nq: t, outputs, coordinates */
+    int ncols;               /* 1 + ny + nq: t, outputs, coordinates; constrained integrators on
+                                a model with nc > 0: t, outputs, violation, coordinates */
     int nrows;
     double* rows;            /* nrows x ncols, row-major; owned, release with fsr_free */
 } fsr_result;
@@ -58,5 +68,59 @@ void fsr_default_options(fsr_options* o);
 fsr_status fsr_simulate(const fsr_options* o, fsr_result* r);
 void fsr_free(fsr_result* r);
 const char* fsr_method_name(fsr_method m);
+/* The same for a model given as a struct (system.h); methods ali3p and genalpha3 only. Before
+ * the first step the initial state is made consistent with the constraints (FSR_ASSEMBLY and a
+ * message naming the constraint with the largest residual when it cannot be). */
+fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r);
+
+/* The same run advanced by the caller, step by step (an FMU's doStep): fsr_simulate is this
+ * loop run to t_end, so the rows at grid points are identical bit for bit. Fixed steps of dt
+ * only (genalpha, newmark, rk4, dopri5 with tol = 0, radau5 with step 0 or dt).
+ * drive: NULL to take theta', theta'' from the model's manoeuvre (o->mp), or [theta',
+ * theta''] at t = 0 given by the caller, then by fsr_stepper_set_drive (implicit methods; a
+ * model with one guided joint, nd = 4; theta is their integral from 0). ali3p and genalpha3:
+ * the model's own drive only, no retuning yet.
+ * Returns NULL only when out of memory; check fsr_stepper_result(p)->status. */
+typedef struct fsr_stepper fsr_stepper;
+fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive);
+/* Integrate to grid point t (a multiple of dt after the current time, or t_end). The row at t
+ * is then fsr_stepper_result(p)->rows (ncols values). A stopped run stays stopped; a refused
+ * request (t off the grid) returns FSR_BAD_OPTIONS with a message and changes nothing. */
+fsr_status fsr_stepper_advance(fsr_stepper* p, double t);
+/* From the current time on: theta' = theta_d + theta_dd (t - now), theta'' = theta_dd. */
+fsr_status fsr_stepper_set_drive(fsr_stepper* p, double theta_d, double theta_dd);
+/* After the caller changed values in o->p or o->mp: caches dropped, options checked again. */
+fsr_status fsr_stepper_retune(fsr_stepper* p);
+const fsr_result* fsr_stepper_result(const fsr_stepper* p);
+double fsr_stepper_time(const fsr_stepper* p);
+void fsr_stepper_free(fsr_stepper* p);
+
+/* ---- Batch: many runs in one call (batch.c; in-process runs and sweeps from Python) ----
+ * Run r takes fsr_default_options and the model's default parameters, then sets the named
+ * inputs to inputs[r * ninputs + i]: option names method (an fsr_method), t_end, dt,
+ * out_every, step, rho_inf, nm_gamma, nm_beta, newton_tol, newton_max, newton_full, tol,
+ * max_steps, blowup, penalty, a beam/manoeuvre parameter name of the model, or q0_<coordinate> /
+ * qd0_<coordinate> for the initial state (the others start at rest). Each run goes through
+ * fsr_simulate. Outputs, per run r:
+ *   summary[r][j][f]  over the stored rows, column j = 0 .. ny + nq - 1 (outputs, then
+ *                     coordinates), f = FSR_SUM_* then the values at the nat times `at`
+ *                     (linear between rows, exact at a row, NaN past the last row);
+ *   stats[r][FSR_STAT_*]; status[r] (fsr_status); messages + r * FSR_BATCH_MESSAGE;
+ *   bound_weights (ny + nq, may be NULL): FSR_STAT_BOUND_PEAK is the peak over the rows of
+ *     sum_j w_j |y_j|, FSR_STAT_BOUND_T the first time it exceeded bound_limit * L (NaN: never);
+ *   rows (may be NULL): rows[r] receives run r's rows (FSR_STAT_NROWS x FSR_STAT_NCOLS,
+ *     as fsr_result.rows), released with fsr_batch_free.
+ * Returns the number of runs that did not end FSR_OK, or -1 (message in messages[0]) when an
+ * input name is unknown or the model has constraints (nc > 0). */
+#define FSR_BATCH_MESSAGE 512
+enum { FSR_SUM_MIN, FSR_SUM_MAX, FSR_SUM_T_MIN, FSR_SUM_T_MAX, FSR_SUM_T_PEAK, FSR_SUM_FINAL,
+       FSR_SUM_FIELDS };
+enum { FSR_STAT_T_STOP, FSR_STAT_STEPS, FSR_STAT_REJECTED, FSR_STAT_NEWTON, FSR_STAT_JACOBIANS,
+       FSR_STAT_FORCES, FSR_STAT_OMEGA_MAX, FSR_STAT_NROWS, FSR_STAT_NCOLS, FSR_STAT_CPU,
+       FSR_STAT_BOUND_PEAK, FSR_STAT_BOUND_T, FSR_STAT_FIELDS };
+int fsr_batch(int ninputs, const char* const* names, int nruns, const double* inputs,
+              int nat, const double* at, const double* bound_weights, double bound_limit,
+              double* summary, double* stats, int* status, char* messages, double** rows);
+void fsr_batch_free(double** rows, int nruns);
 
 #endif

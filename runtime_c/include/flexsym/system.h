@@ -1,0 +1,74 @@
+/* A model as one struct: sizes, scales and kernels behind function pointers (several models can
+ * live in one process). Every integrator takes the model only through this struct; a one-beam
+ * model generated before systems (model.h's global kernels) is wrapped into it by
+ * runtime_c/src/model_adapter.c, with nc = 0. rk4, dopri5, genalpha, newmark and radau5 need
+ * nc = 0; ali3p and genalpha3 take any nc.
+ *
+ * Equations, with the drive vector d (size nd) = [t, then theta_k, theta_k', theta_k'' for each
+ * guided joint k] and the parameters p:
+ *     M(q) q'' = f(q, q', d, p) - Phi_q^T lambda,    Phi(q, d, p) = 0   (nc equations).
+ * All matrices are dense and row-major. Kernels never allocate and have no state. When nc = 0
+ * the constraint kernels are never called (they may be NULL).
+ */
+#ifndef FLEXSYM_SYSTEM_H
+#define FLEXSYM_SYSTEM_H
+
+typedef struct fsm_system {
+    const char* name;
+    const char* fingerprint;     /* spec fingerprint recorded in the manifest */
+    const char* generator;       /* "flexsym X.Y.Z" */
+    int nq;                      /* unknown coordinates q */
+    int nd;                      /* drive vector d: 1 + 3 x (guided joints) */
+    int nc;                      /* constraint equations (cut joints); 0: none */
+    int ny;                      /* outputs */
+    int np;                      /* parameters p */
+    int nmp;                     /* drive parameters (read by drive only) */
+    double length_scale;         /* m: the mechanism's size. Newton tolerances (newton_tol x it),
+                                    blow-up and the violation column are relative to it. */
+    int length_param;            /* index in p of a parameter that is the length scale (a one-beam
+                                    model's L, so that it follows --param L=...), or -1 */
+    int mass_constant;           /* 1 when M depends on neither q nor d: factored once */
+    int bandwidth;               /* half-bandwidth of M and the Jacobians; -1 when dense */
+    int outputs_use_acceleration;/* 1 when outputs read q'' (else it may be anything) */
+    int outputs_use_drive;       /* 1 when outputs read d (else it may be anything) */
+    const char* const* coord_names;       /* nq */
+    const char* const* constraint_names;  /* nc, e.g. "slider.x": named in messages */
+    const char* const* output_names;      /* ny */
+    const char* const* param_names;       /* np */
+    const double* param_defaults;         /* np */
+    const char* const* drive_param_names; /* nmp */
+    const double* drive_param_defaults;   /* nmp */
+
+    /* d at time *t from the drive parameters mp */
+    void (*drive)(const double* t, const double* mp, double* d);
+    /* M depends on d when a guided joint sits between coordinates (a prismatic joint on ground
+     * carrying a guided arm carrying a revolute one); a one-beam model ignores d */
+    void (*mass)(const double* q, const double* d, const double* p, double* M);
+    void (*force)(const double* q, const double* qd, const double* d, const double* p, double* f);
+    /* dr/dq, dr/dq' of r = M(q) q'' - f(q, q', d, p) (without the constraint forces) */
+    void (*residual_jac)(const double* q, const double* qd, const double* qdd, const double* d,
+                         const double* p, double* dr_dq, double* dr_dqd);
+    /* Phi (nc) */
+    void (*constraints)(const double* q, const double* d, const double* p, double* phi);
+    /* Phi_q (nc x nq) */
+    void (*constraint_jac)(const double* q, const double* d, const double* p, double* phi_q);
+    /* Phi_t (nc): the velocity constraint is Phi_q q' + Phi_t = 0 */
+    void (*constraint_rate)(const double* q, const double* d, const double* p, double* phi_t);
+    /* gamma (nc): the acceleration constraint is Phi_q q'' = gamma,
+     * gamma = -(Phi_q q')_q q' - 2 Phi_qt q' - Phi_tt */
+    void (*constraint_acc)(const double* q, const double* qd, const double* d, const double* p,
+                           double* gamma);
+    /* outputs; lambda: the nc multipliers (reactions of the cut joints), zeros when nc = 0 */
+    void (*outputs)(const double* q, const double* qd, const double* qdd, const double* lambda,
+                    const double* d, const double* p, double* y);
+    /* e = [T, V, h]: kinetic, potential energy, Jacobi integral (NULL: no --energy) */
+    void (*energy)(const double* q, const double* qd, const double* d, const double* p, double* e);
+    /* starting guess q (consistent initial conditions correct it) and q' (NULL: q = q' = 0) */
+    void (*initial_state)(const double* p, const double* mp, double* q, double* qd);
+} fsm_system;
+
+/* The model linked into this program (a generated system, or model_adapter.c for a one-beam
+ * model). */
+const fsm_system* fsm_system_model(void);
+
+#endif

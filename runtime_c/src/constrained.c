@@ -1,0 +1,390 @@
+/* A run of a model given as a struct (system.h) by a constrained integrator: options, workspace
+ * (allocated once), consistent initial conditions, the constraint block solve, rows.
+ * The methods themselves are ali3p.c and genalpha3.c.
+ *
+ * Row: t, outputs, violation = max_i |Phi_i(q, t)| / length_scale (only when nc > 0), q, and
+ * with energy T, V, h. Outputs receive the multipliers lambda (ali3p: its lambda*), so that a
+ * joint reaction is an output.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "constrained.h"
+#include "linalg.h"
+
+/* A pivot of the Schur complement below this fraction of the first one marks a constraint
+ * that depends on the others (redundant): it is dropped from the solve. Dependent rows leave
+ * pivots at rounding level (1e-16 relative); independent ones of the tests are above 1e-3. */
+#define RANK_TOL 1e-10
+/* Newton iterations for the initial positions before an assembly is refused */
+#define ASSEMBLY_MAX_ITER 50
+
+fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(s->r->message, sizeof s->r->message, fmt, ap);
+    va_end(ap);
+    s->r->status = st;
+    return st;
+}
+
+double cs_time(const csim* s, long k)
+{
+    return k >= s->nsteps ? s->o->t_end : (double)k * s->o->dt;
+}
+
+void cs_drive(csim* s, double t)
+{
+    s->m->drive(&t, s->o->mp, s->d);
+}
+
+void cs_constraints(csim* s, const double* q)
+{
+    s->m->constraints(q, s->d, s->o->p, s->phi);
+    s->m->constraint_jac(q, s->d, s->o->p, s->Pq);
+}
+
+double cs_max_abs(const double* x, int n)
+{
+    double m = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double a = fabs(x[i]);
+        if (a > m || a != a) m = a;  /* NaN propagates */
+    }
+    return m;
+}
+
+void cs_solve(csim* s, const double* A, double* x)
+{
+    if (A) fsr_lu_solve(A, s->n, s->piv, x);
+}
+
+/* x = G^+ b for G (m x m, overwritten) by Gaussian elimination with complete pivoting; the
+ * unknowns of pivots below RANK_TOL x the first are 0 (a basic solution; for a consistent
+ * system it solves it). Returns the rank. */
+static int rank_solve(csim* s, int m, double* b, double* x)
+{
+    double *G = s->G, *z = s->e2;
+    int* cp = s->cp;
+    int rank = 0;
+    double first = 0.0;
+    for (int i = 0; i < m; ++i) cp[i] = i;
+    for (int k = 0; k < m; ++k) {
+        int p = k, c = k;
+        double best = -1.0;
+        for (int i = k; i < m; ++i)
+            for (int j = k; j < m; ++j)
+                if (fabs(G[i * m + j]) > best) { best = fabs(G[i * m + j]); p = i; c = j; }
+        if (k == 0) first = best;
+        if (!(best > RANK_TOL * first)) break;
+        if (p != k) {
+            for (int j = 0; j < m; ++j) { double t = G[k * m + j]; G[k * m + j] = G[p * m + j]; G[p * m + j] = t; }
+            double t = b[k]; b[k] = b[p]; b[p] = t;
+        }
+        if (c != k) {
+            for (int i = 0; i < m; ++i) { double t = G[i * m + k]; G[i * m + k] = G[i * m + c]; G[i * m + c] = t; }
+            int t = cp[k]; cp[k] = cp[c]; cp[c] = t;
+        }
+        for (int i = k + 1; i < m; ++i) {
+            double l = G[i * m + k] / G[k * m + k];
+            if (l == 0.0) continue;
+            for (int j = k + 1; j < m; ++j) G[i * m + j] -= l * G[k * m + j];
+            b[i] -= l * b[k];
+        }
+        rank = k + 1;
+    }
+    for (int i = rank - 1; i >= 0; --i) {
+        double t = b[i];
+        for (int j = i + 1; j < rank; ++j) t -= G[i * m + j] * z[j];
+        z[i] = t / G[i * m + i];
+    }
+    for (int i = 0; i < m; ++i) x[cp[i]] = i < rank ? z[i] : 0.0;
+    return rank;
+}
+
+int cs_kkt(csim* s, const double* A, double* b, const double* c, double* lam)
+{
+    const int n = s->n, nc = s->nc;
+    cs_solve(s, A, b);  /* y = A^-1 b */
+    if (nc == 0) return 0;
+    for (int j = 0; j < nc; ++j) {  /* Z = A^-1 Phi_q^T, column by column */
+        for (int i = 0; i < n; ++i) s->w2[i] = s->Pq[j * n + i];
+        cs_solve(s, A, s->w2);
+        for (int i = 0; i < n; ++i) s->Z[i * nc + j] = s->w2[i];
+    }
+    for (int i = 0; i < nc; ++i) {  /* G = Phi_q Z, e1 = Phi_q y - c */
+        double r = -c[i];
+        for (int l = 0; l < n; ++l) r += s->Pq[i * n + l] * b[l];
+        s->e1[i] = r;
+        for (int j = 0; j < nc; ++j) {
+            double g = 0.0;
+            for (int l = 0; l < n; ++l) g += s->Pq[i * n + l] * s->Z[l * nc + j];
+            s->G[i * nc + j] = g;
+        }
+    }
+    int rank = rank_solve(s, nc, s->e1, lam);
+    for (int i = 0; i < n; ++i) {  /* x = y - Z lam */
+        double t = 0.0;
+        for (int j = 0; j < nc; ++j) t += s->Z[i * nc + j] * lam[j];
+        b[i] -= t;
+    }
+    return rank;
+}
+
+static int worst_constraint(const csim* s)
+{
+    int w = 0;
+    for (int i = 1; i < s->nc; ++i)
+        if (fabs(s->phi[i]) > fabs(s->phi[w])) w = i;
+    return w;
+}
+
+/* Positions: Newton on Phi(q, 0) = 0 with minimum-norm corrections (Gauss-Newton; redundant
+ * rows dropped), refused after ASSEMBLY_MAX_ITER iterations naming the largest residual of
+ * the best iterate; velocities: the minimum-norm change with Phi_q q' = -Phi_t; accelerations and
+ * multipliers from [M Phi_q^T; Phi_q 0] [q''; lambda] = [f; gamma]. */
+fsr_status cs_consistent_start(csim* s)
+{
+    const fsm_system* m = s->m;
+    const int n = s->n, nc = s->nc;
+    double *q = s->q, *v = s->v;
+    if (s->o->y0) {  /* the caller's initial state, as a starting guess like initial_state's */
+        memcpy(q, s->o->y0, sizeof(double) * (size_t)n);
+        memcpy(v, s->o->y0 + n, sizeof(double) * (size_t)n);
+    } else if (m->initial_state) {
+        m->initial_state(s->o->p, s->o->mp, q, v);
+    }
+    cs_drive(s, 0.0);
+    if (nc > 0) {
+        int it = 0, w_best = 0;
+        double best = INFINITY;  /* the smallest max |Phi| met, for the message */
+        for (;; ++it) {
+            cs_constraints(s, q);
+            double err = cs_max_abs(s->phi, nc);
+            if (err <= s->tol) break;
+            if (err < best) {
+                best = err;
+                w_best = worst_constraint(s);
+            }
+            if (it == ASSEMBLY_MAX_ITER || !isfinite(err) || !isfinite(cs_max_abs(q, n)))
+                return cs_fail(s, FSR_ASSEMBLY,
+                               "assembly cannot close at t = 0: constraint %s is off by %.3g at "
+                               "best (%.3g x the length scale %g m) after %d Newton iterations",
+                               m->constraint_names[w_best], best, best / s->L, s->L, it);
+            for (int i = 0; i < nc; ++i) s->lam[i] = -s->phi[i];
+            memset(s->w1, 0, sizeof(double) * (size_t)n);
+            cs_kkt(s, NULL, s->w1, s->lam, s->lam1);
+            for (int i = 0; i < n; ++i) q[i] += s->w1[i];
+        }
+        m->constraint_rate(q, s->d, s->o->p, s->phit);
+        for (int i = 0; i < nc; ++i) {
+            double r = s->phit[i];
+            for (int l = 0; l < n; ++l) r += s->Pq[i * n + l] * v[l];
+            s->lam[i] = -r;
+        }
+        memset(s->w1, 0, sizeof(double) * (size_t)n);
+        cs_kkt(s, NULL, s->w1, s->lam, s->lam1);
+        for (int i = 0; i < n; ++i) v[i] += s->w1[i];
+    }
+    m->mass(q, s->d, s->o->p, s->M);
+    memcpy(s->S, s->M, sizeof(double) * (size_t)n * (size_t)n);
+    if (fsr_lu_factor(s->S, n, s->piv))
+        return cs_fail(s, FSR_SINGULAR, "mass matrix singular at t = 0");
+    s->h_mat = 0.0;
+    m->force(q, v, s->d, s->o->p, s->a);
+    s->r->force_evaluations++;
+    if (nc > 0) m->constraint_acc(q, v, s->d, s->o->p, s->gam);
+    memset(s->lam, 0, sizeof(double) * (size_t)nc);
+    cs_kkt(s, s->S, s->a, s->gam, s->lam);
+    memcpy(s->mult, s->lam, sizeof(double) * (size_t)nc);
+    memcpy(s->vout, s->v, sizeof(double) * (size_t)n);
+    return FSR_OK;
+}
+
+static fsr_status store(csim* s, double t)
+{
+    fsr_result* r = s->r;
+    const fsm_system* m = s->m;
+    if (r->nrows >= s->capacity) return FSR_OK;
+    double* row = r->rows + (size_t)r->nrows * (size_t)r->ncols;
+    int c = 1 + m->ny;
+    cs_drive(s, t);
+    row[0] = t;
+    m->outputs(s->q, s->vout, s->a, s->nc ? s->mult : s->zero, s->d, s->o->p, s->y);
+    memcpy(row + 1, s->y, sizeof(double) * (size_t)m->ny);
+    if (s->nc) {
+        m->constraints(s->q, s->d, s->o->p, s->phi);
+        row[c++] = cs_max_abs(s->phi, s->nc) / s->L;
+    }
+    memcpy(row + c, s->q, sizeof(double) * (size_t)s->n);
+    if (s->o->energy) m->energy(s->q, s->vout, s->d, s->o->p, row + c + s->n);
+    r->nrows++;
+    return FSR_OK;
+}
+
+fsr_status cs_accept(csim* s, double t1)
+{
+    for (int i = 0; i < s->n; ++i)
+        if (!isfinite(s->q[i]) || !isfinite(s->v[i]) || !isfinite(s->a[i]))
+            return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: %s is not finite", t1,
+                           s->m->coord_names[i]);
+    fsr_result* r = s->r;
+    double h = t1 - cs_time(s, s->k - 1);
+    if (r->steps == 0 || h < r->h_min) r->h_min = h;
+    if (h > r->h_max) r->h_max = h;
+    r->steps++;
+    r->t_stop = t1;
+    if (s->k != s->next_row) return FSR_OK;
+    long next = s->next_row + s->o->out_every;
+    s->next_row = s->next_row == s->nsteps ? s->nsteps + 1 : (next < s->nsteps ? next : s->nsteps);
+    return store(s, t1);
+}
+
+fsr_status cs_newton_failed(csim* s, double t1, double dq, int it)
+{
+    return cs_fail(s, FSR_NEWTON_FAILED,
+                   "Newton iterations did not converge at t = %.6g s (|dq| = %.3g, max |Phi| = %.3g "
+                   "after %d iterations); reduce --dt", t1, dq, cs_max_abs(s->phi, s->nc), it);
+}
+
+static fsr_status check_options(csim* s)
+{
+    const fsr_options* o = s->o;
+    const fsm_system* m = s->m;
+    if (o->method != FSR_ALI3P && o->method != FSR_GENALPHA3)
+        return cs_fail(s, FSR_BAD_OPTIONS, "a model given as a struct runs with ali3p or genalpha3 "
+                       "(got method %d)", (int)o->method);
+    if (!(o->dt > 0.0) || !isfinite(o->dt)) return cs_fail(s, FSR_BAD_OPTIONS, "dt must be > 0 (got %g)", o->dt);
+    if (!(o->t_end > 0.0) || !isfinite(o->t_end))
+        return cs_fail(s, FSR_BAD_OPTIONS, "t_end must be > 0 (got %g)", o->t_end);
+    if (o->out_every < 1) return cs_fail(s, FSR_BAD_OPTIONS, "out_every must be >= 1 (got %d)", o->out_every);
+    if (!(o->rho_inf >= 0.0 && o->rho_inf <= 1.0))
+        return cs_fail(s, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
+    if (o->newton_max < 1 || !(o->newton_tol > 0.0))
+        return cs_fail(s, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
+    if (!(o->penalty > 0.0) || !isfinite(o->penalty))
+        return cs_fail(s, FSR_BAD_OPTIONS, "penalty must be > 0 (got %g)", o->penalty);
+    if (o->step != 0.0)
+        return cs_fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)",
+                       o->method == FSR_ALI3P ? "ali3p" : "genalpha3");
+    if (fsr_check_run(o, m, s->r)) return s->r->status;
+    if (!m->drive || !m->mass || !m->force || !m->residual_jac || !m->outputs
+        || (m->nc > 0 && (!m->constraints || !m->constraint_jac || !m->constraint_rate
+                          || !m->constraint_acc || !m->constraint_names)))
+        return cs_fail(s, FSR_BAD_OPTIONS, "model %s lacks a kernel its sizes need (system.h)", m->name);
+    if (o->energy && !m->energy)
+        return cs_fail(s, FSR_BAD_OPTIONS, "model %s has no energy kernel", m->name);
+    if (!(m->length_scale > 0.0) || !isfinite(m->length_scale))
+        return cs_fail(s, FSR_BAD_OPTIONS, "model %s: length_scale must be > 0", m->name);
+    for (int i = 0; i < m->np; ++i)
+        if (!isfinite(o->p[i]))
+            return cs_fail(s, FSR_BAD_OPTIONS, "parameter %s must be finite", m->param_names[i]);
+    for (int i = 0; i < m->nmp; ++i)
+        if (!isfinite(o->mp[i]))
+            return cs_fail(s, FSR_BAD_OPTIONS, "drive parameter %s must be finite", m->drive_param_names[i]);
+    return FSR_OK;
+}
+
+/* Workspace in one block: doubles, then ints. */
+fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r, long capacity)
+{
+    memset(s, 0, sizeof *s);
+    memset(r, 0, sizeof *r);
+    s->m = m;
+    s->o = o;
+    s->r = r;
+    s->n = m->nq;
+    s->nc = m->nc;
+    r->ncols = 1 + m->ny + (m->nc > 0) + m->nq + (o->energy ? 3 : 0);
+    fsr_status st = check_options(s);
+    if (st) return st;
+    const size_t n = (size_t)s->n, nc = (size_t)s->nc, nn = n * n;
+    s->L = m->length_scale;
+    s->tol = o->newton_tol * s->L;
+    s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
+    if (s->nsteps < 1) s->nsteps = 1;
+    s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
+    s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
+    size_t nz = n > nc ? n : nc;
+    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + 2 * nc * n + nc * nc
+                     + 2 * nc + nz + 1;
+    r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
+    double* x = calloc(doubles, sizeof(double));
+    s->piv = malloc(sizeof(int) * (n + nc + 1));
+    if (!r->rows || !x || !s->piv) {
+        free(x);
+        free(s->piv);
+        s->piv = NULL;
+        s->M = NULL;
+        return cs_fail(s, FSR_NO_MEMORY, "out of memory for %ld output rows", s->capacity);
+    }
+    s->M = x; x += nn;  /* the start of the block */
+    s->S = x; x += nn;
+    s->Jq = x; x += nn;
+    s->Jv = x; x += nn;
+    s->P = x; x += nn;
+    s->q = x; x += n;
+    s->v = x; x += n;
+    s->a = x; x += n;
+    s->ab = x; x += n;
+    s->q1 = x; x += n;
+    s->v1 = x; x += n;
+    s->a1 = x; x += n;
+    s->res = x; x += n;
+    s->f = x; x += n;
+    s->w1 = x; x += n;
+    s->w2 = x; x += n;
+    s->vout = x; x += n;
+    s->lam = x; x += nc;
+    s->lam1 = x; x += nc;
+    s->mult = x; x += nc;
+    s->phi = x; x += nc;
+    s->phit = x; x += nc;
+    s->gam = x; x += nc;
+    s->e1 = x; x += nc;
+    s->e2 = x; x += nc;
+    s->d = x; x += m->nd;
+    s->y = x; x += m->ny;
+    s->Pq = x; x += nc * n;
+    s->Z = x; x += nc * n;
+    s->G = x; x += nc * nc;
+    s->zero = x;
+    s->cp = s->piv + n;
+    return FSR_OK;
+}
+
+fsr_status cs_start(csim* s)
+{
+    fsr_status st = cs_consistent_start(s);
+    if (!st) st = store(s, 0.0);
+    if (!st) st = s->o->method == FSR_ALI3P ? ali3p_begin(s) : genalpha3_begin(s);
+    return st;
+}
+
+fsr_status cs_step(csim* s)
+{
+    return s->o->method == FSR_ALI3P ? ali3p_step(s) : genalpha3_step(s);
+}
+
+void cs_close(csim* s)
+{
+    free(s->M);  /* the start of the workspace */
+    free(s->piv);
+    s->M = NULL;
+    s->piv = NULL;
+}
+
+fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r)
+{
+    csim s;
+    fsr_status st = cs_open(&s, m, o, r, 0);
+    if (!st) st = cs_start(&s);
+    while (!st && s.k < s.nsteps) st = cs_step(&s);
+    cs_close(&s);
+    r->status = st;
+    return st;
+}

@@ -1,0 +1,82 @@
+/* What the constrained integrators (ali3p.c, genalpha3.c) share: a run of a model given as a
+ * struct (system.h), its workspace, rows, consistent initial conditions and the solve of the
+ * constraint block (constrained.c). Internal to the runtime. */
+#ifndef FLEXSYM_CONSTRAINED_H
+#define FLEXSYM_CONSTRAINED_H
+
+#include "flexsym/runtime.h"
+#include "flexsym/system.h"
+
+typedef struct {
+    const fsm_system* m;
+    const fsr_options* o;
+    fsr_result* r;
+    int n, nc;
+    double L;        /* length scale */
+    double tol;      /* Newton tolerance: newton_tol x L */
+    long nsteps;     /* grid points t_k = k dt, t_nsteps = t_end */
+    long next_row;   /* grid index of the next row */
+    long capacity;
+    long k;          /* steps taken */
+    /* state at t_k: q, q', q'', multipliers (ali3p: lambda*), the algorithmic acceleration
+     * (genalpha3; ali3p keeps qh'' there) */
+    double *q, *v, *a, *lam, *ab;
+    double* mult;    /* the multipliers the outputs see (genalpha3: lam; ali3p: from q'') */
+    double* vout;    /* the velocities the rows see: v projected (v when nc = 0) */
+    /* iterates at t_k+1 */
+    double *q1, *v1, *a1, *lam1;
+    double* d;       /* drive (nd) */
+    double* y;       /* outputs */
+    double *M, *S, *Jq, *Jv;  /* n x n; S: the LU-factored iteration matrix (ali3p: W) */
+    double* P;       /* ali3p: M + (h/2) C + (h^2/4) K, W without the penalty term */
+    int* piv;
+    double *Pq, *phi, *phit, *gam;  /* Phi_q (nc x n), Phi, Phi_t, gamma */
+    double *Z, *G;   /* n x nc: S^-1 Phi_q^T; nc x nc: Phi_q Z */
+    int* cp;         /* column order of the complete pivoting of G */
+    double *res, *f, *w1, *w2;  /* n */
+    double *e1, *e2; /* nc */
+    double* zero;    /* max(n, nc) zeros: lambda when nc = 0 */
+    /* method coefficients and Newton state */
+    double alpha;    /* ali3p penalty */
+    double am, af, gm, bt, ra, pa, pb;  /* genalpha3 */
+    double h_mat;    /* step the iteration matrix was built for; 0: none */
+} csim;
+
+fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...);
+/* simulate.c: r->message and r->status; and the checks every run makes (finite o->y0, the
+ * run-size limits of limits.h; r->ncols set), FSR_OK or FSR_BAD_OPTIONS with the message. */
+fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...);
+fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r);
+double cs_time(const csim* s, long k);
+/* s->d = the drive at t */
+void cs_drive(csim* s, double t);
+/* Phi, Phi_q at (q, s->d) */
+void cs_constraints(csim* s, const double* q);
+double cs_max_abs(const double* x, int n);
+/* x = A^-1 x with A LU-factored in s->S (or the identity when A is NULL) */
+void cs_solve(csim* s, const double* A, double* x);
+/* Solve  A x + Phi_q^T lam = b,  Phi_q x = c  for x (in b) and lam, with A LU-factored in A
+ * (NULL: identity) and Phi_q in s->Pq, by the Schur complement Phi_q A^-1 Phi_q^T. Dependent
+ * (redundant) constraint rows are recognised by complete pivoting and dropped: for consistent
+ * equations x is unique and lam one of the solutions. Returns the rank. */
+int cs_kkt(csim* s, const double* A, double* b, const double* c, double* lam);
+/* The state (q, v) made consistent at t = 0 and (a, lam) solved from the equations. */
+fsr_status cs_consistent_start(csim* s);
+/* An accepted step to t1 with the state in q, v, a, lam: finiteness, counters, row if due. */
+fsr_status cs_accept(csim* s, double t1);
+fsr_status cs_newton_failed(csim* s, double t1, double dq, int it);
+
+/* A run resumable step by step (fsr_simulate_system, fsr_stepper): cs_open with room for
+ * `capacity` rows (0: every row of the run), cs_start (consistent initial state, the row at
+ * t = 0, the method's start), cs_step until s->k == s->nsteps, cs_close. */
+fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r, long capacity);
+fsr_status cs_start(csim* s);
+fsr_status cs_step(csim* s);
+void cs_close(csim* s);
+
+fsr_status ali3p_begin(csim* s);
+fsr_status ali3p_step(csim* s);
+fsr_status genalpha3_begin(csim* s);
+fsr_status genalpha3_step(csim* s);
+
+#endif

@@ -1,0 +1,551 @@
+"""Equations of motion of a System in relative coordinates on its spanning tree (sympy).
+
+Unknowns q: the coordinates of the tree joints that are not guided (in tree order), then each
+flexible body's elastic coordinates. A guided joint k contributes the drive entries
+d = [t, theta_k, theta_k', theta_k''] (known functions of time, not unknowns).
+
+Each body's frame pose (angle phi, origin R) is an expression of its parent's pose and its tree
+joint's coordinate; a flexible beam's frame is its root's tangent frame. Energies:
+  rigid body   T = 1/2 m |v_G|^2 + 1/2 J phi'^2,  V_g = -m g.r_G
+  modal beam   T = int 1/2 rho A |V + r' + phi' k x r|^2 dx in frame components (energy.py's
+               kinetic_density with the frame's actual motion), V_g = -m g.R - int rho A g.A r dx,
+               strain terms and their `wrt` groups exactly as the variant's strain model.
+  ef beam      the same per ANCF element (efbody.py); its elastic energy is differentiated by
+               casadi AD in sysgen.py.
+Loads: gravity, motors, point forces, torques, spring-dampers. Cut joints give constraint rows
+Phi(q, theta) (cut_joint_rows); sysgen.py differentiates them.
+Lagrange with guided coordinates theta_k (p = dT/dq'):
+  M = dp/dq',  f = dT/dq - (dp/dq) q' - sum_k (dp/dtheta_k theta_k' + dp/dtheta_k' theta_k'') + Q
+Q: strain terms (their groups only), gravity, motors, point forces and torques.
+
+Geometric stiffening per strain model in a system: #1/#2 (geometric_stiffness) and #3
+(foreshortening) need nothing: the axial coordinates, or u_fs, respond to the frame's actual
+motion through T. `prestress` keeps N(x) = rho A phi'^2 (L^2 - x^2)/2 with phi' the frame's
+actual rate (a velocity-dependent stiffness on the bending coordinates, a force term, not
+part of the Lagrangian); the frame's translational acceleration and gravity are NOT in this
+N(x): use #1-#3 when they matter (S2, S3).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
+
+import sympy as sp
+
+from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, build_fields,
+                     gravity_density, kinetic_density, momentum_density, w)
+from .efbody import EfPart, ef_part
+from .errors import SpecError
+from .integrals import IntegralTable
+from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
+from .outputs import field_at, output_expression
+from .system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
+                     beam_station, parse_output)
+
+SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
+
+
+def _rot(phi) -> sp.Matrix:
+    return sp.Matrix([[sp.cos(phi), -sp.sin(phi)], [sp.sin(phi), sp.cos(phi)]])
+
+
+def _cross(a, b) -> sp.Expr:
+    return a[0] * b[1] - a[1] * b[0]
+
+
+@dataclass
+class Coordinate:
+    name: str
+    group: str  # 'joint' | 'axial' | 'bending'
+    body: str
+    joint: str = ""
+
+
+@dataclass
+class Guided:
+    joint: str
+    driver: str
+    theta: sp.Expr  # of t and the drive parameters
+    params: tuple[Param, ...]
+    symbols: tuple[sp.Symbol, sp.Symbol, sp.Symbol]  # theta, theta', theta''
+
+
+@dataclass
+class Pose:
+    angle: sp.Expr
+    R: sp.Matrix
+
+
+@dataclass
+class FlexPart:
+    """A flexible body's deformation: its table, fields (in this body's symbols), modes."""
+
+    beam: FlexibleBeam
+    table: IntegralTable
+    fields: object
+    modes: dict
+    groups: dict  # mode name -> 'axial' | 'bending'
+    coords: list  # mode names in order
+    psyms: dict  # global beam parameter symbol -> this body's symbol
+
+    def view(self):
+        """What outputs.field_at / output_expression read (a derivation-like object)."""
+        return SimpleNamespace(spec=self.beam.model, table=self.table, modes=self.modes,
+                               fields=self.fields)
+
+
+@dataclass
+class SystemDerivation:
+    system: System
+    tree: object
+    coords: list[Coordinate]
+    guided: list[Guided]
+    q: sp.Matrix
+    qd: sp.Matrix
+    qdd: sp.Matrix
+    params: list[tuple[str, sp.Symbol, float]]  # (name, symbol, default)
+    poses: dict[str, Pose] = field(default_factory=dict)
+    flex: dict[str, FlexPart] = field(default_factory=dict)
+    T: sp.Expr = sp.Integer(0)
+    V: sp.Expr = sp.Integer(0)
+    momentum: sp.Expr = sp.Integer(0)
+    terms: list = field(default_factory=list)  # (body, term, wrt, V, Q)
+    Q: sp.Matrix = None
+    M: sp.Matrix = None
+    f: sp.Matrix = None
+    outputs: dict[str, sp.Expr] = field(default_factory=dict)
+    constraints: list[tuple[str, sp.Expr]] = field(default_factory=list)  # Phi(q, theta) rows
+    lam: sp.Matrix = None  # their multipliers (outputs read them)
+    elastic: list = field(default_factory=list)  # ef bodies' elastic energies, unexpanded
+                                                 # (sysgen: Q = -dV/dq by casadi AD)
+    V_grav: sp.Expr = sp.Integer(0)
+    dropped: list[dict] = field(default_factory=list)
+
+    @property
+    def drive_symbols(self) -> list[sp.Symbol]:
+        return [t] + [x for g in self.guided for x in g.symbols]
+
+    @property
+    def drive_params(self) -> list[Param]:
+        return [p for g in self.guided for p in g.params]
+
+    def ddt(self, expr, order: int = 1):
+        """Total time derivative along the motion (q, q', theta_k and their rates)."""
+        if isinstance(expr, sp.MatrixBase):
+            return expr.applyfunc(lambda e: self.ddt(e, order))
+        for _ in range(order):
+            out = sp.Integer(0)
+            for x, xd in zip(self.q, self.qd):
+                out += sp.diff(expr, x) * xd
+            for x, xd in zip(self.qd, self.qdd):
+                out += sp.diff(expr, x) * xd
+            for g in self.guided:
+                th, thd, thdd = g.symbols
+                out += sp.diff(expr, th) * thd + sp.diff(expr, thd) * thdd
+            expr = out
+        return expr
+
+    def energies(self) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
+        """(T, V, h = T2 - T0 + V): h is conserved when nothing is guided or motored and every
+        term is conservative (then h = T + V)."""
+        T0 = self.T.xreplace({x: 0 for x in self.qd})
+        T2 = sp.expand((self.qd.T * self.M * self.qd)[0, 0] / 2)
+        return self.T, self.V, T2 - T0 + self.V
+
+
+def _unsupported(system: System, tree) -> None:
+    where = f"system '{system.name}'"
+    for b in system.bodies:
+        if b.flexible and b.model.kind == "modal" and STRAIN_MODELS[b.model.strain].kinematics == "exact":
+            raise SpecError(f"{where}: body '{b.name}': the exact kinematics (strain model 'exact') "
+                            "is derived for a guided hub only; use ef for a geometrically exact body")
+        if b.flexible and b.model.kind == "modal" and (b.model.axial_force != "constitutive" or b.model.moment != "constitutive"):
+            raise SpecError(f"{where}: body '{b.name}': N or M from equilibrium is derived for a "
+                            "guided hub only; use the constitutive recovery in a system")
+        if b.flexible and b.model.kind == "modal" and getattr(b.model, "body", None) is not None:
+            raise SpecError(f"{where}: body '{b.name}': a body from finite-element data is not "
+                            "supported in a system yet")
+    for load in system.loads:
+        if not isinstance(load, (Gravity, PointForce, Torque, SpringDamper)):
+            raise SpecError(f"{where}: load {type(load).__name__} is not derived yet")
+
+
+def _param_layout(system: System) -> tuple[list, dict]:
+    """p: [rho, E, A, I, L] of each flexible body (plain names for one body, as a one-beam
+    variant's p, so that --param L=... keeps working; else body_rho, ...)."""
+    beams = [b for b in system.bodies if b.flexible]
+    params, by_body = [], {}
+    for b in beams:
+        values = {"rho": b.section.rho, "E": b.section.E, "A": b.section.A, "I": b.section.I,
+                  "L": b.length}
+        mapping = {}
+        for gp in BEAM_PARAMS:
+            name = gp.name if len(beams) == 1 else f"{b.name}_{gp.name}"
+            sym = gp.symbol if len(beams) == 1 else sp.Symbol(name, positive=True)
+            params.append((name, sym, float(values[gp.name])))
+            mapping[gp.symbol] = sym
+        by_body[b.name] = mapping
+    return params, by_body
+
+
+def _guided(system: System) -> list[Guided]:
+    guided = [d for d in system.drivers if d.kind == "guided"]
+    out = []
+    for d in guided:
+        where = f"system '{system.name}': driver '{d.name}'"
+        if d.maneuver:
+            try:
+                man = maneuver_of(d.maneuver)
+            except SpecError as exc:
+                raise SpecError(f"{where}: {exc}") from None
+            given = dict(d.params)
+            unknown = set(given) - {p.name for p in man.params}
+            if unknown:
+                raise SpecError(f"{where}: manoeuvre '{man.name}' has no parameter "
+                                f"{', '.join(sorted(unknown))}")
+            theta, params = man.theta, []
+            for p in man.params:
+                name = p.name if len(guided) == 1 else f"{d.name}_{p.name}"
+                np_ = Param(name, float(given.get(p.name, p.default)), p.unit, p.description)
+                theta = theta.xreplace({p.symbol: np_.symbol})
+                params.append(np_)
+        else:
+            try:
+                theta = parse_theta(d.expression)
+            except SpecError as exc:
+                raise SpecError(f"{where}: {exc}") from None
+            params = []
+        j = d.joint
+        syms = (sp.Symbol(j, real=True), sp.Symbol(f"{j}_d", real=True),
+                sp.Symbol(f"{j}_dd", real=True))
+        out.append(Guided(j, d.name, theta, tuple(params), syms))
+    return out
+
+
+def derive_system(system: System) -> SystemDerivation:
+    system.validate()
+    tree = system.tree()
+    _unsupported(system, tree)
+    guided = _guided(system)
+    guided_by_joint = {g.joint: g for g in guided}
+    params, psyms = _param_layout(system)
+
+    coords: list[Coordinate] = []
+    joint_sym: dict[str, tuple] = {}  # joint -> (coordinate, rate) symbols
+    for body in tree.order:
+        j = system.joint(tree.joint_of(body))
+        if j.has_coordinate and j.name not in guided_by_joint:
+            coords.append(Coordinate(j.name, "joint", body, j.name))
+    for b in system.bodies:
+        if b.flexible and b.model.kind == "fe":
+            coords += [Coordinate(f"{b.name}_{c}", "node", b.name) for c in b.model.coordinates]
+        elif b.flexible:
+            refs = b.model.modes
+            for r in refs:
+                coords.append(Coordinate(f"{b.name}_{r.coordinate}", r.axis, b.name))
+    q = sp.Matrix([sp.Symbol(c.name, real=True) for c in coords])
+    qd = sp.Matrix([sp.Symbol(c.name + "_d", real=True) for c in coords])
+    qdd = sp.Matrix([sp.Symbol(c.name + "_dd", real=True) for c in coords])
+    for c, x, xd in zip(coords, q, qd):
+        if c.group == "joint":
+            joint_sym[c.joint] = (x, xd)
+    for g in guided:
+        joint_sym[g.joint] = g.symbols[:2]
+    der = SystemDerivation(system, tree, coords, guided, q, qd, qdd, params)
+
+    # deformation fields of each flexible body, in its own coordinate symbols
+    for b in system.bodies:
+        if not b.flexible:
+            continue
+        if b.model.kind == "fe":
+            der.flex[b.name] = ef_part(b, psyms[b.name])
+            continue
+        spec = b.model.validate()
+        modes = {r.coordinate: spec.mode(r) for r in spec.modes}
+        names = list(modes)
+        sym = {n: sp.Symbol(f"{b.name}_{n}", real=True) for n in names}
+        symd = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in names}
+        symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n in names}
+        table = IntegralTable(modes)
+        strain = STRAIN_MODELS[spec.strain]
+        fields = build_fields([modes[r.coordinate] for r in spec.axial],
+                              [modes[r.coordinate] for r in spec.bending], sym, symd, table,
+                              strain.foreshortening, symdd)
+        der.flex[b.name] = FlexPart(b, table, fields, modes,
+                                    {r.coordinate: r.axis for r in spec.modes}, names, psyms[b.name])
+
+    # kinematics: poses in tree order
+    for body in tree.order:
+        j = system.joint(tree.joint_of(body))
+        if j.parent == GROUND:
+            P, phiP = sp.Matrix(j.point).applyfunc(sp.nsimplify), sp.Integer(0)
+        else:
+            P, phiP = marker_pose(der, j.parent)
+        c = joint_sym.get(j.name, (sp.Integer(0),))[0]
+        off = sp.nsimplify(j.offset)
+        b = system.body(body)
+        mc = system.marker(j.child)[1]
+        mloc = sp.Matrix([sp.nsimplify(mc.x), sp.nsimplify(mc.y)])
+        if j.kind == "revolute":
+            phi = phiP + off + c
+        else:
+            phi = phiP + off
+        if j.kind == "prismatic":
+            ax = sp.Matrix([sp.nsimplify(a) for a in j.axis])
+            P = P + _rot(phiP) * ax / sp.sqrt(ax.dot(ax)) * c
+        R = P - (_rot(phi) * mloc if not b.flexible else sp.zeros(2, 1))
+        der.poses[body] = Pose(phi, R)
+
+    # energies and forces
+    g = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), None)
+    gvec = sp.Matrix([sp.nsimplify(x) for x in g]) if g is not None else sp.zeros(2, 1)
+    V_grav = sp.Integer(0)
+    Q = sp.zeros(len(coords), 1)
+    for b in system.bodies:
+        pose = der.poses[b.name]
+        A_ = _rot(pose.angle)
+        omega = der.ddt(pose.angle)
+        Rdot = der.ddt(pose.R)
+        if not b.flexible:
+            G = pose.R + A_ * sp.Matrix([sp.nsimplify(x) for x in b.com])
+            vG = der.ddt(G)
+            m, J = sp.nsimplify(b.mass), sp.nsimplify(b.inertia)
+            der.T += m * vG.dot(vG) / 2 + J * omega**2 / 2
+            V_grav += -m * gvec.dot(G)
+            der.momentum += m * _cross(G, vG) + J * omega
+            continue
+        part = der.flex[b.name]
+        ph = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
+        Vloc, Rloc, gloc = A_.T * Rdot, A_.T * pose.R, A_.T * gvec
+        actual = {ph[0]: omega, ph[1]: Vloc[0], ph[2]: Vloc[1], ph[3]: Rloc[0], ph[4]: Rloc[1],
+                  ph[5]: gloc[0], ph[6]: gloc[1]}
+        mass = BEAM_PARAMS[0].symbol * BEAM_PARAMS[2].symbol * BEAM_PARAMS[4].symbol
+        if isinstance(part, EfPart):
+            T_, Vg_, H_, V_el = part.energies()
+            der.T += T_.xreplace(actual)
+            V_grav += Vg_.xreplace(actual) - mass.xreplace(part.psyms) * gvec.dot(pose.R)
+            der.momentum += H_.xreplace(actual)
+            der.elastic.append(V_el)
+            der.terms.append((b.name, "ancf_elastic", ("node",), V_el, None))
+            continue
+        frame = FrameMotion(ph[0], ph[1], ph[2])
+        tab, fl = part.table, part.fields
+
+        def body_expr(expr, tab=tab, part=part, actual=actual):
+            return expr.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
+
+        der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
+        V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
+            - body_expr(mass) * gvec.dot(pose.R)
+        der.momentum += body_expr(tab.integrate(momentum_density(fl, frame, ph[3], ph[4])))
+        strain = STRAIN_MODELS[b.model.strain]
+        for term_name, wrt in strain.terms:
+            term = ENERGY_TERMS[term_name]
+            V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
+            Qk = sp.Matrix([-sp.diff(V, x) if (c.body == b.name and c.group in wrt) else 0
+                            for c, x in zip(coords, q)])
+            der.terms.append((b.name, term_name, wrt, V, Qk))
+            der.V += V
+            Q += Qk
+    der.V += V_grav
+    der.V_grav = V_grav
+    Q += sp.Matrix([-sp.diff(V_grav, x) for x in q])
+    for load in system.loads:
+        if isinstance(load, SpringDamper):
+            Vs, Qs = _spring(der, load)
+            der.V += Vs
+            der.terms.append(("", f"spring {load.name or load.a + '-' + load.b}", ("all",), Vs, Qs))
+            Q += Qs
+    Q += _applied_forces(der, list(q))
+    der.Q = Q.applyfunc(sp.expand)
+
+    pvec = sp.Matrix([sp.diff(der.T, x) for x in qd])
+    der.M = pvec.jacobian(qd).applyfunc(sp.expand)
+    f = sp.Matrix([sp.diff(der.T, x) for x in q]) - pvec.jacobian(q) * qd + der.Q
+    for gd in guided:
+        th, thd, thdd = gd.symbols
+        f -= pvec.diff(th) * thd + pvec.diff(thd) * thdd
+    der.f = f.applyfunc(sp.expand)
+    der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
+    der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
+    der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
+    return der
+
+
+def _side(der: SystemDerivation, joint, side: str) -> tuple[sp.Matrix, sp.Expr]:
+    ref = getattr(joint, side)
+    if ref == GROUND:
+        return sp.Matrix([sp.nsimplify(c) for c in joint.point]), sp.Integer(0)
+    return marker_pose(der, ref)
+
+
+def cut_joint_rows(der: SystemDerivation, joint) -> list[tuple[str, sp.Expr]]:
+    """Phi = 0 of a cut joint: revolute (pin: the two points coincide), clamp (and the angles
+    differ by the offset), prismatic (the child point on the parent's axis line, angles differ
+    by the offset). On a beam, a point's angle is its tangent's."""
+    (pp, ap), (pc, ac) = _side(der, joint, "parent"), _side(der, joint, "child")
+    off = sp.nsimplify(joint.offset)
+    n = joint.name
+    if joint.kind == "prismatic":
+        ax = sp.Matrix([sp.nsimplify(a) for a in joint.axis])
+        normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
+        return [(f"{n}.normal", (pc - pp).dot(normal)), (f"{n}.angle", ac - ap - off)]
+    rows = [(f"{n}.x", pc[0] - pp[0]), (f"{n}.y", pc[1] - pp[1])]
+    if joint.kind == "clamp":
+        rows.append((f"{n}.angle", ac - ap - off))
+    return rows
+
+
+def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
+    """Generalised forces of the motors, point forces and torques on the coordinates `wrt`
+    (symbols: unknowns, or a guided theta_k for the torque it needs)."""
+    system = der.system
+    Q = sp.zeros(len(wrt), 1)
+    env = [("t", t)]
+    coordinate_of = {}
+    for c, x, xd in zip(der.coords, der.q, der.qd):
+        if c.group == "joint":
+            env += [(c.joint, x), (f"{c.joint}_rate", xd)]
+            coordinate_of[c.joint] = x
+    for gd in der.guided:
+        env += [(gd.joint, gd.symbols[0]), (f"{gd.joint}_rate", gd.symbols[1])]
+    env = tuple(env)
+    for d in system.drivers:
+        if d.kind == "motor" and coordinate_of[d.joint] in wrt:
+            tau = parse_expression(d.expression, env, f"motor '{d.name}' force")
+            Q[list(wrt).index(coordinate_of[d.joint])] += tau
+    for load in system.loads:
+        if isinstance(load, PointForce):
+            body, _ = system.marker(load.marker)
+            r, _phi = marker_pose(der, load.marker)
+            F = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
+            if load.frame == "body":
+                F = _rot(der.poses[body].angle) * F
+            Q += sp.Matrix([F.dot(r.diff(x)) for x in wrt])
+        elif isinstance(load, Torque):
+            tau = parse_expression(load.expression, env, f"torque on '{load.body}'")
+            phi = der.poses[load.body].angle
+            Q += sp.Matrix([tau * sp.diff(phi, x) for x in wrt])
+    return Q
+
+
+def _spring(der: SystemDerivation, load) -> tuple[sp.Expr, sp.Matrix]:
+    """V = k (l - l0)^2 / 2 and Q = -dV/dq - c l' dl/dq of a spring-damper."""
+    ends = []
+    for ref, point in ((load.a, load.point_a), (load.b, load.point_b)):
+        ends.append(sp.Matrix([sp.nsimplify(c) for c in point]) if ref == GROUND
+                    else marker_pose(der, ref)[0])
+    delta = ends[1] - ends[0]
+    k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
+    if l0 == 0:  # no square root: smooth when the ends meet
+        V = k * delta.dot(delta) / 2
+        rate = der.ddt(delta)
+        damping = sp.Matrix([-c * rate.dot(delta.diff(x)) for x in der.q])
+    else:
+        length = sp.sqrt(delta.dot(delta))
+        V = k * (length - l0)**2 / 2
+        damping = sp.Matrix([-c * der.ddt(length) * sp.diff(length, x) for x in der.q])
+    return V, sp.Matrix([-sp.diff(V, x) for x in der.q]) + damping
+
+
+def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
+    """torque(D): a motor's force as given; for a guided joint the generalised force that
+    keeps it on theta(t): d/dt dT/dtheta' - dT/dtheta + dV_g/dtheta - Q_theta + Phi_theta^T
+    lambda (lambda: the cut joints' multipliers, M q'' = f - Phi_q^T lambda)."""
+    if driver.kind == "motor":
+        j = next(c for c in der.coords if c.joint == driver.joint)
+        return _applied_forces(der, [der.q[der.coords.index(j)]])[0]
+    th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
+    p = sp.diff(der.T, thd)
+    tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
+    for (_, phi), lam in zip(der.constraints, der.lam):
+        tau += sp.diff(phi, th) * lam
+    return sp.expand(tau)
+
+
+def marker_pose(der: SystemDerivation, ref: str) -> tuple[sp.Matrix, sp.Expr]:
+    """Ground position and angle of 'body.marker' (on a beam: the deformed axis point and its
+    tangent angle phi + v_x, linear in the slope as the modal kinematics)."""
+    body, m = der.system.marker(ref)
+    pose = der.poses[body]
+    b = der.system.body(body)
+    if not b.flexible:
+        return pose.R + _rot(pose.angle) * sp.Matrix([sp.nsimplify(m.x), sp.nsimplify(m.y)]), pose.angle
+    u, v, slope = beam_fields_at(der, body, m.x)
+    return pose.R + _rot(pose.angle) * sp.Matrix([_x(der, body, m.x) + u, v]), pose.angle + slope
+
+
+def _x(der, body, x):
+    part = der.flex[body]
+    return sp.nsimplify(x) / sp.nsimplify(part.beam.length) * part.psyms[BEAM_PARAMS[4].symbol]
+
+
+def beam_fields_at(der: SystemDerivation, body: str, x: float):
+    """(u, v, v_x) at x on a flexible body, in its frame and coordinate symbols."""
+    part = der.flex[body]
+    if isinstance(part, EfPart):
+        rx, ry, slope = part.position(x)
+        return rx - _x(der, body, x), ry, slope
+    at = sp.nsimplify(x) / sp.nsimplify(part.beam.length)
+    view = part.view()
+    L_ = part.psyms[BEAM_PARAMS[4].symbol]
+
+    def fa(e):
+        return field_at(view, e, at).xreplace(part.table.substitutions()).xreplace(part.psyms)
+    return fa(part.fields.u), fa(part.fields.v), fa(part.fields.v_s) / L_
+
+
+def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
+    system = der.system
+    fn, args = parse_output(system, quantity)
+    where = f"system '{system.name}': output '{quantity}'"
+    if fn in ("angle", "rate"):
+        for c, x, xd in zip(der.coords, der.q, der.qd):
+            if c.joint == args[0]:
+                return x if fn == "angle" else xd
+        for g in der.guided:
+            if g.joint == args[0]:
+                return g.symbols[0] if fn == "angle" else g.symbols[1]
+        raise SpecError(f"{where}: joint '{args[0]}' is a cut joint (no coordinate)")
+    if fn in ("x", "y"):
+        return marker_pose(der, args[0])[0][0 if fn == "x" else 1]
+    if fn == "T":
+        return der.T
+    if fn == "V":
+        return der.V + sp.Add(*der.elastic)
+    if fn == "momentum":
+        return der.momentum
+    if fn == "torque":
+        return motor_torque(der, next(d for d in system.drivers if d.name == args[0]))
+    if fn in ("v", "u", "w", "N", "M"):
+        beam = system.body(args[0])
+        x = beam_station(system, beam, args[1], where)
+        u, v, _ = beam_fields_at(der, beam.name, x)
+        if fn == "u":
+            return u
+        if fn == "v":
+            return v
+        if fn == "w":
+            ut, vt, _ = beam_fields_at(der, beam.name, beam.length)
+            u0, v0, _ = beam_fields_at(der, beam.name, 0.0)
+            p0 = sp.Matrix([u0, v0])
+            d = sp.Matrix([_x(der, beam.name, beam.length) + ut, vt]) - p0
+            r = sp.Matrix([_x(der, beam.name, x) + u, v]) - p0
+            return _cross(d, r) / sp.sqrt(d.dot(d))
+        return _stress(der, beam, x, fn, where)
+    raise SpecError(f"{where}: '{fn}' is not derived for systems yet")
+
+
+def _stress(der, beam, x, fn, where):
+    part = der.flex[beam.name]
+    if isinstance(part, EfPart):
+        return part.stress(fn, x)
+    frac = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    spec = replace(beam.model, points=(("o", str(frac)),))
+    if fn == "N" and not spec.axial and spec.strain != "prestress":
+        raise SpecError(f"{where}: strain model '{spec.strain}' has no axial coordinate to carry "
+                        "an axial force")
+    view = SimpleNamespace(spec=spec, table=part.table, modes=part.modes, fields=part.fields)
+    expr = output_expression(view, f"{fn}_o")
+    omega = der.ddt(der.poses[beam.name].angle)
+    return expr.xreplace(part.table.substitutions()).xreplace(part.psyms).xreplace({w: omega})

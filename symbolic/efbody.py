@@ -1,0 +1,130 @@
+"""An `ef` beam (planar ANCF cable elements, fe.py's element) as a body of a system.
+
+The elements live in the body's floating frame, the frame of its tree joint, with the root
+clamped in it as in the one-beam `ef` (r(0) = 0, r_x(0) along x, its length free): a revolute
+tree joint is then a pin whose angle is the frame's, a clamp holds the root slope. Per element,
+in frame components, with (V_x, V_y) = A^T R' and omega = phi' of the frame:
+    T^e = int rho A/2 |V + r' + omega k x r|^2 dx   (exact: a polynomial in xi)
+    V_g^e = -int rho A g_loc . r dx                 (exact), g_loc = A^T g
+    V^e = int [EA eps^2/2 + EI kappa^2/2] dx        (fe.elastic_element: Gauss-Legendre, material kappa)
+The elastic energy stays unexpanded (a square root per Gauss point): sysgen differentiates it
+with casadi AD, as fe.py does for the one-beam `ef`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import sympy as sp
+
+from .energy import A, E, I, L, rho
+from .errors import SpecError
+from .fe import elastic_element, hermite, le, xi
+
+_E = sp.Matrix(sp.symbols("x1 y1 dx1 dy1 x2 y2 dx2 dy2", real=True))
+_ED = sp.Matrix([sp.Symbol(str(c) + "_d", real=True) for c in _E])
+OM, VX, VY, RX, RY, GX, GY = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
+
+
+def _shape(e):
+    N = hermite(le)
+    rx = sum(Ni * e[j] for Ni, j in zip(N, (0, 2, 4, 6)))
+    ry = sum(Ni * e[j] for Ni, j in zip(N, (1, 3, 5, 7)))
+    return rx, ry
+
+
+@lru_cache(maxsize=None)
+def generic_element():
+    """(T, V_g, H, V_elastic, eps, kappa, stretch) of one element in the generic symbols."""
+    rx, ry = _shape(_E)
+    vx, vy = _shape(_ED)
+    ax, ay = VX + vx - OM * ry, VY + vy + OM * rx
+    T = sp.expand(le * sp.integrate(sp.expand(rho * A / 2 * (ax**2 + ay**2)), (xi, 0, 1)))
+    Vg = sp.expand(le * sp.integrate(sp.expand(-rho * A * (GX * rx + GY * ry)), (xi, 0, 1)))
+    H = sp.expand(le * sp.integrate(sp.expand(rho * A * ((RX + rx) * ay - (RY + ry) * ax)), (xi, 0, 1)))
+    eps, kappa, stretch, V = elastic_element(rx, ry)
+    return T, Vg, H, V, eps, kappa, stretch
+
+
+@dataclass
+class EfPart:
+    beam: object
+    n: int
+    q: dict  # coordinate name -> symbol (fe.FESpec.coordinates)
+    qd: dict
+    psyms: dict  # global beam parameter symbol -> this body's
+
+    @property
+    def coords(self) -> list[str]:
+        return list(self.q)
+
+    def nodes(self, sym) -> list[list]:
+        """Absolute nodal coordinates (x, y, x_x, y_x) of every node in the frame."""
+        Ls = L
+        out = [[sp.Integer(0), sp.Integer(0), 1 + sym["dx0"], sp.Integer(0)]]
+        for k in range(1, self.n + 1):
+            out.append([Ls * sp.Rational(k, self.n) + sym[f"ux{k}"], sym[f"uy{k}"],
+                        1 + sym[f"dx{k}"], sym[f"dy{k}"]])
+        return out
+
+    def rates(self) -> list[list]:
+        out = [[0, 0, self.qd["dx0"], 0]]
+        for k in range(1, self.n + 1):
+            out.append([self.qd[f"ux{k}"], self.qd[f"uy{k}"], self.qd[f"dx{k}"], self.qd[f"dy{k}"]])
+        return out
+
+    def _element_subs(self, e: int) -> dict:
+        nodes, rates = self.nodes(self.q), self.rates()
+        vals = nodes[e] + nodes[e + 1]
+        dvals = rates[e] + rates[e + 1]
+        return dict(zip(_E, vals)) | dict(zip(_ED, dvals)) | {le: L / self.n}
+
+    def energies(self):
+        """(T, V_g, H, V_elastic) summed over the elements, in placeholders OM, VX, ... and
+        this body's parameters."""
+        Tg, Vgg, Hg, Vg_el, *_ = generic_element()
+        T = Vg = H = Vel = sp.Integer(0)
+        for e in range(self.n):
+            sub = self._element_subs(e)
+            T += Tg.xreplace(sub)
+            Vg += Vgg.xreplace(sub)
+            H += Hg.xreplace(sub)
+            Vel += Vg_el.xreplace(sub)
+        return tuple(x.xreplace(self.psyms) for x in (sp.expand(T), sp.expand(Vg), sp.expand(H), Vel))
+
+    def _locate(self, x: float) -> list[tuple[int, sp.Expr, float]]:
+        """(element, xi, weight): at an interior node the two adjacent element ends, averaged."""
+        s_ = sp.nsimplify(x) / sp.nsimplify(self.beam.length) * self.n
+        e = int(sp.floor(s_))
+        if s_ == e and 0 < e < self.n:
+            return [(e - 1, sp.Integer(1), 0.5), (e, sp.Integer(0), 0.5)]
+        if e >= self.n:
+            return [(self.n - 1, sp.Integer(1), 1.0)]
+        return [(e, s_ - e, 1.0)]
+
+    def position(self, x: float):
+        """(r_x, r_y, slope angle) at x in the frame (positions are continuous: one element)."""
+        e, at, _ = self._locate(x)[0]
+        sub = self._element_subs(e)
+        rx, ry = (c.xreplace({xi: at}).xreplace(sub).xreplace(self.psyms) for c in _shape(_E))
+        dx, dy = (sp.diff(c, xi).xreplace({xi: at}).xreplace(sub).xreplace(self.psyms) for c in _shape(_E))
+        return rx, ry, sp.atan2(dy, dx)
+
+    def stress(self, fn: str, x: float):
+        """N = EA eps |r_x| or M = EI kappa at x (the mean of the two ends at a node)."""
+        _, _, _, _, eps, kappa, stretch = generic_element()
+        expr = E * A * eps * stretch if fn == "N" else E * I * kappa
+        out = sp.Integer(0)
+        for e, at, wt in self._locate(x):
+            out += wt * expr.xreplace({xi: at}).xreplace(self._element_subs(e))
+        return out.xreplace(self.psyms)
+
+
+def ef_part(beam, psyms) -> EfPart:
+    spec = beam.model.validate()
+    if spec.body is not None:
+        raise SpecError(f"body '{beam.name}': 'ef' with finite-element data is not supported in a "
+                        "system yet")
+    q = {c: sp.Symbol(f"{beam.name}_{c}", real=True) for c in spec.coordinates}
+    qd = {c: sp.Symbol(f"{beam.name}_{c}_d", real=True) for c in spec.coordinates}
+    return EfPart(beam, spec.elements, q, qd, psyms)

@@ -1,0 +1,244 @@
+"""A System -> kernels (casadi) -> a generated folder that fills flexsym/system.h's struct.
+
+Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = parameters):
+  mass(q, d, p) -> M        force(q, qd, d, p) -> f          M q'' = f
+  residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f
+  outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
+Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
+The fingerprint covers the system's spec, the variant generator's hash (the physics modules
+and templates) and this module, assemble.py, system.py and templates/system/.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import casadi as ca
+import sympy as sp
+
+from .assemble import SystemDerivation, derive_system
+from .build import Built, build
+from .cemit import c_double, emit
+from .generate import MANIFEST, _environment, write_folder
+from .kernels import SympyToCasadi, _matrix_sx, make_kernels
+from .maneuver import t as t_sym
+from .paths import PACKAGE_DIR, cache_dir, file_lock, templates_dir
+from .system import System, system_to_dict
+from .versions import generator_hash, tool_versions
+
+C_PREFIX = "fsm_"
+_OWN = ("assemble", "system", "sysgen", "efbody")
+
+
+def fingerprint(system: System) -> str:
+    h = hashlib.sha256(generator_hash().encode())
+    for f in [PACKAGE_DIR / f"{m}.py" for m in _OWN] + sorted((templates_dir() / "system").glob("*.j2")):
+        h.update(f.name.encode() + b"\0" + f.read_bytes().replace(b"\r\n", b"\n"))
+    payload = {"system": system_to_dict(system), "generator": h.hexdigest(),
+               "versions": tool_versions()}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
+
+def length_scale(system: System) -> float:
+    """The mechanism's size: the largest beam length, rigid marker distance from its body's
+    origin, or ground joint point distance from the origin (tolerances and blow-up use it)."""
+    sizes = [b.length for b in system.bodies if b.flexible]
+    sizes += [abs(complex(m.x, m.y)) for b in system.bodies if not b.flexible for m in b.markers]
+    sizes += [abs(complex(*j.point)) for j in system.joints if j.parent == "ground"]
+    return max([x for x in sizes if x > 0] or [1.0])
+
+
+def build_system_kernels(der: SystemDerivation) -> list:
+    n, nd = len(der.q), len(der.drive_symbols)
+    x = {"q": ca.SX.sym("q", n), "qd": ca.SX.sym("qd", n), "qdd": ca.SX.sym("qdd", n),
+         "d": ca.SX.sym("d", nd), "p": ca.SX.sym("p", len(der.params)), "t": ca.SX.sym("t"),
+         "mp": ca.SX.sym("mp", len(der.drive_params)), "lam": ca.SX.sym("lam", len(der.lam))}
+    symbols, priority = {}, {}
+    for i, (_, sym, _) in enumerate(der.params):
+        symbols[sym], priority[sym] = x["p"][i], 0
+    for i, sym in enumerate(der.drive_symbols):
+        symbols[sym], priority[sym] = x["d"][i], 1
+    for i, sym in enumerate(der.lam):
+        symbols[sym], priority[sym] = x["lam"][i], 2
+    for i in range(n):
+        for key, syms in (("q", der.q), ("qd", der.qd), ("qdd", der.qdd)):
+            symbols[syms[i]], priority[syms[i]] = x[key][i], 2
+    tr = SympyToCasadi(symbols, priority)
+    psyms = [sym for _, sym, _ in der.params]
+    M = _matrix_sx(tr, der.M, psyms)
+    f = _matrix_sx(tr, der.f, psyms)
+    # outputs and ef elastic energies hold square roots and atan2: translated as they are
+    y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
+    T_, V_, h_ = der.energies()
+    V_el = ca.SX(0.0)
+    for V in der.elastic:
+        V_el = V_el + tr(V)
+    if der.elastic:
+        f = f - ca.gradient(V_el, x["q"])  # ef bodies: Q = -dV/dq by casadi AD, as fe.py
+    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms) + ca.vertcat(0, V_el, V_el)
+    dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
+    dtr = SympyToCasadi(dsyms, {})
+    drive = [x["t"]]
+    for g in der.guided:
+        drive += [dtr(g.theta), dtr(sp.diff(g.theta, t_sym)), dtr(sp.diff(g.theta, t_sym, 2))]
+    r = ca.mtimes(M, x["qdd"]) - f
+    q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
+    constraint_kernels = []
+    if der.constraints:
+        # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d', with
+        # d' = [1, then theta_k', theta_k'', 0 per guided joint] (Phi does not read theta_k')
+        phi = _matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
+        ddot = [ca.SX(1.0)]
+        for k in range(len(der.guided)):
+            ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
+        ddot = ca.vertcat(*ddot)
+        phi_q = ca.jacobian(phi, q)
+        phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
+        phi_dot = ca.mtimes(phi_q, qd) + phi_t
+        gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
+        constraint_kernels = [
+            ("constraints", "Phi of the cut joints", [("q", q), ("d", d), ("p", p)], [("phi", phi)]),
+            ("constraint_jac", "Phi_q", [("q", q), ("d", d), ("p", p)], [("phi_q", phi_q)]),
+            ("constraint_rate", "Phi_t (Phi_q q' + Phi_t = 0)", [("q", q), ("d", d), ("p", p)],
+             [("phi_t", phi_t)]),
+            ("constraint_acc", "gamma (Phi_q q'' = gamma), casadi AD",
+             [("q", q), ("qd", qd), ("d", d), ("p", p)], [("gamma", gamma)]),
+        ]
+    return make_kernels(constraint_kernels + [
+        ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
+        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
+         [("f", f)]),
+        ("residual_jac", "Jacobians of r = M q'' - f",
+         [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)],
+         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
+        ("outputs", "outputs " + ", ".join(der.outputs),
+         [("q", q), ("qd", qd), ("qdd", qdd), ("lambda", x["lam"]), ("d", d), ("p", p)],
+         [("y", y)]),
+        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
+         [("q", q), ("qd", qd), ("d", d), ("p", p)], [("e", en)]),
+        ("drive", "d = [t, theta_k, theta_k', theta_k''] of the guided joints",
+         [("t", x["t"]), ("mp", x["mp"])], [("d", ca.vertcat(*drive))]),
+    ])
+
+
+def generate_system_files(system: System) -> dict[str, str]:
+    der = derive_system(system)
+    fp = fingerprint(system)
+    emitted = [emit(k, C_PREFIX) for k in build_system_kernels(der)]
+    versions = tool_versions()
+    mass_constant = not (der.M.free_symbols & (set(der.q) | set(der.drive_symbols)))
+    scale = length_scale(system)
+    names = [n for n, _, _ in der.params]
+    beams = [b for b in system.bodies if b.flexible]
+    length_param = names.index("L") if (len(beams) == 1 and beams[0].length == scale) else -1
+    initial = [c_double(system.joint(c.joint).initial) if c.group == "joint" else "0.0"
+               for c in der.coords]
+    used = {k.kernel.name: k.used_inputs for k in emitted}
+    ctx = {
+        "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
+        "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
+        "summary": f"{len(system.bodies)} bodies, {len(der.q)} coordinates, "
+                   f"{len(der.guided)} guided joints, {len(der.constraints)} constraint equations.",
+        "constraints": [n for n, _ in der.constraints],
+        "banner": "system/banner.j2", "kernels": emitted,
+        "guided": [g.joint for g in der.guided], "coords": [c.name for c in der.coords],
+        "outputs": list(der.outputs), "nd": len(der.drive_symbols),
+        "params": [{"name": n, "c_default": c_double(v)} for n, _, v in der.params],
+        "drive_params": [{"name": p.name, "c_default": c_double(p.default)}
+                         for p in der.drive_params],
+        "length_scale": c_double(scale), "length_param": length_param,
+        "mass_constant": mass_constant, "initial": initial,
+        "outputs_use_acceleration": "qdd" in used["outputs"],
+        "outputs_use_drive": "d" in used["outputs"],
+    }
+    env = _environment()
+    files = {
+        f"fsm_{system.name}.h": env.get_template("system/system.h.j2").render(ctx),
+        "kernels.c": env.get_template("kernels.c.j2").render(ctx),
+        "system.c": env.get_template("system/system.c.j2").render(ctx),
+        "CMakeLists.txt": env.get_template("system/CMakeLists.txt.j2").render(ctx),
+    }
+    manifest = {
+        "kind": "system", "generator": ctx["generator"], "versions": versions, "fingerprint": fp,
+        "spec": {"name": system.name} | system_to_dict(system),
+        "tree": {"order": list(der.tree.order), "tree_joints": dict(der.tree.parent_joint),
+                 "cut_joints": list(der.tree.cut)},
+        "coordinates": [{"name": c.name, "group": c.group, "body": c.body} for c in der.coords],
+        "drive": ["t"] + [f"{g.joint}{s}" for g in der.guided for s in ("", "'", "''")],
+        "drive_params": [{"name": p.name, "default": p.default, "unit": p.unit}
+                         for p in der.drive_params],
+        "params": [{"name": n, "default": v} for n, _, v in der.params],
+        "constraints": [{"name": n, "phi": str(e)} for n, e in der.constraints],
+        "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
+                         for b, term, wrt, _, _ in der.terms],
+        "outputs": dict(zip(der.outputs, (o.quantity for o in system.outputs))),
+        "length_scale": scale, "mass_constant": mass_constant,
+        "left_out": der.dropped,
+        "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
+                    for k in emitted},
+        "files": {n: hashlib.sha256(tx.encode()).hexdigest() for n, tx in sorted(files.items())},
+    }
+    files[MANIFEST] = json.dumps(manifest, indent=2) + "\n"
+    return files
+
+
+def system_folder(system: System) -> Path:
+    return cache_dir() / "systems" / f"{system.name}-{fingerprint(system)[:12]}"
+
+
+def _current(folder: Path, fp: str) -> bool:
+    try:
+        manifest = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    if manifest.get("fingerprint") != fp:
+        return False
+    for name, digest in manifest.get("files", {}).items():
+        try:
+            if hashlib.sha256((folder / name).read_bytes()).hexdigest() != digest:
+                return False
+        except OSError:
+            return False
+    return True
+
+
+def prepare_system(system: System) -> Built:
+    """Generate (when not current) and build a system; returns the build (run with run_built)."""
+    system.validate()
+    folder = system_folder(system)
+    fp = fingerprint(system)
+    if not _current(folder, fp):
+        with file_lock(folder.parent / f".{folder.name}.lock"):
+            if not _current(folder, fp):
+                write_folder(generate_system_files(system), folder)
+    return build(folder)
+
+
+def run_system(system: System, out: Path | None = None, **options):
+    """Generate, build and run a system: run.run_built's options (t_end, dt, integrator,
+    params, ...), checked against the option table before any work."""
+    from .run import check_options, run_built
+
+    opts = check_options(**options)
+    return run_built(prepare_system(system), opts, out=out)
+
+
+def describe(system: System) -> str:
+    """What `inspect` shows of a system's derivation: tree, coordinates, constraint rows, which
+    energy term acts on which coordinates, and the kernels' operation counts."""
+    files = generate_system_files(system)
+    m = json.loads(files[MANIFEST])
+    lines = [f"system '{system.name}': {len(system.bodies)} bodies; tree "
+             + ", ".join(f"{b} <- {j}" for b, j in m["tree"]["tree_joints"].items())
+             + (f"; cut joints: {', '.join(m['tree']['cut_joints'])}" if m["tree"]["cut_joints"] else ""),
+             "coordinates: " + ", ".join(f"{c['name']} ({c['group']})" for c in m["coordinates"]),
+             "drive d: " + ", ".join(m["drive"])]
+    for c in m["constraints"]:
+        lines.append(f"constraint {c['name']}: {c['phi']} = 0")
+    for t_ in m["energy_terms"]:
+        where = f"body {t_['body']}: " if t_["body"] else ""
+        lines.append(f"{where}{t_['term']} acts on {', '.join(t_['differentiated_wrt'])}")
+    for name, k in m["kernels"].items():
+        lines.append(f"kernel {k['c_name']}: {k['total_ops']} operations")
+    return "\n".join(lines) + "\n"

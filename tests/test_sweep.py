@@ -1,0 +1,249 @@
+"""Parameter sweeps (symbolic/sweep.py, `flexsym sweep`): the table, sampling reproducible by
+seed, resume after an interruption, Dask and local executors giving the same table, and
+malformed sweep specifications refused with one line and exit 2, before anything is written."""
+import io
+import os
+
+import numpy as np
+import pytest
+
+from flexsym import api
+from flexsym.cli import main
+from flexsym.errors import SpecError
+from flexsym.pipeline import prepare
+from flexsym.progress import Progress
+from flexsym.run import run_built
+from flexsym.spec import builtin
+from flexsym.sweep import make_plan, read_table
+
+pd = pytest.importorskip("pandas")
+
+FAST = dict(integrator="radau5", dt=0.01, step=0.25, t_end=20.0)  # #3's 1e-4 m case of the bench
+
+
+def _same_table(a: dict, b: dict, skip=("cpu_s",)):
+    assert list(a) == list(b)
+    for k in a:
+        if k not in skip:
+            assert a[k].dtype == b[k].dtype and np.array_equal(a[k], b[k], equal_nan=a[k].dtype != object), k
+
+
+def test_grid_table_rows_columns_and_values(isolated_cache, tmp_path):
+    out = tmp_path / "t.csv"
+    table = api.sweep("m3", ["ws=2:6:3", "L=9,10"], out, at=[15.0], workers=2, **FAST)
+    df = pd.read_csv(out)
+    assert len(df) == 6 and list(df["run"]) == list(range(6))
+    assert list(df["ws"]) == [2, 2, 4, 4, 6, 6] and list(df["L"]) == [9, 10] * 3  # last varies fastest
+    for c in ("status", "valid", "message", "v_tip_min", "v_tip_max", "v_tip_final", "v_tip_t_peak",
+              "v_tip_at_15", "M_A_min", "t_stop", "steps", "newton_iterations", "cpu_s"):
+        assert c in df.columns, c
+    assert (df["status"] == "ok").all() and df["valid"].dtype == bool and df["valid"].all()
+    # run 5 (ws = 6, L = 10) against `flexsym run`'s rows: summaries are over the output grid
+    ref = run_built(prepare(builtin("m3")), params={"ws": 6.0, "L": 10.0}, **FAST)
+    v = ref["v_tip"]
+    assert table["v_tip_min"][5] == v.min() and table["v_tip_max"][5] == v.max()
+    assert table["v_tip_final"][5] == v[-1] and table["v_tip_at_15"][5] == v[ref.t == 15.0][0]
+    assert table["v_tip_t_peak"][5] == ref.t[np.argmax(np.abs(v))]
+    assert table["steps"][5] == ref.summary["steps"] == 80
+    assert not out.with_name("t.csv.partial").exists()
+
+
+def test_failed_and_invalid_runs_have_their_rows(isolated_cache, tmp_path):
+    table = api.sweep("m0", {"ws": [2.0, 6.0]}, tmp_path / "t.csv", integrator="genalpha", dt=0.01)
+    assert list(table["status"]) == ["ok", "diverged"] and list(table["valid"]) == ["True", "False"]
+    assert "diverged at t = " in table["message"][1] and table["t_stop"][1] < 20.0
+    table = api.sweep("m3", {"ws": [6.0, 20.0]}, tmp_path / "u.csv", **FAST)
+    assert list(table["status"]) == ["ok", "ok"] and list(table["valid"]) == ["True", "False"]
+    assert "range of validity" in table["message"][1]
+
+
+def test_scene_sweep_uses_the_scene_settings_and_columns(isolated_cache, tmp_path):
+    scene = os.path.join(os.path.dirname(__file__), "..", "scenes", "constant_speed.toml")
+    table = api.sweep(scene, ["ws=3,6"], tmp_path / "t.csv")
+    r = api.run(api.load_scene(scene), out=tmp_path / "ref.csv")  # ws = 6
+    assert table["N_A_max"][1] == r["N_A"].max() and table["u_tip_final"][1] == r["u_tip"][-1]
+    # the static elongation grows like ws^2: the mean of u_tip over the oscillation, roughly
+    assert 3.0 < table["u_tip_max"][1] / table["u_tip_max"][0] < 5.0
+
+
+def test_samples_reproducible_by_seed_and_latin_hypercube_strata(isolated_cache):
+    spec = builtin("m3")
+    settings = dict(t_end=20.0, dt=0.01, integrator="radau5")
+    plan = lambda **kw: make_plan(spec, settings, {"ws": 6.0, "ts": 15.0}, ["ws=2:8", "L=8:12"], **kw)
+    a, b, c = plan(samples=50, seed=3), plan(samples=50, seed=3), plan(samples=50, seed=4)
+    assert np.array_equal(a.table, b.table) and not np.array_equal(a.table, c.table)
+    assert a.sampling == "lhs"
+    for j, (lo, hi) in enumerate([(2, 8), (8, 12)]):  # one sample in each of the 50 strata
+        strata = np.floor((a.table[:, j] - lo) / (hi - lo) * 50).astype(int)
+        assert sorted(strata) == list(range(50))
+    r = plan(samples=2000, seed=1, sampling="random")
+    assert r.table[:, 0].min() >= 2 and r.table[:, 0].max() <= 8
+    assert abs(r.table[:, 0].mean() - 5) < 0.15  # uniform: sd of the mean 1.73 / sqrt(2000)
+
+
+def test_interrupted_sweep_resumes_to_the_same_table(isolated_cache, tmp_path):
+    vary = ["ws=2:6:20", "L=9,10"]
+    full = api.sweep("m3", vary, tmp_path / "full.csv", workers=1, **FAST)
+    out = tmp_path / "t.csv"
+
+    def stop(done, total):
+        if done >= 10:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        api.sweep("m3", vary, out, workers=1, on_chunk=stop, **FAST)
+    part = tmp_path / "t.csv.partial"
+    assert part.exists() and not out.exists()
+    kept = part.read_text().splitlines()[2:]
+    assert 10 <= len(kept) < 40
+    with open(part, "a") as fh:  # a row cut off in the middle by the interruption
+        fh.write("39,6.0,10.0,ok,Tr")
+    with pytest.raises(SpecError, match="--resume"):
+        api.sweep("m3", vary, out, workers=1, **FAST)
+    with pytest.raises(SpecError, match="different sweep"):
+        api.sweep("m3", ["ws=2:6:20", "L=9,11"], out, workers=1, resume=True, **FAST)
+    table = api.sweep("m3", vary, out, workers=1, resume=True, **FAST)
+    _same_table(table, full)
+    assert not part.exists()
+    # the finished runs were kept, not run again: their CPU times are the recorded ones
+    kept_cpu = {int(r.split(",")[0]): float(r.split(",")[-1]) for r in kept}
+    assert all(table["cpu_s"][i] == c for i, c in kept_cpu.items())
+
+
+def test_dask_local_cluster_gives_the_local_table(isolated_cache, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    vary = ["ws=2:8:7", "E=5e10,7e10", "L=9:11:3"]
+    local = api.sweep("m3", vary, tmp_path / "local.csv", at=[10.0], **FAST)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, host="127.0.0.1",
+                                  protocol="tcp", dashboard_address=":0") as cluster:
+        table = api.sweep("m3", vary, tmp_path / "dask.csv", at=[10.0], dask=cluster.scheduler_address,
+                          **FAST)
+    _same_table(table, local)
+    assert len(table["run"]) == 42
+
+
+def test_cli_sweep_writes_table_and_plot(isolated_cache, tmp_path, capsys):
+    out, png = tmp_path / "t.csv", tmp_path / "t.png"
+    assert main(["sweep", "m3", "--integrator", "radau5", "--dt", "0.01", "--step", "0.25",
+                 "--vary", "ws=2:6:5", "--vary", "ts=10,15", "--out", str(out), "--plot", str(png),
+                 "--plot-x", "ws", "--workers", "2"]) == 0
+    assert "10 runs" in capsys.readouterr().out
+    assert len(pd.read_csv(out)) == 10 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+BAD = [
+    (["--vary", "omega=1:2:3"], "--vary omega: unknown parameter"),
+    (["--vary", "bending=1,2"], "--vary bending: unknown parameter"),
+    (["--vary", "step=0.1,0.2"], "--vary step: unknown parameter"),  # genalpha: no step
+    (["--vary", "dt=-0.01,0.02"], "--vary dt=-0.01: --dt: must be > 0"),
+    (["--vary", "t_end=0,10"], "--vary t_end=0: --t-end: must be > 0"),
+    (["--vary", "ws=2:2:5"], "empty range"),
+    (["--vary", "ws=3:2", "--samples", "4"], "empty range"),
+    (["--vary", "ws=a:b:3"], "'a' is not a number"),
+    (["--vary", "ws=1,x,3"], "'x' is not a number"),
+    (["--vary", "ws=1:2:0"], "COUNT must be >= 1"),
+    (["--vary", "ws=1:2:-3"], "COUNT must be >= 1"),
+    (["--vary", "ws=1:2:2.5"], "COUNT '2.5' is not a whole number"),
+    (["--vary", "ws=1:2:3", "--vary", "ws=4,5"], "--vary ws: given twice"),
+    (["--vary", "ws=1,2,1"], "duplicate values"),
+    (["--vary", "ws="], "no values"),
+    (["--vary", "ws=1,,2"], "empty value"),
+    (["--vary", "ws=1e999,2"], "not finite"),
+    (["--vary", "L=-1,10"], "--vary L=-1: --param L: must be > 0"),
+    (["--vary", "ts=0,5"], "--vary ts=0: --param ts: must be > 0"),
+    (["--vary", "ws=1:2"], "needs --samples"),
+    (["--vary", "ws=1:2:3", "--samples", "5"], "with --samples give a range"),
+    (["--vary", "ws=1:2:3", "--seed", "1"], "--seed is for --samples"),
+    (["--vary", "ws=1:2", "--samples", "0"], "--samples must be"),
+    (["--vary", "ws=1:2:3", "--at", "25"], "--at 25: not a time"),
+    (["--vary", "ws=1:2:3", "--at", "x"], "--at 'x' is not a number"),
+    ([], "at least one --vary"),
+    (["--vary", "ws 1:2:3"], "expected NAME="),
+    (["--vary", "q0_v_tip=0,0.1"], "--vary q0_v_tip: unknown parameter"),
+    (["--vary", "ws=1,2", "--plot", "p.png", "--plot-y", "v_tip_mean"], "--plot-y v_tip_mean: not a column"),
+    (["--vary", "ws=1,2", "--plot-x", "L"], "--plot-x L: not a varied input"),
+]
+
+
+@pytest.mark.parametrize("extra,message", BAD, ids=[m for _, m in BAD])
+def test_malformed_sweeps_exit_2_with_one_line_and_write_nothing(isolated_cache, tmp_path, capsys,
+                                                                 extra, message):
+    out = tmp_path / "new" / "t.csv"
+    code = main(["sweep", "m3", "--out", str(out), *extra])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and message in err, err
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_partial_file_is_never_overwritten_without_resume(isolated_cache, tmp_path, capsys):
+    out = tmp_path / "t.csv"
+    part = tmp_path / "t.csv.partial"
+    part.write_text("# flexsym sweep 0\n")
+    assert main(["sweep", "m3", "--vary", "ws=1,2", "--out", str(out)]) == 2
+    assert "--resume" in capsys.readouterr().err and part.read_text() == "# flexsym sweep 0\n"
+
+
+def test_progress_bar_only_on_a_terminal_or_when_asked(monkeypatch):
+    monkeypatch.delenv("FLEXSYM_PROGRESS", raising=False)
+    quiet, shown = io.StringIO(), io.StringIO()
+    for stream, enabled in ((quiet, None), (shown, True)):
+        with Progress(3, "sweep", enabled=enabled, stream=stream) as bar:
+            for _ in range(3):
+                bar.update()
+    assert quiet.getvalue() == "" and "3/3" in shown.getvalue() and "[###" in shown.getvalue()
+    monkeypatch.setenv("FLEXSYM_PROGRESS", "1")
+    forced = io.StringIO()
+    with Progress(2, "x", stream=forced) as bar:
+        bar.update(2)
+    assert "2/2" in forced.getvalue()
+
+
+def test_ctrl_c_keeps_finished_runs_and_resume_completes(isolated_cache, tmp_path):
+    """A real SIGINT to `flexsym sweep`: exit 130, the finished runs stay in the partial file,
+    and the same command with --resume completes the table without running them again."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out, part = tmp_path / "t.csv", tmp_path / "t.csv.partial"
+    cmd = [sys.executable, "-m", "flexsym.cli", "sweep", "m3", "--integrator", "radau5", "--dt", "0.01",
+           "--step", "0.25", "--vary", "ws=2:8:4000", "--out", str(out), "--workers", "2"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not (part.exists() and len(part.read_text().splitlines()) > 200) and time.time() < deadline:
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "--resume" in err and not out.exists()
+    kept = {int(r.split(",")[0]): r for r in part.read_text().splitlines()[2:]}
+    assert 200 < len(kept) < 4000
+    done = subprocess.run(cmd + ["--resume"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    rows = out.read_text().splitlines()
+    assert len(rows) == 4001 and not part.exists()
+    assert all(rows[i + 1] == r for i, r in kept.items())  # kept runs were not run again
+
+
+def test_solver_options_per_run(isolated_cache, tmp_path, capsys):
+    """step, dt and t_end vary per run like parameters: each row is `flexsym run` with that
+    option; radau5's error falls steeply with its step; a scene keeps its row interval."""
+    out = tmp_path / "t.csv"
+    steps = [0.05, 0.1, 0.2, 0.4]
+    table = api.sweep("m3", {"step": steps}, out, integrator="radau5", dt=0.01)
+    built = prepare(builtin("m3"))
+    for i, h in enumerate(steps):
+        r = run_built(built, integrator="radau5", dt=0.01, step=h, params={"ws": 6.0, "ts": 15.0})
+        assert table["v_tip_min"][i] == r["v_tip"].min() and table["steps"][i] == r.summary["steps"]
+    err = np.abs(table["v_tip_min"][1:] - table["v_tip_min"][0])
+    assert err[0] < err[1] < err[2] and err[1] / err[0] > 8  # high order: at least 2^3 per halving
+    table = api.sweep("m3", {"dt": [0.01, 0.02], "t_end": [5.0, 10.0]}, tmp_path / "u.csv",
+                      integrator="rk4")
+    assert list(table["steps"]) == [500, 1000, 250, 500] and list(table["t_stop"]) == [5, 10, 5, 10]
+    scene = os.path.join(os.path.dirname(__file__), "..", "scenes", "constant_speed.toml")
+    table = api.sweep(scene, {"dt": [5e-5, 1e-4]}, tmp_path / "s.csv")
+    r = api.run(api.load_scene(scene), out=tmp_path / "ref.csv")  # dt = 1e-4, rows every 1e-4 s
+    assert table["N_A_max"][1] == r["N_A"].max() and table["steps"][0] == 2 * table["steps"][1]
+    assert main(["sweep", scene, "--vary", "dt=3e-5,1e-4", "--out", str(tmp_path / "v.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "--vary dt=3e-05: " in err and "[output] interval: must be a whole number of steps" in err
