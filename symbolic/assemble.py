@@ -156,6 +156,9 @@ class SystemDerivation:
 def _unsupported(system: System, tree) -> None:
     where = f"system '{system.name}'"
     for b in system.bodies:
+        if b.flexible and b.model.kind == "modal" and STRAIN_MODELS[b.model.strain].kinematics == "exact":
+            raise SpecError(f"{where}: body '{b.name}': the exact kinematics (strain model 'exact') "
+                            "is derived for a guided hub only; use ef for a geometrically exact body")
         if b.flexible and b.model.kind == "modal" and (b.model.axial_force != "constitutive" or b.model.moment != "constitutive"):
             raise SpecError(f"{where}: body '{b.name}': N or M from equilibrium is derived for a "
                             "guided hub only; use the constitutive recovery in a system")

@@ -429,7 +429,8 @@ def cmd_select(args) -> int:
     repeat = validate(given_options(args, ("repeat",)), CLI).repeat
     scene = load_scene(args.scene)
     print(f"{scene.path}: candidates on outputs {', '.join(scene.spec.outputs)}, tolerance {tol:g}")
-    results, best = select(scene, tol, max_bending=int(args.max_bending), repeat=repeat)
+    results, best = select(scene, tol, max_bending=int(args.max_bending), repeat=repeat,
+                           exact=args.exact)
     print()
     print(table(results, best, tol))
     if best is None:
@@ -535,6 +536,17 @@ def cmd_bench_systems(args) -> int:
     models = _names(args.models, "--models") if args.models else None
     repeat = BY_NAME["repeat"].convert(args.repeat, CLI) if args.repeat is not None else None
     run_system_bench(check_output_dir(args.out, "--out"), systems, models, args.quick, repeat)
+    return 0
+
+
+def cmd_exact_study(args) -> int:
+    from .exact_study import run_study
+
+    from .run import check_output_dir
+
+    if args.max_modes not in [str(k) for k in range(1, 13)]:
+        raise SpecError(f"--max-modes: must be one of 1..12 (got {args.max_modes})")
+    run_study(check_output_dir(args.out, "--out"), quick=args.quick, max_modes=int(args.max_modes))
     return 0
 
 
@@ -649,6 +661,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="largest allowed error, relative to each output's peak (e.g. 0.01)")
     p.add_argument("--max-bending", default="4", help="largest bending set tried (1..5, default 4)")
     add_arguments(p, ("repeat",), defaults={"repeat": "3"})
+    p.add_argument("--exact", action="store_true", help="also try the exact-kinematics model "
+                   "(strain exact, bending cf1..cfK; opt-in: each takes tens of seconds to compile)")
     p.set_defaults(func=cmd_select)
 
     p = sub.add_parser("paper", help="reproduce the paper's Fig. 7-9 and Table 1, with an "
@@ -689,6 +703,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot-x", help="one or two varied inputs, comma-separated (default: the first two)")
     p.add_argument("--progress", action="store_true", help="progress bar on stderr even when not a terminal")
     p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser("exact-study", help="the exact-kinematics model against ef: error against "
+                       "the number of modes at omega_s = 6, 10, 20 and the abrupt spin-up")
+    p.add_argument("--out", default="exact_study", help="output folder (default: exact_study)")
+    p.add_argument("--max-modes", default="6", help="largest mode count (default 6)")
+    p.add_argument("--quick", action="store_true", help="8 s of one case, 2 and 3 modes")
+    p.set_defaults(func=cmd_exact_study)
 
     p = sub.add_parser("variants", help="list built-in variants, strain models and mode families")
     p.set_defaults(func=cmd_variants)

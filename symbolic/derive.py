@@ -110,9 +110,11 @@ def derive(spec: VariantSpec) -> Derivation:
     axial = [modes[r.coordinate] for r in spec.axial]
     bending = [modes[r.coordinate] for r in spec.bending]
     fields = build_fields(axial, bending, qmap, qdmap, table, strain.foreshortening, qddmap)
-    der = Derivation(spec, strain, maneuver, modes, groups, q, qd, qdd, table, fields)
+    cls = Derivation
+    if strain.kinematics == "exact":
+        from .exact import ExactDerivation as cls
+    der = cls(spec, strain, maneuver, modes, groups, q, qd, qdd, table, fields)
 
-    der.T = table.integrate(kinetic_density(fields))
     Q = sp.zeros(len(names), 1)
     for term_name, wrt in strain.terms:
         term = ENERGY_TERMS[term_name]
@@ -122,7 +124,12 @@ def derive(spec: VariantSpec) -> Derivation:
         der.terms.append(DerivedTerm(term_name, term.formula, wrt, V, Qk))
         Q += Qk
     der.Q = Q
+    if strain.kinematics == "exact":  # T, M, f by quadrature and casadi AD
+        from .exact import finish
 
+        return finish(der)
+
+    der.T = table.integrate(kinetic_density(fields))
     p = sp.Matrix([sp.diff(der.T, x) for x in qd])
     der.M = p.jacobian(qd).applyfunc(sp.expand)
     rhs = sp.Matrix([sp.diff(der.T, x) for x in q]) - p.jacobian(q) * qd - sp.diff(p, w) * alpha + Q

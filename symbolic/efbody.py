@@ -6,7 +6,7 @@ tree joint is then a pin whose angle is the frame's, a clamp holds the root slop
 in frame components, with (V_x, V_y) = A^T R' and omega = phi' of the frame:
     T^e = int rho A/2 |V + r' + omega k x r|^2 dx   (exact: a polynomial in xi)
     V_g^e = -int rho A g_loc . r dx                 (exact), g_loc = A^T g
-    V^e = int [EA eps^2/2 + EI kappa^2/2] dx        (Gauss-Legendre, fe.QUAD_POINTS, exact kappa)
+    V^e = int [EA eps^2/2 + EI kappa^2/2] dx        (fe.elastic_element: Gauss-Legendre, material kappa)
 The elastic energy stays unexpanded (a square root per Gauss point): sysgen differentiates it
 with casadi AD, as fe.py does for the one-beam `ef`.
 """
@@ -19,8 +19,7 @@ import sympy as sp
 
 from .energy import A, E, I, L, rho
 from .errors import SpecError
-from .fe import QUAD_POINTS, hermite, le, xi
-from .integrals import gauss_legendre
+from .fe import elastic_element, hermite, le, xi
 
 _E = sp.Matrix(sp.symbols("x1 y1 dx1 dy1 x2 y2 dx2 dy2", real=True))
 _ED = sp.Matrix([sp.Symbol(str(c) + "_d", real=True) for c in _E])
@@ -43,15 +42,8 @@ def generic_element():
     T = sp.expand(le * sp.integrate(sp.expand(rho * A / 2 * (ax**2 + ay**2)), (xi, 0, 1)))
     Vg = sp.expand(le * sp.integrate(sp.expand(-rho * A * (GX * rx + GY * ry)), (xi, 0, 1)))
     H = sp.expand(le * sp.integrate(sp.expand(rho * A * ((RX + rx) * ay - (RY + ry) * ax)), (xi, 0, 1)))
-    r1 = sp.Matrix([sp.diff(rx, xi), sp.diff(ry, xi)]) / le
-    r2 = sp.Matrix([sp.diff(rx, xi, 2), sp.diff(ry, xi, 2)]) / le**2
-    eps = (r1.dot(r1) - 1) / 2
-    kappa = (r1[0] * r2[1] - r1[1] * r2[0]) / (r1.dot(r1))**sp.Rational(3, 2)
-    V = sp.Integer(0)
-    for xg, wg in zip(*gauss_legendre(QUAD_POINTS)):
-        at = {xi: sp.Float(xg, 30)}
-        V += sp.Float(wg, 30) * le * (E * A / 2 * eps.xreplace(at)**2 + E * I / 2 * kappa.xreplace(at)**2)
-    return T, Vg, H, V, eps, kappa, sp.sqrt(r1.dot(r1))
+    eps, kappa, stretch, V = elastic_element(rx, ry)
+    return T, Vg, H, V, eps, kappa, stretch
 
 
 @dataclass

@@ -143,6 +143,12 @@ ENERGY_TERMS: dict[str, EnergyTerm] = {t.name: t for t in (
     EnergyTerm("prestress", "1/2 int N(x) (v_x)^2 dx, N = rho A w^2 (L^2 - x^2)/2 (a body: "
                "N = w^2 [int_x^L rho A x dx + m_tip L])",
                lambda f: rho * A * w**2 * L / 4 * f.weights["nhat"] * f.v_s**2),
+    # exact kinematics (exact.py, uniform beams only): the same quadratic forms, read as
+    # eps = u_x, dphi/dx = v_xx
+    EnergyTerm("stretch", "EA/2 int eps^2 dx, eps = sum eta_j Phi_j'/L (exact)",
+               lambda f: E * A / (2 * L) * f.weights["ea"] * f.u_stretch_s**2),
+    EnergyTerm("curvature", "EI/2 int (dphi/dx)^2 dx, phi = sum xi_k Phi_k'/L (exact)",
+               lambda f: E * I / (2 * L**3) * f.weights["ei"] * f.v_ss**2),
 )}
 
 
@@ -153,12 +159,13 @@ class StrainModel:
     terms: tuple[tuple[str, tuple[str, ...]], ...]  # (energy term, coordinate groups differentiated)
     needs_axial: bool
     description: str
+    kinematics: str = "second_order"  # or "exact" (exact.py: positions from the rotation field)
 
     def conservative(self, axial_present: bool) -> bool:
         """True when every term is differentiated w.r.t. every coordinate group it depends on."""
         for term, wrt in self.terms:
-            depends = {"axial": term in ("axial", "cubic") and axial_present,
-                       "bending": term in ("bending", "cubic", "quartic", "prestress")}
+            depends = {"axial": term in ("axial", "cubic", "stretch") and axial_present,
+                       "bending": term in ("bending", "cubic", "quartic", "prestress", "curvature")}
             if any(dep and g not in wrt for g, dep in depends.items()):
                 return False
         return True
@@ -185,4 +192,8 @@ STRAIN_MODELS: dict[str, StrainModel] = {m.name: m for m in (
     StrainModel("prestress", False, _BASE + (("prestress", ("bending",)),), False,
                 "bending modes with the centrifugal-prestress geometric stiffness "
                 "w^2 int N(x) v_x^2, N = rho A (L^2 - x^2)/2"),
+    StrainModel("exact", False, (("stretch", ("axial",)), ("curvature", ("bending",))), False,
+                "exact kinematics: bending modes' slopes are the section rotation, axial modes' "
+                "strains the stretch (none: inextensible); r = int (1 + eps)(cos phi, sin phi) dx, "
+                "no strain truncated (exact.py)", kinematics="exact"),
 )}

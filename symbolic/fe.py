@@ -5,7 +5,7 @@ beam axis in the moving frame (8 coordinates), interpolated by cubic Hermite fun
 No rotation is linearised and no strain term is truncated:
 
     axial strain  eps   = (r_x . r_x - 1) / 2          (Green-Lagrange)
-    curvature     kappa = (r_x x r_xx) / |r_x|^3       (exact)
+    curvature     kappa = (r_x x r_xx) / |r_x|^2       (material: d(phi)/dx per reference length)
     V^e = int_0^l [EA eps^2 / 2 + EI kappa^2 / 2] dx   (Gauss-Legendre, QUAD_POINTS per element)
     T^e = 1/2 int_0^l rho A |r' + w z x r|^2 dx        (exact: a polynomial in xi)
 
@@ -134,19 +134,28 @@ def derive_element(spec: FESpec) -> ElementDerivation:
     f_in = (sp.Matrix([sp.diff(T, x) for x in e]) - p.jacobian(e) * ed - sp.diff(p, w) * alpha)
     f_in = f_in.applyfunc(sp.expand)
 
+    eps, kappa, stretch, V = elastic_element(rx, ry)
+    maneuver = maneuver_of(spec.maneuver)
+    if not maneuver.accelerates:
+        f_in = f_in.xreplace({alpha: 0})
+    return ElementDerivation(spec, maneuver, e, ed, edd, T, M, f_in, V, eps, stretch, kappa)
+
+
+def elastic_element(rx, ry):
+    """(eps, kappa, |r_x|, V^e) of an element whose axis is (rx, ry)(xi): the one place of the
+    strain measures (the one-beam `ef` and efbody.py's `ef` bodies in systems)."""
     # Derivatives along the beam: d/dx = (1/l) d/dxi.
     r1 = sp.Matrix([sp.diff(rx, xi), sp.diff(ry, xi)]) / le
     r2 = sp.Matrix([sp.diff(rx, xi, 2), sp.diff(ry, xi, 2)]) / le**2
     eps = (r1.dot(r1) - 1) / 2
-    kappa = (r1[0] * r2[1] - r1[1] * r2[0]) / (r1.dot(r1))**sp.Rational(3, 2)
+    # material curvature d(phi)/dx per reference length (Kirchhoff rod; the exact modal model's);
+    # (r_x x r_xx)/|r_x|^3 would be per deformed length, O(axial strain) different
+    kappa = (r1[0] * r2[1] - r1[1] * r2[0]) / r1.dot(r1)
     V = sp.Integer(0)
     for xg, wg in zip(*gauss_legendre(QUAD_POINTS)):
         at = {xi: sp.Float(xg, 30)}
         V += sp.Float(wg, 30) * le * (E * A / 2 * eps.xreplace(at)**2 + E * I / 2 * kappa.xreplace(at)**2)
-    maneuver = maneuver_of(spec.maneuver)
-    if not maneuver.accelerates:
-        f_in = f_in.xreplace({alpha: 0})
-    return ElementDerivation(spec, maneuver, e, ed, edd, T, M, f_in, V, eps, sp.sqrt(r1.dot(r1)), kappa)
+    return eps, kappa, sp.sqrt(r1.dot(r1)), V
 
 
 def build_element_kernels(der: ElementDerivation) -> list:

@@ -124,6 +124,8 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
         "left_out": [{"what": w, "why": y} for w, y in spec.left_out] + der.dropped,
         "modal_integrals": integrals,
     }
+    if getattr(der, "exact", False):
+        manifest["exact_kinematics"] = {"quadrature": der.quadrature.describe()}
     if spec.body is not None:
         manifest["body"] = spec.body.to_dict() | {
             "modes": [{"coordinate": c, "description": der.modes[c].description} for c in der.coords],

@@ -201,6 +201,10 @@ def make_kernels(specs) -> list[Kernel]:
 
 
 def build_kernels(der: "Derivation") -> list[Kernel]:
+    if getattr(der, "exact", False):
+        from .exact import build_exact_kernels
+
+        return build_exact_kernels(der)
     params = der.params
     tr, x = translator(der.q, der.qd, der.qdd, params, der.maneuver)
     M = _matrix_sx(tr, der.numeric(der.M), params)

@@ -11,6 +11,10 @@ Methods (spec.stress):
   continuum   N = EA u_o', M = EI v_o''                                  (paper eq. 26)
   element:n   the paper's element method (22)-(25) on n beam elements: nodal u, v, theta
               from the modes, S^e = (K_L^e + P K_GL^e) u_e with P = EA (u2 - u1)/l
+Moment source (spec.moment):
+  constitutive  the method above
+  equilibrium   M(x) from the inertial loads of the part beyond x (the strain model exact
+                evaluates both equilibrium sources on its exact kinematics, exact.py)
 Axial force source (spec.axial_force):
   constitutive  from the axial strain of the model's axial modes (prestress: N(x) assumed by
                 the model); unavailable without axial modes (foreshortening)
@@ -286,6 +290,10 @@ def stress_method(spec) -> tuple[str, int]:
         return "body", 0
     if spec.stress == "continuum":
         return "continuum", 0
+    if getattr(spec, "strain", None) == "exact" and spec.stress != "continuum":
+        raise SpecError(f"variant '{spec.name}': the element method reads small-deflection nodal "
+                        "values; the exact kinematics takes --stress continuum (and --moment / "
+                        "--axial-force equilibrium for the resultants from the inertial loads)")
     m = re.fullmatch(r"element:(\d+)", spec.stress)
     if not m or not 1 <= int(m.group(1)) <= 1000:
         raise SpecError(f"variant '{spec.name}': stress method '{spec.stress}' must be "

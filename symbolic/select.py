@@ -3,7 +3,9 @@ outputs, against the geometrically exact reference, stays under TOL.
 
 Candidates: strain models prestress, foreshortening and geometric_stiffness (with axial
 modes {static} or {static, sin1}), each with the bending sets {static}, {static, cp1}, ...,
-up to --max-bending modes. Cost: CPU time of the integration with the scene's solver
+up to --max-bending modes; with --exact also the exact kinematics (strain `exact`,
+inextensible, stresses from equilibrium) with {cf1}, {cf1, cf2}, ... (opt-in: their larger
+kernels take tens of seconds each to compile). Cost: CPU time of the integration with the scene's solver
 (median of repeats). Error: the largest over the outputs of max_t |y - y_ref| divided by a
 scale: the output's peak |y_ref| for v_tip and u_tip; for N and M the largest peak of that
 quantity over the requested points (M at the free end is zero in every modal model and not
@@ -22,6 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .errors import SpecError
 from .pipeline import prepare
 from .progress import Progress
 from .run import RunResult, run_built
@@ -53,7 +56,7 @@ class Candidate:
         return f"{s.strain:20s} axial {axial:11s} bending {','.join(m.token for m in s.bending)}"
 
 
-def candidates(scene, max_bending: int = 4) -> list[VariantSpec]:
+def candidates(scene, max_bending: int = 4, exact: bool = False) -> list[VariantSpec]:
     base = scene.spec
     wants_n = any(o.startswith("N_") for o in base.outputs)
     out = []
@@ -67,6 +70,13 @@ def candidates(scene, max_bending: int = 4) -> list[VariantSpec]:
                                    axial_force="equilibrium" if wants_n and strain == "foreshortening"
                                    else "constitutive", body=getattr(base, "body", None))
                 out.append(spec.validate())
+    if exact and getattr(base, "body", None) is not None:
+        raise SpecError("--exact: the exact kinematics integrates a uniform beam; this scene's "
+                        "[body] from finite-element data needs the other candidates")
+    for k in range(1, max_bending + 1 if exact else 1):
+        out.append(VariantSpec(f"sel_ex_b{k}", "exact", (), _refs("bending", [f"cf{i}" for i in range(1, k + 1)]),
+                               maneuver=base.maneuver, outputs=base.outputs, points=base.points,
+                               moment="equilibrium", axial_force="equilibrium").validate())
     return out
 
 
@@ -94,14 +104,14 @@ def error(r: RunResult, ref: RunResult, outputs) -> float:
     return worst
 
 
-def select(scene, tol: float, max_bending: int = 4, repeat: int = 3, log=print):
+def select(scene, tol: float, max_bending: int = 4, repeat: int = 3, log=print, exact: bool = False):
+    specs = candidates(scene, max_bending, exact)  # checked before any run
     interval = scene.dt * scene.out_every
     ref_dt = interval / max(1, math.ceil(interval / min(scene.dt, 5e-4)))
     log(f"reference: ef with {REFERENCE_ELEMENTS} elements, dt = {ref_dt:g} s ...")
     ref = run_built(prepare(reference_spec(scene), log=lambda m: None), t_end=scene.t_end, dt=ref_dt,
                     params=scene.params, out_every=round(interval / ref_dt), raise_on_failure=True)
     results = []
-    specs = candidates(scene, max_bending)
     bar = Progress(len(specs), "select")
     log = bar.wrap(log)
     for spec in specs:

@@ -90,6 +90,9 @@ class VariantSpec:
                 seen.add(r)
         if not self.bending:
             raise SpecError(f"variant '{self.name}': at least one bending mode is required")
+        if model.kinematics == "exact" and self.body is not None:
+            raise SpecError(f"variant '{self.name}': the exact kinematics integrates a uniform beam; "
+                            "a [body] from finite-element data needs another strain model")
         if model.needs_axial and not self.axial:
             raise SpecError(f"variant '{self.name}': strain model '{self.strain}' needs at least "
                             "one axial mode (its stiffening term is linear in the axial amplitudes)")
@@ -151,6 +154,11 @@ BUILTIN: tuple[VariantSpec, ...] = tuple(with_default_outputs(v) for v in (
     VariantSpec("prestress", "prestress", (), _refs("bending", PAPER_BENDING),
                 description="bending modes with the centrifugal-prestress geometric stiffness "
                             "w^2 int N(x) v'^2 dx, N(x) = rho A (L^2 - x^2)/2 (not in the paper)"),
+    VariantSpec("exact", "exact", (), _refs("bending", ["cf1", "cf2", "cf3", "cf4", "cf5"]),
+                moment="equilibrium", axial_force="equilibrium",
+                description="exact kinematics: section rotation from the clamped-free modes' "
+                            "slopes, inextensible; N and M from equilibrium; only modal "
+                            "truncation (not in the paper)"),
 )) + (FESpec("ef", 16, description="geometrically exact finite elements (planar ANCF cable "
                                   "elements, 16 by default): the reference"),)
 

@@ -28,7 +28,7 @@ from .system import System, system_to_dict
 from .versions import generator_hash, tool_versions
 
 C_PREFIX = "fsm_"
-_OWN = ("assemble", "system", "sysgen")
+_OWN = ("assemble", "system", "sysgen", "efbody")
 
 
 def fingerprint(system: System) -> str:

@@ -5,6 +5,12 @@ measures keep terms of second order in v' only, so their error grows like (v/L)^
 spin-up beam against `ef` it is 0.4 % of the peak deflection at v/L = 0.057 (omega_s = 6),
 1 % at 0.087 (omega_s = 10) and 3 % at 0.137 (omega_s = 20) (tests/test_hard_cases.py).
 `ef` is geometrically exact and has no such limit (only its mesh and step).
+
+The exact-kinematics model (strain model `exact`) truncates no strain, only modes: its
+criterion is the share of the last bending mode in the curvature field,
+||xi_n Phi_n''|| / ||sum_k xi_k Phi_k''|| (L2 norms along the beam), over the rows where the
+curvature is at least SIGNIFICANT of its peak. A share above TRUNCATION_LIMIT says the mode
+set does not resolve the deformation: add modes.
 """
 from __future__ import annotations
 
@@ -15,6 +21,8 @@ import numpy as np
 import sympy as sp
 
 VALIDITY_LIMIT = 0.1  # |v| / L
+TRUNCATION_LIMIT = 0.25  # share of the last mode in the curvature (exact kinematics; exact_study)
+SIGNIFICANT = 0.1  # rows with curvature norm >= this fraction of its peak are judged
 
 
 @dataclass
@@ -43,10 +51,37 @@ def deflection_bound(spec, result) -> tuple[np.ndarray, str]:
     return bound, "a bound on |v|"
 
 
+@lru_cache(maxsize=None)
+def _curvature_gram(refs: tuple) -> np.ndarray:
+    """G_ij = int_0^1 Phi_i'' Phi_j'' ds (Simpson on 2001 points: a norm, not a kernel value)."""
+    from .modes import mode, s
+
+    x = np.linspace(0.0, 1.0, 2001)
+    vals = np.array([np.broadcast_to(sp.lambdify(s, sp.diff(mode(r).expr, s, 2), "numpy")(x), x.shape)
+                     for r in refs])
+    w = np.full(x.size, 2.0)
+    w[1::2], w[0], w[-1] = 4.0, 1.0, 1.0
+    return (vals * w) @ vals.T * (x[1] - x[0]) / 3
+
+
+def truncation_share(spec, result) -> np.ndarray:
+    """Share of the last bending mode in the curvature field at every row (nan at rest)."""
+    refs = tuple(spec.bending)
+    G = _curvature_gram(refs)
+    xi = np.column_stack([result[m.coordinate] for m in refs])
+    total = np.sqrt(np.maximum(np.einsum("ti,ij,tj->t", xi, G, xi), 0.0))
+    last = np.abs(xi[:, -1]) * np.sqrt(G[-1, -1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = last / total
+    share[total < SIGNIFICANT * np.max(total, initial=0.0)] = np.nan
+    return share
+
+
 def deflection_weights(spec, columns) -> list[float] | None:
     """Weights w over `columns` with sum_j w_j |y_j| = the quantity deflection_bound() uses
-    (for the C batch, which has no rows to hand back); None when the model has no limit."""
-    if spec.kind != "modal":
+    (for the C batch, which has no rows to hand back); None when the model has no limit (ef; the
+    exact kinematics, whose truncation share needs the rows: assess() on a run with rows)."""
+    if spec.kind != "modal" or getattr(spec, "strain", None) == "exact":
         return None
     if "v_tip" in columns:
         return [float(c == "v_tip") for c in columns]
@@ -57,7 +92,16 @@ def deflection_weights(spec, columns) -> list[float] | None:
 def assess(spec, result, params: dict | None = None) -> Assessment:
     length = (params or {}).get("L", 10.0)
     a = Assessment(True)
-    if spec.kind == "modal" and len(result.t):
+    exact = getattr(spec, "strain", None) == "exact"
+    if exact and len(result.t) and len(spec.bending) > 1:
+        share = truncation_share(spec, result)
+        if np.any(share > TRUNCATION_LIMIT):
+            i = int(np.nanargmax(share > TRUNCATION_LIMIT))
+            a.valid = False
+            a.notes.append(f"modal truncation: the last bending mode ({spec.bending[-1].token}) carries "
+                           f"{share[i]:.1%} of the curvature at t = {result.t[i]:.3g} s (peak "
+                           f"{np.nanmax(share):.1%}) > {TRUNCATION_LIMIT:.0%}; add modes")
+    elif spec.kind == "modal" and len(result.t):
         v, what = deflection_bound(spec, result)
         over = v > VALIDITY_LIMIT * length
         if np.any(over):

@@ -110,7 +110,7 @@ CLI_BAD = [
     (["run", "ef", "--elements", "x"], "--elements: 'x' is not a whole number"),
     (["run", "m3", "--outputs", "M@0.5\nx"], "unknown output 'M@0.5"),
     (["run", "m9"], "unknown variant 'm9' (built-in: linear (m0), geometric (m1), geometric_sine (m2), "
-                    "foreshortening (m3), prestress, ef)"),
+                    "foreshortening (m3), prestress, exact, ef)"),
     (["spinup", "--variants", "m1,,m2"], "--variants 'm1,,m2': empty name in the list"),
     (["spinup", "--ts", "0"], "--ts: must be > 0"),
     (["bench", "--repeat", "0"], "--repeat: must be >= 1"),
