@@ -38,6 +38,7 @@ from .efbody import EfPart, ef_part
 from .errors import SpecError
 from .integrals import IntegralTable
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
+from .modes import s
 from .outputs import field_at, output_expression
 from .system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
                      beam_station, length_scale, parse_output)
@@ -161,9 +162,6 @@ class SystemDerivation:
 def _unsupported(system: System, tree) -> None:
     where = f"system '{system.name}'"
     for b in system.bodies:
-        if b.flexible and b.model.kind == "modal" and (b.model.axial_force != "constitutive" or b.model.moment != "constitutive"):
-            raise SpecError(f"{where}: body '{b.name}': N or M from equilibrium is derived for a "
-                            "guided hub only; use the constitutive recovery in a system")
         if b.flexible and b.model.kind == "modal" and getattr(b.model, "body", None) is not None:
             raise SpecError(f"{where}: body '{b.name}': a body from finite-element data is not "
                             "supported in a system yet")
@@ -564,6 +562,8 @@ def _stress(der, beam, x, fn, where):
         return part.stress(fn, x)
     frac = sp.nsimplify(x) / sp.nsimplify(beam.length)
     spec = replace(beam.model, points=(("o", str(frac)),))
+    if (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium":
+        return _equilibrium_stress(der, beam, x, fn)
     if fn == "N" and not spec.axial and spec.strain != "prestress":
         raise SpecError(f"{where}: strain model '{spec.strain}' has no axial coordinate to carry "
                         "an axial force")
@@ -695,3 +695,74 @@ def joint_reaction(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp
     F = der.ddt(S, 2) - Fe
     M = der.ddt(H) - Me - _cross(P, F)
     return F, M, P
+
+
+def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix, sp.Expr, sp.Matrix]]:
+    """(F, tau, at) of the loads on beam's markers beyond station x (at the tip, x = L, those
+    at the tip): joints (a cut joint's multipliers, a child tree joint's reaction, with the
+    sign for the side the beam is on), point forces, spring-dampers (ground frame)."""
+    system, out = der.system, []
+    L = beam.length
+
+    def beyond(ref):
+        if ref == GROUND:
+            return False
+        body, m = system.marker(ref)
+        return body == beam.name and (m.x > x or (x >= L and m.x >= L))
+
+    for j in system.joints:
+        if j.name != der.tree.joint_of(beam.name) and (beyond(j.parent) or beyond(j.child)):
+            F, tau, P = joint_reaction(der, j)
+            if beyond(j.parent):  # the beam is the parent side: it gets -F, -tau at P
+                out.append((-F, -tau, P))
+            if beyond(j.child):
+                out.append((F, tau, P))
+    for load in system.loads:
+        if isinstance(load, PointForce) and beyond(load.marker):
+            F = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
+            if load.frame == "body":
+                F = _rot(der.poses[beam.name].angle) * F
+            out.append((F, sp.Integer(0), marker_pose(der, load.marker)[0]))
+        elif isinstance(load, SpringDamper) and (beyond(load.a) or beyond(load.b)):
+            raise SpecError(f"system '{system.name}': N or M from equilibrium on '{beam.name}' "
+                            "with a spring-damper on it is not derived")
+    return out
+
+
+def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Expr:
+    """N or M at station x from the equilibrium of the part of the beam beyond x, with the
+    frame's actual motion and gravity: the inertial loads -rho A (a - g) (a in frame
+    components: A^T R'' + the relative, Coriolis, angular and centripetal terms, as
+    outputs._equilibrium_* for a guided hub) and the loads on its markers beyond x (joint
+    reactions, point forces). N: their frame-x component (tension > 0), M: their moment about
+    the section point (point rotary inertias' couples included)."""
+    rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
+    part = der.flex[beam.name]
+    f, tab = part.fields, part.table
+    om, al, a0x, a0y, gx, gy = sp.symbols("Om_ Al_ A0x_ A0y_ gx_ gy_", real=True)
+    at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    X = L_ * s + f.u
+    ax = a0x - gx + f.u_ddot - 2 * om * f.v_dot - al * f.v - om**2 * X
+    ay = a0y - gy + f.v_ddot + 2 * om * f.u_dot + al * X - om**2 * f.v
+    view = part.view()
+    if fn == "N":
+        out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * ax, at, 1)
+    else:
+        dx = X - L_ * at - field_at(view, f.u, at)
+        dy = f.v - field_at(view, f.v, at)
+        out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * (dx * ay - dy * ax), at, 1)
+        if f.weights["rot"] != 0:
+            out -= rho_ * A_ * L_**3 * tab.integrate(f.weights["rot"] * (al + f.v_ddot_s / L_), at, 1)
+    pose = der.poses[beam.name]
+    Arot = _rot(pose.angle)
+    omega = der.ddt(pose.angle)
+    a0 = Arot.T * der.ddt(pose.R, 2)
+    g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
+    gl = Arot.T * sp.Matrix([sp.nsimplify(c) for c in g])
+    actual = {om: omega, al: der.ddt(omega), a0x: a0[0], a0y: a0[1], gx: gl[0], gy: gl[1]}
+    out = out.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
+    u, v, _ = beam_fields_at(der, beam.name, x)
+    section = pose.R + Arot * sp.Matrix([_x(der, beam.name, x) + u, v])
+    for F, tau, P in _loads_beyond(der, beam, x):
+        out += (Arot.T * F)[0] if fn == "N" else _cross(P - section, F) + tau
+    return out
