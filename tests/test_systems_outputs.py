@@ -142,3 +142,25 @@ def test_s0_equilibrium_n_and_m_equal_todays(variant):
         a = float(old.numeric(old.outputs[name]).xreplace(vals))
         assert abs(a) > 1e-3
         assert float(new.outputs[name].xreplace(vals)) == pytest.approx(a, rel=1e-12)
+
+
+def test_s3_equilibrium_with_gravity_meets_the_pin():
+    """S3 (#1 beam, gravity): N and M at the pinned root from the equilibrium of the whole
+    beam (inertia and gravity in the frame) meet the pin's reaction from the momentum balance
+    and its zero moment."""
+    from flexsym.run import run_built
+    from flexsym.sysgen import prepare_system
+    from flexsym.systems_library import pendulum_system
+
+    system = pendulum_system(replace(builtin("m1"), axial_force="equilibrium",
+                                     moment="equilibrium"))
+    outs = (Output("theta", "angle(pin)"), Output("Rx", "reaction(pin, x)"),
+            Output("Ry", "reaction(pin, y)"), Output("N0", "N(beam, root)"),
+            Output("M0", "M(beam, root)"), Output("M_mid", "M(beam, mid)"))
+    r = run_built(prepare_system(replace(system, outputs=outs)), t_end=0.5, dt=1e-4)
+    assert r.ok
+    ex, ey = np.cos(r["theta"]), np.sin(r["theta"])
+    peak = np.abs(r["N0"]).max()
+    assert peak > 1.0
+    assert np.abs(r["N0"] + r["Rx"] * ex + r["Ry"] * ey).max() < 1e-9 * peak
+    assert np.abs(r["M0"]).max() < 1e-5 * np.abs(r["M_mid"]).max()
