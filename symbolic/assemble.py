@@ -36,7 +36,7 @@ from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, buil
                      gravity_density, kinetic_density, momentum_density, w)
 from .efbody import EfPart, ef_part
 from .errors import SpecError
-from .integrals import IntegralTable
+from .integrals import BodyIntegralTable, IntegralTable
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from .modes import s
 from .outputs import field_at, output_expression
@@ -162,9 +162,15 @@ class SystemDerivation:
 def _unsupported(system: System, tree) -> None:
     where = f"system '{system.name}'"
     for b in system.bodies:
-        if b.flexible and b.model.kind == "modal" and getattr(b.model, "body", None) is not None:
-            raise SpecError(f"{where}: body '{b.name}': a body from finite-element data is not "
-                            "supported in a system yet")
+        body = getattr(b.model, "body", None) if b.flexible else None
+        if body is not None:  # the body's data are the beam's: markers and p must agree
+            ref = body.reference
+            given = (b.length, b.section.rho, b.section.E, b.section.A, b.section.I)
+            data = (body.length, ref.rho, ref.E, ref.A, ref.I)
+            if any(abs(x - y) > 1e-12 * abs(y) for x, y in zip(given, data)):
+                raise SpecError(f"{where}: body '{b.name}': length and section (rho, E, A, I) "
+                                f"{given} differ from its finite-element data's length and root "
+                                f"section {data}")
     for load in system.loads:
         if not isinstance(load, (Gravity, PointForce, Torque, SpringDamper)):
             raise SpecError(f"{where}: load {type(load).__name__} is not derived yet")
@@ -266,7 +272,7 @@ def derive_system(system: System) -> SystemDerivation:
         sym = {n: sp.Symbol(f"{b.name}_{n}", real=True) for n in names}
         symd = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in names}
         symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n in names}
-        table = IntegralTable(modes)
+        table = IntegralTable(modes) if spec.body is None else BodyIntegralTable(spec.body, modes)
         strain = STRAIN_MODELS[spec.strain]
         fields = build_fields([modes[r.coordinate] for r in spec.axial],
                               [modes[r.coordinate] for r in spec.bending], sym, symd, table,
