@@ -24,6 +24,10 @@ motion through T. `prestress` keeps N(x) = rho A phi'^2 (L^2 - x^2)/2 with phi' 
 actual rate (a velocity-dependent stiffness on the bending coordinates, a force term, not
 part of the Lagrangian); the frame's translational acceleration and gravity are NOT in this
 N(x): use #1-#3 when they matter (S2, S3).
+Outputs of q, q', q'', the drive and lambda: joint reactions (joint_reaction: a cut joint's
+from lambda, a tree joint's from the momentum balance of the subtree beyond it), N and M from
+equilibrium (_equilibrium_stress: the part of the beam beyond the station with the frame's
+actual motion, gravity and the loads on its markers), the violation.
 """
 from __future__ import annotations
 
