@@ -95,6 +95,9 @@ def build_system_kernels(der: SystemDerivation) -> list:
              [("phi_t", phi_t)]),
             ("constraint_acc", "gamma (Phi_q q'' = gamma), casadi AD",
              [("q", q), ("qd", qd), ("d", d), ("p", p)], [("gamma", gamma)]),
+            ("constraint_hess", "d(Phi_q^T e)/dq at fixed e (Newton tangent)",
+             [("q", q), ("e", x["lam"]), ("d", d), ("p", p)],
+             [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
         ]
     return make_kernels(constraint_kernels + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
