@@ -24,6 +24,10 @@ motion through T. `prestress` keeps N(x) = rho A phi'^2 (L^2 - x^2)/2 with phi' 
 actual rate (a velocity-dependent stiffness on the bending coordinates, a force term, not
 part of the Lagrangian); the frame's translational acceleration and gravity are NOT in this
 N(x): use #1-#3 when they matter (S2, S3).
+Outputs of q, q', q'', the drive and lambda: joint reactions (joint_reaction: a cut joint's
+from lambda, a tree joint's from the momentum balance of the subtree beyond it), N and M from
+equilibrium (_equilibrium_stress: the part of the beam beyond the station with the frame's
+actual motion, gravity and the loads on its markers), the violation.
 """
 from __future__ import annotations
 
@@ -36,11 +40,12 @@ from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, buil
                      gravity_density, kinetic_density, momentum_density, w)
 from .efbody import EfPart, ef_part
 from .errors import SpecError
-from .integrals import IntegralTable
+from .integrals import BodyIntegralTable, IntegralTable
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
+from .modes import s
 from .outputs import field_at, output_expression
 from .system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
-                     beam_station, parse_output)
+                     beam_station, length_scale, parse_output)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
 
@@ -119,6 +124,11 @@ class SystemDerivation:
     elastic: list = field(default_factory=list)  # ef bodies' elastic energies, unexpanded
                                                  # (sysgen: Q = -dV/dq by casadi AD)
     V_grav: sp.Expr = sp.Integer(0)
+    # per body, ground frame: mass, first moment m r_G, angular momentum about the origin
+    # (reactions of tree joints are the subtree's momentum balance)
+    mass: dict = field(default_factory=dict)
+    first_moment: dict = field(default_factory=dict)
+    body_momentum: dict = field(default_factory=dict)
     dropped: list[dict] = field(default_factory=list)
 
     @property
@@ -159,12 +169,15 @@ def _unsupported(system: System, tree) -> None:
         if b.flexible and b.model.kind == "modal" and STRAIN_MODELS[b.model.strain].kinematics == "exact":
             raise SpecError(f"{where}: body '{b.name}': the exact kinematics (strain model 'exact') "
                             "is derived for a guided hub only; use ef for a geometrically exact body")
-        if b.flexible and b.model.kind == "modal" and (b.model.axial_force != "constitutive" or b.model.moment != "constitutive"):
-            raise SpecError(f"{where}: body '{b.name}': N or M from equilibrium is derived for a "
-                            "guided hub only; use the constitutive recovery in a system")
-        if b.flexible and b.model.kind == "modal" and getattr(b.model, "body", None) is not None:
-            raise SpecError(f"{where}: body '{b.name}': a body from finite-element data is not "
-                            "supported in a system yet")
+        body = getattr(b.model, "body", None) if b.flexible else None
+        if body is not None:  # the body's data are the beam's: markers and p must agree
+            ref = body.reference
+            given = (b.length, b.section.rho, b.section.E, b.section.A, b.section.I)
+            data = (body.length, ref.rho, ref.E, ref.A, ref.I)
+            if any(abs(x - y) > 1e-12 * abs(y) for x, y in zip(given, data)):
+                raise SpecError(f"{where}: body '{b.name}': length and section (rho, E, A, I) "
+                                f"{given} differ from its finite-element data's length and root "
+                                f"section {data}")
     for load in system.loads:
         if not isinstance(load, (Gravity, PointForce, Torque, SpringDamper)):
             raise SpecError(f"{where}: load {type(load).__name__} is not derived yet")
@@ -266,7 +279,7 @@ def derive_system(system: System) -> SystemDerivation:
         sym = {n: sp.Symbol(f"{b.name}_{n}", real=True) for n in names}
         symd = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in names}
         symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n in names}
-        table = IntegralTable(modes)
+        table = IntegralTable(modes) if spec.body is None else BodyIntegralTable(spec.body, modes)
         strain = STRAIN_MODELS[spec.strain]
         fields = build_fields([modes[r.coordinate] for r in spec.axial],
                               [modes[r.coordinate] for r in spec.bending], sym, symd, table,
@@ -313,6 +326,8 @@ def derive_system(system: System) -> SystemDerivation:
             der.T += m * vG.dot(vG) / 2 + J * omega**2 / 2
             V_grav += -m * gvec.dot(G)
             der.momentum += m * _cross(G, vG) + J * omega
+            der.mass[b.name], der.first_moment[b.name] = m, m * G
+            der.body_momentum[b.name] = m * _cross(G, vG) + J * omega
             continue
         part = der.flex[b.name]
         ph = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
@@ -325,6 +340,9 @@ def derive_system(system: System) -> SystemDerivation:
             der.T += T_.xreplace(actual)
             V_grav += Vg_.xreplace(actual) - mass.xreplace(part.psyms) * gvec.dot(pose.R)
             der.momentum += H_.xreplace(actual)
+            _record_body(der, b.name, mass.xreplace(part.psyms), pose, A_,
+                         [-sp.diff(Vg_, gk).xreplace(actual) for gk in ph[5:]],
+                         H_.xreplace(actual))
             der.elastic.append(V_el)
             der.terms.append((b.name, "ancf_elastic", ("node",), V_el, None))
             continue
@@ -337,7 +355,11 @@ def derive_system(system: System) -> SystemDerivation:
         der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
         V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
             - body_expr(mass) * gvec.dot(pose.R)
-        der.momentum += body_expr(tab.integrate(momentum_density(fl, frame, ph[3], ph[4])))
+        H_ = body_expr(tab.integrate(momentum_density(fl, frame, ph[3], ph[4])))
+        der.momentum += H_
+        Ig = tab.integrate(gravity_density(fl, ph[5], ph[6]))  # linear in g: -g.(first moment)
+        _record_body(der, b.name, body_expr(mass), pose, A_,
+                     [body_expr(-sp.diff(Ig, gk)) for gk in ph[5:]], H_)
         strain = STRAIN_MODELS[b.model.strain]
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
@@ -370,6 +392,12 @@ def derive_system(system: System) -> SystemDerivation:
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
     return der
+
+
+def _record_body(der, name, mass, pose, A_, local_moment, H) -> None:
+    der.mass[name] = mass
+    der.first_moment[name] = mass * pose.R + A_ * sp.Matrix(local_moment)
+    der.body_momentum[name] = H
 
 
 def _side(der: SystemDerivation, joint, side: str) -> tuple[sp.Matrix, sp.Expr]:
@@ -517,6 +545,11 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
         return der.momentum
     if fn == "torque":
         return motor_torque(der, next(d for d in system.drivers if d.name == args[0]))
+    if fn == "reaction":
+        force, moment, _ = joint_reaction(der, system.joint(args[0]))
+        return {"x": force[0], "y": force[1], "moment": moment}[args[1]]
+    if fn == "violation":
+        return violation(der)
     if fn in ("v", "u", "w", "N", "M"):
         beam = system.body(args[0])
         x = beam_station(system, beam, args[1], where)
@@ -542,6 +575,8 @@ def _stress(der, beam, x, fn, where):
         return part.stress(fn, x)
     frac = sp.nsimplify(x) / sp.nsimplify(beam.length)
     spec = replace(beam.model, points=(("o", str(frac)),))
+    if (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium":
+        return _equilibrium_stress(der, beam, x, fn)
     if fn == "N" and not spec.axial and spec.strain != "prestress":
         raise SpecError(f"{where}: strain model '{spec.strain}' has no axial coordinate to carry "
                         "an axial force")
@@ -549,3 +584,198 @@ def _stress(der, beam, x, fn, where):
     expr = output_expression(view, f"{fn}_o")
     omega = der.ddt(der.poses[beam.name].angle)
     return expr.xreplace(part.table.substitutions()).xreplace(part.psyms).xreplace({w: omega})
+
+
+def violation(der: SystemDerivation) -> sp.Expr:
+    """max_i |Phi_i| / length_scale: the runtime's `violation` column as an output (0 with no
+    cut joint). A nest of Piecewise, as casadi's fmax takes two arguments."""
+    rows = [sp.Abs(phi) for _, phi in der.constraints]
+    if not rows:
+        return sp.Integer(0)
+    out = rows[0]
+    for r in rows[1:]:
+        out = sp.Piecewise((out, out >= r), (r, True))
+    return out / sp.Float(length_scale(der.system))
+
+
+def _cut_loads(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Matrix, sp.Matrix]:
+    """(F, tau, at_child, at_parent): the force and torque a cut joint's parent side exerts on
+    its child side, from M q'' = f - Phi_q^T lambda: a row pc - pp of a pin gives the child
+    -lambda, the normal row of a prismatic -lambda n (n the parent's axis normal), an angle
+    row a torque -lambda. The parent side gets -F and -tau at `at_parent`."""
+    lam = {name: l for (name, _), l in zip(der.constraints, der.lam)}
+    (pp, ap), (pc, _) = _side(der, joint, "parent"), _side(der, joint, "child")
+    n = joint.name
+    tau = -lam.get(f"{n}.angle", sp.Integer(0))
+    if joint.kind == "prismatic":
+        ax = sp.Matrix([sp.nsimplify(a) for a in joint.axis])
+        normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
+        return -lam[f"{n}.normal"] * normal, tau, pc, pc
+    return -sp.Matrix([lam[f"{n}.x"], lam[f"{n}.y"]]), tau, pc, pp
+
+
+def _subtree(der: SystemDerivation, joint) -> set[str]:
+    """The bodies whose path to ground passes through tree joint `joint`."""
+    system, out = der.system, set()
+    for body in der.tree.order:
+        b = body
+        while True:
+            j = system.joint(der.tree.joint_of(b))
+            if j.name == joint.name:
+                out.add(body)
+                break
+            if j.parent == GROUND:
+                break
+            b = system.marker(j.parent)[0]
+    return out
+
+
+def _external_loads(der: SystemDerivation, bodies: set[str]) -> tuple[sp.Matrix, sp.Expr]:
+    """Resultant force and moment about the ground origin of the loads on `bodies` from outside
+    the set, except the tree joint that carries it: gravity, point forces, torques,
+    spring-dampers with one end outside and cut joints with one side outside."""
+    system = der.system
+    env = [("t", t)] + [(c.joint, x) for c, x in zip(der.coords, der.q) if c.group == "joint"] \
+        + [(f"{c.joint}_rate", xd) for c, xd in zip(der.coords, der.qd) if c.group == "joint"] \
+        + [(g.joint, g.symbols[0]) for g in der.guided] \
+        + [(f"{g.joint}_rate", g.symbols[1]) for g in der.guided]
+    F, Mo = sp.zeros(2, 1), sp.Integer(0)
+
+    def add(force, at):
+        nonlocal F, Mo
+        F += force
+        Mo += _cross(at, force)
+
+    def inside(ref):
+        return ref != GROUND and system.marker(ref)[0] in bodies
+
+    g = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), None)
+    if g is not None:
+        gvec = sp.Matrix([sp.nsimplify(x) for x in g])
+        for b in bodies:
+            F += der.mass[b] * gvec
+            Mo += _cross(der.first_moment[b], gvec)
+    for load in system.loads:
+        if isinstance(load, PointForce) and inside(load.marker):
+            body, _ = system.marker(load.marker)
+            force = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
+            if load.frame == "body":
+                force = _rot(der.poses[body].angle) * force
+            add(force, marker_pose(der, load.marker)[0])
+        elif isinstance(load, Torque) and load.body in bodies:
+            Mo += parse_expression(load.expression, tuple(env), f"torque on '{load.body}'")
+        elif isinstance(load, SpringDamper) and inside(load.a) != inside(load.b):
+            ends = [sp.Matrix([sp.nsimplify(c) for c in pt]) if ref == GROUND
+                    else marker_pose(der, ref)[0]
+                    for ref, pt in ((load.a, load.point_a), (load.b, load.point_b))]
+            delta = ends[1] - ends[0]
+            k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
+            if l0 == 0:
+                on_b = -k * delta - c * der.ddt(delta)
+            else:
+                length = sp.sqrt(delta.dot(delta))
+                on_b = -(k * (length - l0) + c * der.ddt(length)) * delta / length
+            add(on_b if inside(load.b) else -on_b, ends[1] if inside(load.b) else ends[0])
+    for name in der.tree.cut:
+        joint = system.joint(name)
+        if inside(joint.child) == inside(joint.parent):
+            continue
+        force, tau, at_c, at_p = _cut_loads(der, joint)
+        if inside(joint.child):
+            add(force, at_c)
+            Mo += tau
+        else:
+            add(-force, at_p)
+            Mo -= tau
+    return F, Mo
+
+
+def joint_reaction(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Matrix]:
+    """(F, M, P): the force (ground components) and the moment about P (the joint's child
+    point) that the joint's parent side exerts on its child side, constraint and drive loads
+    together (a guided or motored joint's moment or axial force is its drive's). A cut joint:
+    from its multipliers. A tree joint: the momentum balance of the subtree beyond it,
+    F = d^2/dt^2 (sum m r_G) - external forces, M = dH_O/dt - external moments - P x F, an
+    expression of q, q', q'', the drive and lambda."""
+    if joint.name in der.tree.cut:
+        force, tau, at_c, _ = _cut_loads(der, joint)
+        return force, tau, at_c
+    bodies = _subtree(der, joint)
+    P = _side(der, joint, "child")[0]
+    Fe, Me = _external_loads(der, bodies)
+    S = sum((der.first_moment[b] for b in bodies), sp.zeros(2, 1))
+    H = sp.Add(*[der.body_momentum[b] for b in bodies])
+    F = der.ddt(S, 2) - Fe
+    M = der.ddt(H) - Me - _cross(P, F)
+    return F, M, P
+
+
+def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix, sp.Expr, sp.Matrix]]:
+    """(F, tau, at) of the loads on beam's markers beyond station x (at the tip, x = L, those
+    at the tip): joints (a cut joint's multipliers, a child tree joint's reaction, with the
+    sign for the side the beam is on), point forces, spring-dampers (ground frame)."""
+    system, out = der.system, []
+    L = beam.length
+
+    def beyond(ref):
+        if ref == GROUND:
+            return False
+        body, m = system.marker(ref)
+        return body == beam.name and (m.x > x or (x >= L and m.x >= L))
+
+    for j in system.joints:
+        if j.name != der.tree.joint_of(beam.name) and (beyond(j.parent) or beyond(j.child)):
+            F, tau, P = joint_reaction(der, j)
+            if beyond(j.parent):  # the beam is the parent side: it gets -F, -tau at P
+                out.append((-F, -tau, P))
+            if beyond(j.child):
+                out.append((F, tau, P))
+    for load in system.loads:
+        if isinstance(load, PointForce) and beyond(load.marker):
+            F = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
+            if load.frame == "body":
+                F = _rot(der.poses[beam.name].angle) * F
+            out.append((F, sp.Integer(0), marker_pose(der, load.marker)[0]))
+        elif isinstance(load, SpringDamper) and (beyond(load.a) or beyond(load.b)):
+            raise SpecError(f"system '{system.name}': N or M from equilibrium on '{beam.name}' "
+                            "with a spring-damper on it is not derived")
+    return out
+
+
+def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Expr:
+    """N or M at station x from the equilibrium of the part of the beam beyond x, with the
+    frame's actual motion and gravity: the inertial loads -rho A (a - g) (a in frame
+    components: A^T R'' + the relative, Coriolis, angular and centripetal terms, as
+    outputs._equilibrium_* for a guided hub) and the loads on its markers beyond x (joint
+    reactions, point forces). N: their frame-x component (tension > 0), M: their moment about
+    the section point (point rotary inertias' couples included)."""
+    rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
+    part = der.flex[beam.name]
+    f, tab = part.fields, part.table
+    om, al, a0x, a0y, gx, gy = sp.symbols("Om_ Al_ A0x_ A0y_ gx_ gy_", real=True)
+    at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    X = L_ * s + f.u
+    ax = a0x - gx + f.u_ddot - 2 * om * f.v_dot - al * f.v - om**2 * X
+    ay = a0y - gy + f.v_ddot + 2 * om * f.u_dot + al * X - om**2 * f.v
+    view = part.view()
+    if fn == "N":
+        out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * ax, at, 1)
+    else:
+        dx = X - L_ * at - field_at(view, f.u, at)
+        dy = f.v - field_at(view, f.v, at)
+        out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * (dx * ay - dy * ax), at, 1)
+        if f.weights["rot"] != 0:
+            out -= rho_ * A_ * L_**3 * tab.integrate(f.weights["rot"] * (al + f.v_ddot_s / L_), at, 1)
+    pose = der.poses[beam.name]
+    Arot = _rot(pose.angle)
+    omega = der.ddt(pose.angle)
+    a0 = Arot.T * der.ddt(pose.R, 2)
+    g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
+    gl = Arot.T * sp.Matrix([sp.nsimplify(c) for c in g])
+    actual = {om: omega, al: der.ddt(omega), a0x: a0[0], a0y: a0[1], gx: gl[0], gy: gl[1]}
+    out = out.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
+    u, v, _ = beam_fields_at(der, beam.name, x)
+    section = pose.R + Arot * sp.Matrix([_x(der, beam.name, x) + u, v])
+    for F, tau, P in _loads_beyond(der, beam, x):
+        out += (Arot.T * F)[0] if fn == "N" else _cross(P - section, F) + tau
+    return out

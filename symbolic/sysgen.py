@@ -24,7 +24,7 @@ from .generate import MANIFEST, _environment, write_folder
 from .kernels import SympyToCasadi, _matrix_sx, make_kernels
 from .maneuver import t as t_sym
 from .paths import PACKAGE_DIR, cache_dir, file_lock, templates_dir
-from .system import System, system_to_dict
+from .system import System, length_scale, system_to_dict
 from .versions import generator_hash, tool_versions
 
 C_PREFIX = "fsm_"
@@ -38,15 +38,6 @@ def fingerprint(system: System) -> str:
     payload = {"system": system_to_dict(system), "generator": h.hexdigest(),
                "versions": tool_versions()}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
-
-
-def length_scale(system: System) -> float:
-    """The mechanism's size: the largest beam length, rigid marker distance from its body's
-    origin, or ground joint point distance from the origin (tolerances and blow-up use it)."""
-    sizes = [b.length for b in system.bodies if b.flexible]
-    sizes += [abs(complex(m.x, m.y)) for b in system.bodies if not b.flexible for m in b.markers]
-    sizes += [abs(complex(*j.point)) for j in system.joints if j.parent == "ground"]
-    return max([x for x in sizes if x > 0] or [1.0])
 
 
 def build_system_kernels(der: SystemDerivation) -> list:
@@ -104,6 +95,9 @@ def build_system_kernels(der: SystemDerivation) -> list:
              [("phi_t", phi_t)]),
             ("constraint_acc", "gamma (Phi_q q'' = gamma), casadi AD",
              [("q", q), ("qd", qd), ("d", d), ("p", p)], [("gamma", gamma)]),
+            ("constraint_hess", "d(Phi_q^T e)/dq at fixed e (Newton tangent)",
+             [("q", q), ("e", x["lam"]), ("d", d), ("p", p)],
+             [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
         ]
     return make_kernels(constraint_kernels + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),

@@ -29,6 +29,7 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam",
 }
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation")
+REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
 _OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
 
 
@@ -502,7 +503,12 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
     args = tuple(a.strip() for a in argtext.split(","))
     kind = OUTPUT_FUNCTIONS[fn]
     if kind == "joint":
-        if len(args) != 1 or args[0] not in {j.name for j in system.joints}:
+        if fn == "reaction":
+            if (len(args) != 2 or args[0] not in {j.name for j in system.joints}
+                    or args[1] not in REACTION_COMPONENTS):
+                raise SpecError(f"{where}: needs (joint, component) with component one of "
+                                f"{', '.join(REACTION_COMPONENTS)}")
+        elif len(args) != 1 or args[0] not in {j.name for j in system.joints}:
             raise SpecError(f"{where}: needs one joint name")
         if fn in ("angle", "rate") and not system.joint(args[0]).has_coordinate:
             raise SpecError(f"{where}: joint '{args[0]}' has no coordinate")
@@ -535,3 +541,13 @@ def beam_station(system: System, beam: FlexibleBeam, text: str, where: str) -> f
     if not (math.isfinite(x) and 0 <= x <= beam.length):
         raise SpecError(f"{where}: x = {text} is outside 0..{beam.length}")
     return x
+
+
+def length_scale(system: System) -> float:
+    """The mechanism's size: the largest beam length, rigid marker distance from its body's
+    origin, or ground joint point distance from the origin (tolerances, blow-up and the
+    violation output use it)."""
+    sizes = [b.length for b in system.bodies if b.flexible]
+    sizes += [abs(complex(m.x, m.y)) for b in system.bodies if not b.flexible for m in b.markers]
+    sizes += [abs(complex(*j.point)) for j in system.joints if j.parent == "ground"]
+    return max([x for x in sizes if x > 0] or [1.0])

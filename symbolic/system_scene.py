@@ -228,7 +228,8 @@ def _body(r: _Items, k: int, tab: dict, model: str | None):
 
 
 def _model(r: _Items, where: str, given, flag: str | None):
-    """A deformation model: a variant name, or { variant, elements } or { strain, axial, bending }."""
+    """A deformation model: a variant name, or { variant, elements } or { strain, axial, bending },
+    either table with axial_force / moment = "constitutive" | "equilibrium"."""
     from .spec import VariantSpec, _refs, builtin, customize
 
     where = flag or where
@@ -239,7 +240,22 @@ def _model(r: _Items, where: str, given, flag: str | None):
             return builtin(given)
         if not isinstance(given, dict):
             r.fail(where, f"must be a variant name or a table (got {given!r})")
-        r.table(where, given, {"variant", "elements", "strain", "axial", "bending"})
+        r.table(where, given, {"variant", "elements", "strain", "axial", "bending", "axial_force",
+                               "moment"})
+        recovery = {}
+        for key in ("axial_force", "moment"):
+            if key in given:
+                if given[key] not in ("constitutive", "equilibrium"):
+                    r.fail(f"{where} {key}", f"must be \"constitutive\" or \"equilibrium\" "
+                           f"(got {given[key]!r})")
+                recovery[key] = given[key]
+        given = {k: v for k, v in given.items() if k not in recovery}
+        if recovery:
+            base = _model(r, where, given if len(given) > 1 or "strain" in given
+                          else given.get("variant"), flag)
+            if base.kind != "modal":
+                r.fail(where, "axial_force / moment apply to modal variants only")
+            return replace(base, **recovery)
         if "variant" in given:
             base = builtin(r.string(where, given, "variant"))
             if set(given) & {"strain", "axial", "bending"}:

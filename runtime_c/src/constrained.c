@@ -310,7 +310,7 @@ fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_resul
     s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
     s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
     size_t nz = n > nc ? n : nc;
-    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + 2 * nc * n + nc * nc
+    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 6 * nn + 2 * nc * n + nc * nc
                      + 2 * nc + nz + 1;
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
     double* x = calloc(doubles, sizeof(double));
@@ -327,6 +327,7 @@ fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_resul
     s->Jq = x; x += nn;
     s->Jv = x; x += nn;
     s->P = x; x += nn;
+    s->H = x; x += nn;
     s->q = x; x += n;
     s->v = x; x += n;
     s->a = x; x += n;

@@ -31,6 +31,7 @@ typedef struct {
     double* P;       /* ali3p: M + (h/2) C + (h^2/4) K, W without the penalty term */
     int* piv;
     double *Pq, *phi, *phit, *gam;  /* Phi_q (nc x n), Phi, Phi_t, gamma */
+    double* H;                      /* d(Phi_q^T e)/dq (n x n) */
     double *Z, *G;   /* n x nc: S^-1 Phi_q^T; nc x nc: Phi_q Z */
     int* cp;         /* column order of the complete pivoting of G */
     double *res, *f, *w1, *w2;  /* n */

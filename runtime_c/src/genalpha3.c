@@ -5,7 +5,8 @@
  * [a1, lambda1] with the constraint block
  *     [S  Phi_q^T] [da  ]   [f - M a1 - Phi_q^T lambda1]
  *     [Phi_q   0 ] [dlam] = [-Phi / cb                 ],   S = M + cb K + cg C,
- * (dq1 = cb da, dv1 = cg da; K, C the generated Jacobians of r = M q'' - f, reused across
+ * (dq1 = cb da, dv1 = cg da; K, C the generated Jacobians of r = M q'' - f, K with the
+ * constraint forces' geometric stiffness d(Phi_q^T lambda1)/dq when the model has it, reused across
  * iterations and steps while they contract (modified Newton); Phi_q fresh every iteration),
  * solved by the Schur complement Phi_q S^-1 Phi_q^T with complete pivoting, which drops the rows
  * of redundant constraints (cs_kkt). Converged when |dq1| <= tol and max |Phi| <= tol.
@@ -79,6 +80,10 @@ fsr_status genalpha3_step(csim* s)
             m->residual_jac(q1, v1, a1, s->d, o->p, s->Jq, s->Jv);
             for (size_t ij = 0; ij < (size_t)n * (size_t)n; ++ij)
                 s->S[ij] = s->M[ij] + cb * s->Jq[ij] + cg * s->Jv[ij];
+            if (nc && m->constraint_hess) {  /* + cb d(Phi_q^T lambda1)/dq */
+                m->constraint_hess(q1, lam1, s->d, o->p, s->H);
+                for (size_t ij = 0; ij < (size_t)n * (size_t)n; ++ij) s->S[ij] += cb * s->H[ij];
+            }
             s->r->jacobian_evaluations++;
             s->h_mat = h;
             if (fsr_lu_factor(s->S, n, s->piv))

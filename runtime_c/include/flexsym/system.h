@@ -65,6 +65,10 @@ typedef struct fsm_system {
     void (*energy)(const double* q, const double* qd, const double* d, const double* p, double* e);
     /* starting guess q (consistent initial conditions correct it) and q' (NULL: q = q' = 0) */
     void (*initial_state)(const double* p, const double* mp, double* q, double* qd);
+    /* h (n x n) = d(Phi_q^T e)/dq at fixed e: the constraint forces' geometric stiffness in the
+     * Newton tangent (NULL: left out) */
+    void (*constraint_hess)(const double* q, const double* e, const double* d, const double* p,
+                            double* h);
 } fsm_system;
 
 /* The model linked into this program (a generated system, or model_adapter.c for a one-beam
