@@ -464,22 +464,20 @@ SEGMENT_KEYS = {"length": "length", "density": "rho", "youngs_modulus": "E", "ar
 DEFAULT_ELEMENTS = 100
 
 
-def scene_body(r) -> BeamBody:
-    """The [body] table of a scene (r: scene._Reader): segments meshed with `elements` elements
-    (for the modes), point masses, or an imported finite-element folder."""
+def check_mesh_keys(r) -> None:
+    """[body] elements / ef_elements of a scene (r: scene._Reader)."""
     tab = r.data["body"]
     for key in ("elements", "ef_elements"):
         v = tab.get(key)
         if v is not None and (isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 2000):
             r.fail(f"[body] {key}", f"must be an integer in 1..2000 (got {v!r})")
-    if "folder" in tab:
-        if "segments" in tab or "point_masses" in tab:
-            r.fail("[body] folder", "an imported body brings its own elements and masses: "
-                   "drop segments and point_masses")
-        from .feimport import read_folder
 
-        folder = r.string("body", "folder")
-        return read_folder(r.path.parent / folder)
+
+def scene_body(r) -> BeamBody:
+    """The [body] table of a scene (r: scene._Reader): segments meshed with `elements` elements
+    (for the modes) and point masses. An imported folder is read by feimport.scene_folder."""
+    tab = r.data["body"]
+    check_mesh_keys(r)
     segs = tab.get("segments")
     if not isinstance(segs, list) or not segs or not all(isinstance(s, dict) for s in segs):
         r.fail("[body] segments", "must be a non-empty list of tables {length, density, "

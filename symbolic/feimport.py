@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SpecError
-from .fedata import BeamBody, PointMass, Section
+from .fedata import BeamBody, PointMass, Section, check_mesh_keys
 
 FORMAT = "flexsym-beam-fe-1"
 DOF_NAMES = ("u", "v", "theta")
@@ -225,3 +225,13 @@ def write_folder(body: BeamBody, folder) -> Path:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return folder
+
+
+def scene_folder(r) -> BeamBody:
+    """The [body] table of a scene that names an imported folder (r: scene._Reader)."""
+    tab = r.data["body"]
+    check_mesh_keys(r)
+    if "segments" in tab or "point_masses" in tab:
+        r.fail("[body] folder", "an imported body brings its own elements and masses: "
+               "drop segments and point_masses")
+    return read_folder(r.path.parent / r.string("body", "folder"))

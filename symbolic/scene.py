@@ -142,7 +142,7 @@ def load_scene(path, model: str | None = None):
     from .system_scene import is_system_scene, load_system_scene
 
     if is_system_scene(data):  # a mechanism ([[body]] entries): symbolic/system_scene.py
-        return load_system_scene(path, data, model)
+        return load_system_scene(path, data, _default_name(path), model)
     r = _Reader(path, data)
     unknown = sorted(set(data) - set(TABLES))
     if unknown:
@@ -168,8 +168,9 @@ def load_scene(path, model: str | None = None):
         if "beam" in data:
             r.fail("[body]", "give either [beam] (a uniform beam) or [body] (finite-element data), not both")
         from .fedata import scene_body
+        from .feimport import scene_folder
 
-        body = scene_body(r)
+        body = scene_folder(r) if "folder" in data["body"] else scene_body(r)
         ref = body.reference
         beam = {"rho": ref.rho, "E": ref.E, "A": ref.A, "I": ref.I, "L": body.length}
     else:

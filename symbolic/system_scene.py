@@ -504,14 +504,13 @@ def check_assembly(system: System) -> dict:
 
 
 # ----- the scene ------------------------------------------------------------------------------
-def load_system_scene(path: Path, data: dict, model: str | None = None) -> SystemScene:
-    """A system scene, checked completely (path names the file in every message)."""
-    from .scene import _default_name
-
+def load_system_scene(path: Path, data: dict, name: str, model: str | None = None) -> SystemScene:
+    """A system scene, checked completely (path names the file in every message); name: the
+    system's name when the scene gives none (from the file name, as for one-beam scenes)."""
     prefix = f"{path}: "
     if model is not None and (not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model)):
         raise SpecError(f"{prefix}--model: '{model}' is not a variant name")
-    system, given, output_file = system_from_data(data, prefix, _default_name(path), model)
+    system, given, output_file = system_from_data(data, prefix, name, model)
     if model is not None:
         system = _model_outputs(system)
     options = validate(given, Where("scene", path))
