@@ -109,9 +109,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
-        ("residual_jac", "Jacobians of r = M q'' - f",
-         [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)],
-         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
+    ] + _residual_jac_kernels(der, r, q, qd, qdd, d, p) + [
         ("outputs", "outputs " + ", ".join(der.outputs),
          [("q", q), ("qd", qd), ("qdd", qdd), ("lambda", x["lam"]), ("d", d), ("p", p)],
          [("y", y)]),
@@ -120,6 +118,32 @@ def build_system_kernels(der: SystemDerivation) -> list:
         ("drive", "d = [t, theta_k, theta_k', theta_k''] of the guided joints",
          [("t", x["t"]), ("mp", x["mp"])], [("d", ca.vertcat(*drive))]),
     ])
+
+
+# With ef bodies the Jacobians of r are split into blocks of this many columns (q_j), one C
+# function each: gcc's time grows faster than linearly with a function's length (S3 with 16
+# elements: one 64k-operation function took most of 110 s to compile). Each block is the same
+# casadi expression graph, so the values are the same; the C wrapper is in system.c.j2.
+JAC_BLOCK = 8
+
+
+def residual_jac_blocks(der: SystemDerivation) -> list[tuple[int, int]]:
+    """Column ranges [a, b) of residual_jac's blocks; [] for one kernel (no ef body)."""
+    n = len(der.q)
+    if not der.elastic or n <= JAC_BLOCK:
+        return []
+    return [(a, min(a + JAC_BLOCK, n)) for a in range(0, n, JAC_BLOCK)]
+
+
+def _residual_jac_kernels(der, r, q, qd, qdd, d, p) -> list:
+    ins = [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)]
+    blocks = residual_jac_blocks(der)
+    if not blocks:
+        return [("residual_jac", "Jacobians of r = M q'' - f", ins,
+                 [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))])]
+    return [(f"residual_jac_c{a}", f"columns {a}..{b - 1} of the Jacobians of r = M q'' - f", ins,
+             [("dr_dq", ca.jacobian(r, q[a:b])), ("dr_dqd", ca.jacobian(r, qd[a:b]))])
+            for a, b in blocks]
 
 
 def generate_system_files(system: System) -> dict[str, str]:
@@ -151,6 +175,7 @@ def generate_system_files(system: System) -> dict[str, str]:
         "mass_constant": mass_constant, "initial": initial,
         "outputs_use_acceleration": "qdd" in used["outputs"],
         "outputs_use_drive": "d" in used["outputs"],
+        "jac_blocks": residual_jac_blocks(der),
     }
     env = _environment()
     files = {
