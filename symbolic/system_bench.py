@@ -56,6 +56,8 @@ SYSTEMS = {
 EF_REFERENCE = {"hub": (16, "genalpha", 5e-4), "slider_crank": (16, "ali3p", 5e-6),
                 "pendulum": (16, "genalpha", 1.25e-5)}
 QUICK = {"pendulum": SystemCases(("m3",), (("genalpha", 1e-3), ("genalpha", 5e-4)))}
+# --quick: a coarse ef (fast to build; 4 elements are 2e-1 of M_mid's history from converged)
+QUICK_EF_REFERENCE = {"pendulum": (4, "genalpha", 1e-4)}
 
 
 def _run(built, scene, integrator, dt, repeat=1):
@@ -71,9 +73,9 @@ def ef_system(system, elements: int):
                                         for b in system.bodies))
 
 
-def ef_reference(name: str, log=print):
-    """The converged-ef run of a system scene (EF_REFERENCE)."""
-    elements, integrator, dt = EF_REFERENCE[name]
+def ef_reference(name: str, log=print, quick=False):
+    """The converged-ef run of a system scene (EF_REFERENCE; QUICK_EF_REFERENCE for --quick)."""
+    elements, integrator, dt = (QUICK_EF_REFERENCE if quick else EF_REFERENCE)[name]
     scene = load_scene(SCENES_DIR / f"{name}.toml", model="ef")
     ref = _run(prepare_system(ef_system(scene.system, elements)), scene, integrator, dt)
     if not ref.ok:
@@ -99,7 +101,7 @@ def run_system_bench(out: Path | None = None, systems=None, models=None, quick=F
     rows = []
     for name in systems or list(table):
         spec = table[name]
-        ef = ef_reference(name, log) if versus_ef else None
+        ef = ef_reference(name, log, quick) if versus_ef else None
         for model in models or spec.models:
             scene = load_scene(SCENES_DIR / f"{name}.toml", model=model)
             built = prepare_system(scene.system)
