@@ -2,8 +2,9 @@
 
 Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = parameters):
   mass(q, d, p) -> M        force(q, qd, d, p) -> f          M q'' = f
-  residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f  (with ef bodies: in
-                                     column blocks residual_jac_cA, assembled in system.c)
+  residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f
+  ef_elastic(e, pe) -> V, g, H   one ANCF element's elastic energy: system.c adds it to force,
+                                 residual_jac and energy per element of each ef body
   outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
@@ -21,6 +22,9 @@ import sympy as sp
 from .assemble import SystemDerivation, derive_system
 from .build import Built, build
 from .cemit import c_double, emit
+from .efbody import _E, EfPart, generic_element
+from .energy import A, E, I, L
+from .fe import le
 from .generate import MANIFEST, _environment, write_folder
 from .kernels import SympyToCasadi, _matrix_sx, make_kernels
 from .maneuver import t as t_sym
@@ -72,12 +76,9 @@ def build_system_kernels(der: SystemDerivation) -> list:
     # outputs and ef elastic energies hold square roots and atan2: translated as they are
     y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
     T_, V_, h_ = der.energies()
-    V_el = ca.SX(0.0)
-    for V in der.elastic:
-        V_el = V_el + tr(V)
-    if der.elastic:
-        f = f - ca.gradient(V_el, x["q"])  # ef bodies: Q = -dV/dq by casadi AD, as fe.py
-    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms) + ca.vertcat(0, V_el, V_el)
+    # ef bodies' elastic energy is not in these kernels: system.c adds it per element with the
+    # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
+    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
     dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
     dtr = SympyToCasadi(dsyms, {})
     drive = [x["t"]]
@@ -106,11 +107,13 @@ def build_system_kernels(der: SystemDerivation) -> list:
             ("constraint_acc", "gamma (Phi_q q'' = gamma), casadi AD",
              [("q", q), ("qd", qd), ("d", d), ("p", p)], [("gamma", gamma)]),
         ]
-    return make_kernels(constraint_kernels + [
+    return make_kernels(constraint_kernels + _ef_element_kernel(der) + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
-    ] + _residual_jac_kernels(der, r, q, qd, qdd, d, p) + [
+        ("residual_jac", "Jacobians of r = M q'' - f",
+         [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)],
+         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
         ("outputs", "outputs " + ", ".join(der.outputs),
          [("q", q), ("qd", qd), ("qdd", qdd), ("lambda", x["lam"]), ("d", d), ("p", p)],
          [("y", y)]),
@@ -121,31 +124,41 @@ def build_system_kernels(der: SystemDerivation) -> list:
     ])
 
 
-# With ef bodies the Jacobians of r are split into blocks of this many columns (q_j), one C
-# function each: gcc's time grows faster than linearly with a function's length (S3 with 16
-# elements: one 64k-operation function took most of 110 s to compile; nine blocks 47 s). The
-# blocks differentiate the same expressions (rows measured identical to the single kernel's);
-# system.c.j2 assembles them into residual_jac.
-JAC_BLOCK = 8
-
-
-def residual_jac_blocks(der: SystemDerivation) -> list[tuple[int, int]]:
-    """Column ranges [a, b) of residual_jac's blocks; [] for one kernel (no ef body)."""
-    n = len(der.q)
-    if not der.elastic or n <= JAC_BLOCK:
+def _ef_element_kernel(der: SystemDerivation) -> list:
+    """One ANCF element's elastic energy V(e; le, E, A, I), its gradient and Hessian (casadi AD
+    of efbody's Gauss-point energy, as fe.py's one-beam elements): generated once, called per
+    element by system.c."""
+    if not der.elastic:
         return []
-    return [(a, min(a + JAC_BLOCK, n)) for a in range(0, n, JAC_BLOCK)]
+    e, pe = ca.SX.sym("e", 8), ca.SX.sym("pe", 4)
+    symbols = {s: e[i] for i, s in enumerate(_E)} | {le: pe[0], E: pe[1], A: pe[2], I: pe[3]}
+    priority = {s: 2 for s in _E} | {le: 0, E: 0, A: 0, I: 0}
+    V = SympyToCasadi(symbols, priority)(generic_element()[3])
+    H, g = ca.hessian(V, e)
+    return [("ef_elastic", "one ANCF element: elastic energy, its gradient and Hessian",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)])]
 
 
-def _residual_jac_kernels(der, r, q, qd, qdd, d, p) -> list:
-    ins = [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)]
-    blocks = residual_jac_blocks(der)
-    if not blocks:
-        return [("residual_jac", "Jacobians of r = M q'' - f", ins,
-                 [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))])]
-    return [(f"residual_jac_c{a}", f"columns {a}..{b - 1} of the Jacobians of r = M q'' - f", ins,
-             [("dr_dq", ca.jacobian(r, q[a:b])), ("dr_dqd", ca.jacobian(r, qd[a:b]))])
-            for a, b in blocks]
+def ef_elements(der: SystemDerivation) -> list[dict]:
+    """Per ef body, what system.c needs to assemble its elements: the parameter indices of
+    [L, E, A, I], the element count, and per element and entry (x1 y1 x1' y1' x2 ...) the
+    coordinate index (-1: none) and the value a*L + b added to it (fixed root, node x = kL/n)."""
+    qindex = {s: i for i, s in enumerate(der.q)}
+    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
+    out = []
+    for part in der.flex.values():
+        if not isinstance(part, EfPart):
+            continue
+        n = part.n
+        node = [[(-1, 0.0, 0.0), (-1, 0.0, 0.0), (qindex[part.q["dx0"]], 0.0, 1.0), (-1, 0.0, 0.0)]]
+        for k in range(1, n + 1):
+            node.append([(qindex[part.q[f"ux{k}"]], k / n, 0.0), (qindex[part.q[f"uy{k}"]], 0.0, 0.0),
+                         (qindex[part.q[f"dx{k}"]], 0.0, 1.0), (qindex[part.q[f"dy{k}"]], 0.0, 0.0)])
+        params = [pindex[part.psyms[s]] for s in (L, E, A, I)]
+        out.append({"name": part.beam.name, "n": n, "params": params,
+                    "elements": [[(i, c_double(a), c_double(b)) for i, a, b in node[k] + node[k + 1]]
+                                 for k in range(n)]})
+    return out
 
 
 def generate_system_files(system: System) -> dict[str, str]:
@@ -177,7 +190,7 @@ def generate_system_files(system: System) -> dict[str, str]:
         "mass_constant": mass_constant, "initial": initial,
         "outputs_use_acceleration": "qdd" in used["outputs"],
         "outputs_use_drive": "d" in used["outputs"],
-        "jac_blocks": residual_jac_blocks(der),
+        "ef_bodies": ef_elements(der),
     }
     env = _environment()
     files = {

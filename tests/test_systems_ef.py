@@ -1,11 +1,11 @@
-"""`ef` bodies in systems: the column-block Jacobian kernels, and the modal variants against
+"""`ef` bodies in systems: the element-wise elastic assembly, and the modal variants against
 `ef` on the benchmark systems (short runs on coarse meshes; the converged study is README's)."""
-from dataclasses import replace
-
+import casadi as ca
 import numpy as np
 import pytest
 
 from flexsym import sysgen
+from flexsym.kernels import SympyToCasadi
 from flexsym.spec import builtin, customize
 from flexsym.systems_library import pendulum_system
 from flexsym.sysgen import run_system
@@ -15,20 +15,43 @@ def _ef_pendulum(elements: int):
     return pendulum_system(customize(builtin("ef"), elements=elements))
 
 
-def test_jacobian_blocks_equal_one_kernel(monkeypatch):
-    """residual_jac split into column blocks (one C function each, assembled in system.c) gives
-    the rows of the single-kernel Jacobian: the same casadi graph, so equal to round-off
-    (measured: identical over S3's 2 s with 4 elements, against the code before the split).
-    Two elements (10 coordinates, two blocks) keep the two builds cheap."""
-    system = _ef_pendulum(2)
-    assert len(sysgen.residual_jac_blocks(sysgen.derive_system(system))) == 2
-    opts = dict(t_end=0.3, dt=1e-4)
-    split = run_system(system, **opts)
-    monkeypatch.setattr(sysgen, "JAC_BLOCK", 10**6)
-    whole = run_system(replace(system, name="pendulum_one_jac"), **opts)
-    assert split.ok and whole.ok
-    for c in ("x_tip", "y_tip", "w_mid", "M_mid"):
-        assert np.max(np.abs(split[c] - whole[c])) <= 1e-10 * np.max(np.abs(whole[c]))
+def test_element_assembly_equals_dense_body():
+    """The ef body's elastic energy, force and stiffness assembled per element from the one
+    element kernel (what system.c does with sysgen.ef_elements) equal casadi's AD of the whole
+    body's energy at a random deformed state (to round-off: 1e-10 of the largest entry).
+    Run against the dense kernels before this assembly (S3, 4 elements, 2 s, full Newton at
+    tolerance 1e-15): the rows agree to 1.4e-13; with the default modified Newton to 8.8e-6 of
+    M_mid, where the iterations stop differently."""
+    der = sysgen.derive_system(_ef_pendulum(4))
+    kernel = next(k for k in sysgen.build_system_kernels(der) if k.name == "ef_elastic").function
+    (body,) = sysgen.ef_elements(der)
+    n, np_ = len(der.q), len(der.params)
+    qs, ps = ca.SX.sym("q", n), ca.SX.sym("p", np_)
+    symbols = {s: qs[i] for i, s in enumerate(der.q)} | {s: ps[i] for i, (_, s, _) in enumerate(der.params)}
+    V = SympyToCasadi(symbols, {s: 0 for s in symbols})(der.elastic[0])
+    H, g = ca.hessian(V, qs)
+    dense = ca.Function("dense", [qs, ps], [V, g, H])
+
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-1e-3, 1e-3, n)
+    p = np.array([v for _, _, v in der.params])
+    Vd, gd, Hd = (np.array(x) for x in dense(q, p))
+    L_, E_, A_, I_ = (p[i] for i in body["params"])
+    Ve, ge, He = 0.0, np.zeros(n), np.zeros((n, n))
+    for el in body["elements"]:
+        idx = [i for i, _, _ in el]
+        e = [(q[i] if i >= 0 else 0.0) + float(a) * L_ + float(b) for i, a, b in el]
+        v, gk, hk = (np.array(x) for x in kernel(e, [L_ / body["n"], E_, A_, I_]))
+        Ve += v.item()
+        for r, i in enumerate(idx):
+            if i >= 0:
+                ge[i] += gk[r, 0]
+                for c, j in enumerate(idx):
+                    if j >= 0:
+                        He[i, j] += hk[r, c]
+    assert abs(Ve - Vd.item()) <= 1e-10 * abs(Vd.item())
+    assert np.max(np.abs(ge - gd.ravel())) <= 1e-10 * np.max(np.abs(gd))
+    assert np.max(np.abs(He - Hd)) <= 1e-10 * np.max(np.abs(Hd))
 
 
 @pytest.fixture(scope="module")
