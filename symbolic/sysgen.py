@@ -8,7 +8,7 @@ Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = para
   outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
-and templates) and this module, assemble.py, system.py and templates/system/.
+and templates) and this module, assemble.py, efbody.py, system.py and templates/system/.
 """
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ from .system import System, system_to_dict
 from .versions import generator_hash, tool_versions
 
 C_PREFIX = "fsm_"
-_OWN = ("assemble", "system", "sysgen")
+_OWN = ("assemble", "efbody", "system", "sysgen")
 
 
 def fingerprint(system: System) -> str:
