@@ -3,8 +3,8 @@
 Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = parameters):
   mass(q, d, p) -> M        force(q, qd, d, p) -> f          M q'' = f
   residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f
-  ef_elastic(e, pe) -> V, g, H   one ANCF element's elastic energy: system.c adds it to force,
-                                 residual_jac and energy per element of each ef body
+  ef_elastic(e, pe) -> V, g, H   one ANCF element's elastic energy (ef_elastic_grad: V, g):
+                                 system.c adds it to force, residual_jac and energy per element
   outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
@@ -136,7 +136,9 @@ def _ef_element_kernel(der: SystemDerivation) -> list:
     V = SympyToCasadi(symbols, priority)(generic_element()[3])
     H, g = ca.hessian(V, e)
     return [("ef_elastic", "one ANCF element: elastic energy, its gradient and Hessian",
-             [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)])]
+             [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)]),
+            ("ef_elastic_grad", "one ANCF element: elastic energy and its gradient (no Hessian)",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
 
 
 def ef_elements(der: SystemDerivation) -> list[dict]:
