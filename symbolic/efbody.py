@@ -7,8 +7,9 @@ in frame components, with (V_x, V_y) = A^T R' and omega = phi' of the frame:
     T^e = int rho A/2 |V + r' + omega k x r|^2 dx   (exact: a polynomial in xi)
     V_g^e = -int rho A g_loc . r dx                 (exact), g_loc = A^T g
     V^e = int [EA eps^2/2 + EI kappa^2/2] dx        (fe.elastic_element: Gauss-Legendre, material kappa)
-The elastic energy stays unexpanded (a square root per Gauss point): sysgen differentiates it
-with casadi AD, as fe.py does for the one-beam `ef`.
+The elastic energy stays unexpanded (a square root per Gauss point): sysgen makes one element
+kernel of it (V, gradient, Hessian by casadi AD, as fe.py does for the one-beam `ef`) and
+system.c assembles it per element; the summed V_elastic here is for inspection and tests.
 """
 from __future__ import annotations
 

@@ -3,10 +3,12 @@
 Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = parameters):
   mass(q, d, p) -> M        force(q, qd, d, p) -> f          M q'' = f
   residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f
+  ef_elastic(e, pe) -> V, g, H   one ANCF element's elastic energy (ef_elastic_grad: V, g):
+                                 system.c adds it to force, residual_jac and energy per element
   outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
-and templates) and this module, assemble.py, system.py and templates/system/.
+and templates) and this module, assemble.py, efbody.py, system.py and templates/system/.
 """
 from __future__ import annotations
 
@@ -20,6 +22,9 @@ import sympy as sp
 from .assemble import SystemDerivation, derive_system
 from .build import Built, build
 from .cemit import c_double, emit
+from .efbody import _E, EfPart, generic_element
+from .energy import A, E, I, L
+from .fe import le
 from .generate import MANIFEST, _environment, write_folder
 from .kernels import SympyToCasadi, _matrix_sx, make_kernels
 from .maneuver import t as t_sym
@@ -28,7 +33,7 @@ from .system import System, length_scale, system_to_dict
 from .versions import generator_hash, tool_versions
 
 C_PREFIX = "fsm_"
-_OWN = ("assemble", "system", "sysgen", "efbody")
+_OWN = ("assemble", "efbody", "system", "sysgen")
 
 
 def fingerprint(system: System) -> str:
@@ -62,12 +67,9 @@ def build_system_kernels(der: SystemDerivation) -> list:
     # outputs and ef elastic energies hold square roots and atan2: translated as they are
     y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
     T_, V_, h_ = der.energies()
-    V_el = ca.SX(0.0)
-    for V in der.elastic:
-        V_el = V_el + tr(V)
-    if der.elastic:
-        f = f - ca.gradient(V_el, x["q"])  # ef bodies: Q = -dV/dq by casadi AD, as fe.py
-    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms) + ca.vertcat(0, V_el, V_el)
+    # ef bodies' elastic energy is not in these kernels: system.c adds it per element with the
+    # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
+    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
     dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
     dtr = SympyToCasadi(dsyms, {})
     drive = [x["t"]]
@@ -99,7 +101,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
              [("q", q), ("e", x["lam"]), ("d", d), ("p", p)],
              [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
         ]
-    return make_kernels(constraint_kernels + [
+    return make_kernels(constraint_kernels + _ef_element_kernel(der) + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
@@ -114,6 +116,45 @@ def build_system_kernels(der: SystemDerivation) -> list:
         ("drive", "d = [t, theta_k, theta_k', theta_k''] of the guided joints",
          [("t", x["t"]), ("mp", x["mp"])], [("d", ca.vertcat(*drive))]),
     ])
+
+
+def _ef_element_kernel(der: SystemDerivation) -> list:
+    """One ANCF element's elastic energy V(e; le, E, A, I), its gradient and Hessian (casadi AD
+    of efbody's Gauss-point energy, as fe.py's one-beam elements): generated once, called per
+    element by system.c."""
+    if not der.elastic:
+        return []
+    e, pe = ca.SX.sym("e", 8), ca.SX.sym("pe", 4)
+    symbols = {s: e[i] for i, s in enumerate(_E)} | {le: pe[0], E: pe[1], A: pe[2], I: pe[3]}
+    priority = {s: 2 for s in _E} | {le: 0, E: 0, A: 0, I: 0}
+    V = SympyToCasadi(symbols, priority)(generic_element()[3])
+    H, g = ca.hessian(V, e)
+    return [("ef_elastic", "one ANCF element: elastic energy, its gradient and Hessian",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)]),
+            ("ef_elastic_grad", "one ANCF element: elastic energy and its gradient (no Hessian)",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
+
+
+def ef_elements(der: SystemDerivation) -> list[dict]:
+    """Per ef body, what system.c needs to assemble its elements: the parameter indices of
+    [L, E, A, I], the element count, and per element and entry (x1 y1 x1' y1' x2 ...) the
+    coordinate index (-1: none) and the value a*L + b added to it (fixed root, node x = kL/n)."""
+    qindex = {s: i for i, s in enumerate(der.q)}
+    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
+    out = []
+    for part in der.flex.values():
+        if not isinstance(part, EfPart):
+            continue
+        n = part.n
+        node = [[(-1, 0.0, 0.0), (-1, 0.0, 0.0), (qindex[part.q["dx0"]], 0.0, 1.0), (-1, 0.0, 0.0)]]
+        for k in range(1, n + 1):
+            node.append([(qindex[part.q[f"ux{k}"]], k / n, 0.0), (qindex[part.q[f"uy{k}"]], 0.0, 0.0),
+                         (qindex[part.q[f"dx{k}"]], 0.0, 1.0), (qindex[part.q[f"dy{k}"]], 0.0, 0.0)])
+        params = [pindex[part.psyms[s]] for s in (L, E, A, I)]
+        out.append({"name": part.beam.name, "n": n, "params": params,
+                    "elements": [[(i, c_double(a), c_double(b)) for i, a, b in node[k] + node[k + 1]]
+                                 for k in range(n)]})
+    return out
 
 
 def generate_system_files(system: System) -> dict[str, str]:
@@ -145,6 +186,7 @@ def generate_system_files(system: System) -> dict[str, str]:
         "mass_constant": mass_constant, "initial": initial,
         "outputs_use_acceleration": "qdd" in used["outputs"],
         "outputs_use_drive": "d" in used["outputs"],
+        "ef_bodies": ef_elements(der),
     }
     env = _environment()
     files = {

@@ -8,8 +8,10 @@ For each system scene x model x integrator x step, on the scene's own run (t_end
 The reference is the same model at REF_DIVISOR times smaller a step than the smallest of the
 cases, by rk4 for a tree (no cut joint: the smallest error per step of the methods here;
 rk4 at 0.1 ms is within 3e-5 of the peak of rk4 at 10 us on S3) and by the scene's
-integrator for a closed loop (ali3p on S2). The error of each modal model against the geometrically exact `ef` on the same
-system is not measured here yet.
+integrator for a closed loop (ali3p on S2). Next to it, the total error of the case against
+the geometrically exact `ef` on the same system (EF_REFERENCE: elements, integrator, step):
+  ef_<column>  max |y - y_ef| over the rows, divided by the peak |y_ef|
+  ef_max       the largest of them (model error + integration error)
 Writes bench_systems.csv and bench_systems.md to --out.
 """
 from __future__ import annotations
@@ -21,7 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
+from dataclasses import replace
+
 from .options import Where, validate
+from .spec import builtin, customize
 from .paths import PACKAGE_DIR
 from .run import run_built
 from .scene import load_scene
@@ -47,7 +52,12 @@ SYSTEMS = {
     "pendulum": SystemCases(("m1", "m3", "prestress"),
                             tuple(("genalpha", dt) for dt in (1e-3, 5e-4, 2e-4, 1e-4, 5e-5)) + (("rk4", 1e-4),)),
 }
+# The ef reference of each system: (elements, integrator, step); see README's convergence study.
+EF_REFERENCE = {"hub": (16, "genalpha", 5e-4), "slider_crank": (16, "ali3p", 5e-6),
+                "pendulum": (16, "genalpha", 1.25e-5)}
 QUICK = {"pendulum": SystemCases(("m3",), (("genalpha", 1e-3), ("genalpha", 5e-4)))}
+# --quick: a coarse ef (fast to build; 4 elements are 2e-1 of M_mid's history from converged)
+QUICK_EF_REFERENCE = {"pendulum": (4, "genalpha", 1e-4)}
 
 
 def _run(built, scene, integrator, dt, repeat=1):
@@ -56,13 +66,42 @@ def _run(built, scene, integrator, dt, repeat=1):
     return run_built(built, validate(given, Where("api")))
 
 
+def ef_system(system, elements: int):
+    """The system with every flexible body replaced by `elements` ANCF elements."""
+    ef = customize(builtin("ef"), elements=elements)
+    return replace(system, bodies=tuple(replace(b, model=ef) if b.flexible else b
+                                        for b in system.bodies))
+
+
+def ef_reference(name: str, log=print, quick=False):
+    """The converged-ef run of a system scene (EF_REFERENCE; QUICK_EF_REFERENCE for --quick)."""
+    elements, integrator, dt = (QUICK_EF_REFERENCE if quick else EF_REFERENCE)[name]
+    scene = load_scene(SCENES_DIR / f"{name}.toml", model="ef")
+    ref = _run(prepare_system(ef_system(scene.system, elements)), scene, integrator, dt)
+    if not ref.ok:
+        raise RuntimeError(f"{name} ef: the reference run stopped: {ref.message}")
+    log(f"{name}: ef reference, {elements} elements, {integrator} dt = {dt:g} s")
+    return ref
+
+
+def _errors(r, ref, columns, prefix):
+    out = {}
+    for c in columns:
+        peak = float(np.max(np.abs(ref[c]))) or 1.0
+        out[f"{prefix}_{c}"] = (float(np.max(np.abs(r[c] - ref[c]))) / peak
+                                if r.ok and len(r[c]) == len(ref[c]) else math.nan)
+    out[f"{prefix}_max"] = max(out[f"{prefix}_{c}"] for c in columns)
+    return out
+
+
 def run_system_bench(out: Path | None = None, systems=None, models=None, quick=False, repeat=None,
-                     log=print) -> list[dict]:
+                     log=print, versus_ef=True) -> list[dict]:
     table = QUICK if quick else SYSTEMS
     repeat = repeat or (1 if quick else 5)
     rows = []
     for name in systems or list(table):
         spec = table[name]
+        ef = ef_reference(name, log, quick) if versus_ef else None
         for model in models or spec.models:
             scene = load_scene(SCENES_DIR / f"{name}.toml", model=model)
             built = prepare_system(scene.system)
@@ -72,24 +111,27 @@ def run_system_bench(out: Path | None = None, systems=None, models=None, quick=F
             ref = _run(built, scene, ref_integrator, ref_dt)
             if not ref.ok:
                 raise RuntimeError(f"{name} {model}: the reference run stopped: {ref.message}")
-            peaks = {c: float(np.max(np.abs(ref[c]))) or 1.0 for c in columns}
             log(f"{name}, {model}: reference {ref_integrator} dt = {ref_dt:g} s")
             for integrator, dt in spec.cases:
                 r = _run(built, scene, integrator, dt, repeat)
                 row = {"system": name, "model": model, "integrator": integrator, "dt": dt,
                        "cpu_s": r.summary["cpu_median"], "status": "ok" if r.ok else r.message}
-                for c in columns:
-                    row[f"err_{c}"] = (float(np.max(np.abs(r[c] - ref[c]))) / peaks[c]
-                                       if r.ok and len(r[c]) == len(ref[c]) else math.nan)
-                row["err_max"] = max(row[f"err_{c}"] for c in columns)
+                row |= _errors(r, ref, columns, "err")
+                if ef is not None:
+                    row |= _errors(r, ef, columns, "ef")
                 rows.append(row)
                 log(f"  {integrator:9s} dt = {dt:<8g} {row['cpu_s'] * 1e3:8.3f} ms  max error "
-                    f"{row['err_max']:.2e} of the peak  {'' if r.ok else r.message}")
+                    f"{row['err_max']:.2e} of the peak"
+                    + (f", vs ef {row['ef_max']:.2e}" if ef is not None else "")
+                    + f"  {'' if r.ok else r.message}")
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        fields = sorted({k for r in rows for k in r}, key=lambda k: (k.startswith("err_"), k != "err_max", k))
+        keys = sorted({k for r in rows for k in r})
         fields = ["system", "model", "integrator", "dt", "cpu_s", "err_max"] + [
-            f for f in fields if f.startswith("err_") and f != "err_max"] + ["status"]
+            f for f in keys if f.startswith("err_") and f != "err_max"]
+        if versus_ef:
+            fields += ["ef_max"] + [f for f in keys if f.startswith("ef_") and f != "ef_max"]
+        fields += ["status"]
         with open(out / "bench_systems.csv", "w", newline="", encoding="utf-8") as fh:
             w = csv.DictWriter(fh, fieldnames=fields, restval="")
             w.writeheader()
@@ -100,10 +142,14 @@ def run_system_bench(out: Path | None = None, systems=None, models=None, quick=F
 
 
 def markdown(rows) -> str:
-    lines = ["| system | model | integrator | step | CPU | integration error (max over outputs, of the peak) |",
-             "|---|---|---|---|---|---|"]
+    lines = ["| system | model | integrator | step | CPU | integration error | error vs ef |",
+             "|---|---|---|---|---|---|---|"]
     for r in rows:
+        ef = f"{r['ef_max']:.2e}" if "ef_max" in r else "-"
         lines.append(f"| {r['system']} | {r['model']} | {r['integrator']} | {r['dt']:g} s | "
-                     f"{r['cpu_s'] * 1e3:.3f} ms | {r['err_max']:.2e}"
+                     f"{r['cpu_s'] * 1e3:.3f} ms | {r['err_max']:.2e} | {ef}"
                      f"{'' if r['status'] == 'ok' else ' (' + r['status'] + ')'} |")
+    lines.append("")
+    lines.append("errors: max over the outputs of max |y - y_ref| / peak |y_ref|; integration error "
+                 "against the same model at a 10x smaller step, error vs ef against EF_REFERENCE")
     return "\n".join(lines) + "\n"
