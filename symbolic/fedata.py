@@ -38,6 +38,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .beam_element import numeric_element_matrices
 from .errors import SpecError
 
 GAUSS_POINTS = 8  # exact for polynomials of degree 15 per element (invariants reach 14)
@@ -207,30 +208,9 @@ class BeamBody:
 
 def element_matrices(sec: Section, l: float):
     """Mass, stiffness (eq. 7) and unit-load geometric stiffness (eq. 8, (th1, th2) = -l/30)
-    of the planar beam element, dofs (u1, v1, th1, u2, v2, th2)."""
-    a, b, m = sec.E * sec.A / l, sec.E * sec.I, sec.rho * sec.A * l
-    K = np.array([
-        [a, 0, 0, -a, 0, 0],
-        [0, 12 * b / l**3, 6 * b / l**2, 0, -12 * b / l**3, 6 * b / l**2],
-        [0, 6 * b / l**2, 4 * b / l, 0, -6 * b / l**2, 2 * b / l],
-        [-a, 0, 0, a, 0, 0],
-        [0, -12 * b / l**3, -6 * b / l**2, 0, 12 * b / l**3, -6 * b / l**2],
-        [0, 6 * b / l**2, 2 * b / l, 0, -6 * b / l**2, 4 * b / l]])
-    KG = np.array([
-        [0, 0, 0, 0, 0, 0],
-        [0, 6 / (5 * l), 1 / 10, 0, -6 / (5 * l), 1 / 10],
-        [0, 1 / 10, 2 * l / 15, 0, -1 / 10, -l / 30],
-        [0, 0, 0, 0, 0, 0],
-        [0, -6 / (5 * l), -1 / 10, 0, 6 / (5 * l), -1 / 10],
-        [0, 1 / 10, -l / 30, 0, -1 / 10, 2 * l / 15]])
-    M = np.zeros((6, 6))
-    M[np.ix_([0, 3], [0, 3])] = m / 6 * np.array([[2, 1], [1, 2]])
-    M[np.ix_([1, 2, 4, 5], [1, 2, 4, 5])] = m / 420 * np.array([
-        [156, 22 * l, 54, -13 * l],
-        [22 * l, 4 * l**2, 13 * l, -3 * l**2],
-        [54, 13 * l, 156, -22 * l],
-        [-13 * l, -3 * l**2, -22 * l, 4 * l**2]])
-    return M, K, KG
+    of the planar beam element, dofs (u1, v1, th1, u2, v2, th2) (beam_element.py)."""
+    M, K, KG = numeric_element_matrices()(l, sec.E * sec.A, sec.E * sec.I, sec.rho * sec.A)
+    return np.asarray(M, dtype=float), np.asarray(K, dtype=float), np.asarray(KG, dtype=float)
 
 
 @dataclass(frozen=True)

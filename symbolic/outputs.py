@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from .energy import A, E, I, L, alpha, rho, w
+from . import beam_element
 from .errors import SpecError
 from .integrals import Factor
 from .modes import s
@@ -190,28 +191,8 @@ def _equilibrium_M(der, at) -> sp.Expr:
 
 
 def element_matrices(le, EA=E * A, EI=E * I):
-    """The paper's K_L^e (7) and K_GL^e (8) for dofs (u1, v1, th1, u2, v2, th2).
-
-    K_GL^e[th1, th2] is -le/30: the paper prints +le/30, a sign misprint (the integral of the
-    cubic energy term for Hermite shapes gives -le/30; tests/test_integrals.py).
-    """
-    a, b = EA / le, EI
-    KL = sp.Matrix([
-        [a, 0, 0, -a, 0, 0],
-        [0, 12 * b / le**3, 6 * b / le**2, 0, -12 * b / le**3, 6 * b / le**2],
-        [0, 6 * b / le**2, 4 * b / le, 0, -6 * b / le**2, 2 * b / le],
-        [-a, 0, 0, a, 0, 0],
-        [0, -12 * b / le**3, -6 * b / le**2, 0, 12 * b / le**3, -6 * b / le**2],
-        [0, 6 * b / le**2, 2 * b / le, 0, -6 * b / le**2, 4 * b / le]])
-    r = sp.Rational
-    KG = sp.Matrix([
-        [0, 0, 0, 0, 0, 0],
-        [0, r(6, 5) / le, r(1, 10), 0, -r(6, 5) / le, r(1, 10)],
-        [0, r(1, 10), 2 * le / 15, 0, -r(1, 10), -le / 30],
-        [0, 0, 0, 0, 0, 0],
-        [0, -r(6, 5) / le, -r(1, 10), 0, r(6, 5) / le, -r(1, 10)],
-        [0, r(1, 10), -le / 30, 0, -r(1, 10), 2 * le / 15]])
-    return KL, KG
+    """The paper's K_L^e (7) and K_G^e (8) (beam_element.py; (th1, th2) = -le/30)."""
+    return beam_element.element_matrices(le, EA, EI)[1:]
 
 
 def _element_end_values(der, n: int, e: int, want_N: bool):
