@@ -26,9 +26,8 @@ fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(s->r->message, sizeof s->r->message, fmt, ap);
+    fsr_vfail(s->r, st, fmt, ap);
     va_end(ap);
-    s->r->status = st;
     return st;
 }
 

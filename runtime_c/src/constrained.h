@@ -4,6 +4,8 @@
 #ifndef FLEXSYM_CONSTRAINED_H
 #define FLEXSYM_CONSTRAINED_H
 
+#include <stdarg.h>
+
 #include "flexsym/runtime.h"
 #include "flexsym/system.h"
 
@@ -47,6 +49,10 @@ fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...);
 /* simulate.c: r->message and r->status; and the checks every run makes (finite o->y0, the
  * run-size limits of limits.h; r->ncols set), FSR_OK or FSR_BAD_OPTIONS with the message. */
 fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...);
+fsr_status fsr_vfail(fsr_result* r, fsr_status st, const char* fmt, va_list ap);
+/* Generalized-alpha coefficients (Chung-Hulbert) from the spectral radius at infinity */
+typedef struct { double am, af, gam, bet; } fsr_alpha;
+fsr_alpha fsr_alpha_coefficients(double rho_inf);
 fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r);
 double cs_time(const csim* s, long k);
 /* s->d = the drive at t */

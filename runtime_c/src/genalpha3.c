@@ -28,11 +28,11 @@
 
 fsr_status genalpha3_begin(csim* s)
 {
-    double r = s->o->rho_inf;
-    s->am = (2.0 * r - 1.0) / (r + 1.0);
-    s->af = r / (r + 1.0);
-    s->gm = 0.5 + s->af - s->am;
-    s->bt = 0.25 * (s->gm + 0.5) * (s->gm + 0.5);
+    fsr_alpha c = fsr_alpha_coefficients(s->o->rho_inf);
+    s->am = c.am;
+    s->af = c.af;
+    s->gm = c.gam;
+    s->bt = c.bet;
     s->ra = (1.0 - s->af) / (1.0 - s->am);
     s->pa = s->af / (1.0 - s->am);
     s->pb = -s->am / (1.0 - s->am);

@@ -175,13 +175,19 @@ const char* fsr_method_name(fsr_method m)
 }
 
 /* r->message from fmt, r->status = st; returns st (shared with constrained.c). */
+fsr_status fsr_vfail(fsr_result* r, fsr_status st, const char* fmt, va_list ap)
+{
+    vsnprintf(r->message, sizeof r->message, fmt, ap);
+    r->status = st;
+    return st;
+}
+
 fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(r->message, sizeof r->message, fmt, ap);
+    fsr_vfail(r, st, fmt, ap);
     va_end(ap);
-    r->status = st;
     return st;
 }
 
@@ -189,10 +195,19 @@ static fsr_status fail(sim* s, fsr_status st, const char* fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(s->r->message, sizeof s->r->message, fmt, ap);
+    fsr_vfail(s->r, st, fmt, ap);
     va_end(ap);
-    s->r->status = st;
     return st;
+}
+
+fsr_alpha fsr_alpha_coefficients(double rho_inf)
+{
+    fsr_alpha c;
+    c.am = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+    c.af = rho_inf / (rho_inf + 1.0);
+    c.gam = 0.5 + c.af - c.am;
+    c.bet = 0.25 * (c.gam + 0.5) * (c.gam + 0.5);
+    return c;
 }
 
 /* max(m, |x|) for m >= 0 (libm's fmax is a call in strict C99). */
@@ -701,11 +716,11 @@ static fsr_status alpha_begin(sim* s)
         s->gam = o->nm_gamma;
         s->bet = o->nm_beta;
     } else {
-        double r = o->rho_inf;
-        s->am = (2.0 * r - 1.0) / (r + 1.0);
-        s->af = r / (r + 1.0);
-        s->gam = 0.5 + s->af - s->am;
-        s->bet = 0.25 * (s->gam + 0.5) * (s->gam + 0.5);
+        fsr_alpha c = fsr_alpha_coefficients(o->rho_inf);
+        s->am = c.am;
+        s->af = c.af;
+        s->gam = c.gam;
+        s->bet = c.bet;
     }
     s->ra = (1.0 - s->af) / (1.0 - s->am);
     s->pa = s->af / (1.0 - s->am);
