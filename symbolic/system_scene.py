@@ -622,6 +622,9 @@ def summary(system: System) -> str:
             s = b.section
             what = (f"beam L = {b.length:g} m, rho {s.rho:g}, E {s.E:g}, A {s.A:g}, I {s.I:g}; "
                     f"model {b.model.name}")
+            if getattr(b.model, "body", None) is not None:
+                what = what.replace(", rho", ", root section rho").replace(
+                    "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
         else:
             what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
         lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")

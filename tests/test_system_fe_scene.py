@@ -31,11 +31,11 @@ def _hub_with_fe_beam(elements: int, model: str) -> dict:
     return tomllib.loads(HUB.replace(UNIFORM, seg).replace('model = "m3"', f"model = {model}"))
 
 
-def _run(data: dict, name: str = "hub"):
+def _run(data: dict, name: str = "hub", t_end: float = 20.0):
     from flexsym.run import run_built
     from flexsym.sysgen import prepare_system
 
-    return run_built(prepare_system(system_from_dict(data, name)), t_end=20.0, dt=1e-3, out_every=10)
+    return run_built(prepare_system(system_from_dict(data, name)), t_end=t_end, dt=1e-3, out_every=10)
 
 
 def test_scene_equals_the_python_system_row_for_row(tmp_path):
@@ -191,3 +191,78 @@ def test_python_dict_reads_a_folder_relative_to_base(tmp_path):
     assert system_from_dict(data, "stepped_hub", base=tmp_path).body("blade").model.body.elements == 4
     with pytest.raises(SpecError, match=r"^system data: \[\[body\]\] 'blade' folder: .*body.toml: no such file"):
         system_from_dict(data, "stepped_hub", base=tmp_path / "elsewhere")
+
+
+STEPPED_MODEL = ('model = { strain = "prestress", bending = ["static", "cp1", "cp2"], '
+                 'axial_force = "equilibrium", moment = "equilibrium" }')
+
+
+def _stepped(model: str, elements: int = 100) -> dict:
+    assert STEPPED.count(STEPPED_MODEL) == 1
+    return tomllib.loads(STEPPED.replace(STEPPED_MODEL, f"model = {model}")
+                         .replace("elements = 100 ", f"elements = {elements} "))
+
+
+def test_body_mass_moves_the_frame():
+    """The stepped blade (9.5 kg: 6 + 3 kg of sections, 0.5 kg at the tip; the root section
+    alone would say 12 kg) on a prismatic joint along its axis with gravity along it falls
+    freely, undeformed: x = -g t^2/2 (the frame's gravity term takes the body's own mass;
+    measured 6e-14 m over 1 s; 1.29 m off with the root section's rho A L)."""
+    data = _stepped('{ strain = "prestress", bending = ["static"] }', elements=8)
+    data["body"] = [data["body"][1]]
+    data["joint"] = [{"name": "slide", "kind": "prismatic", "parent": "ground", "point": [0.0, 0.0],
+                      "child": "blade.root", "axis": [1.0, 0.0]}]
+    data["driver"] = []
+    data["gravity"] = {"g": [-9.81, 0.0]}
+    data["output"]["columns"] = {"x": "angle(slide)", "v_tip": "v(blade, tip)"}
+    r = _run(data, "fall", t_end=1.0)
+    assert r.ok and len(r["t"]) == 101
+    assert np.abs(r["x"] + 9.81 * r["t"] ** 2 / 2).max() < 1e-12 and r["x"][-1] < -4.9
+
+
+def _theta_p(t):
+    """The rigid hub + blade's spin-up P(t; 6 rad/s, 15 s) that the motor law is made for."""
+    w, T = 6.0, 15.0
+    tt = np.minimum(t, T)
+    return (w / T) * (tt**2 / 2 + (T / (2 * np.pi))**2 * (np.cos(2 * np.pi * tt / T) - 1)) + w * np.maximum(t - T, 0)
+
+
+def test_ef_body_rigid_limit_momentum_and_element_table():
+    """`ef` with the stepped blade (4 elements, the step at a node, the tip mass at the last):
+    (1) the motor law assumes J_h + J_blade = 40 + 275 kg m^2, so at 10^4 E the hub follows
+    P(t) (measured 3.9e-6 rad, 0.035 rad at E: the lag is the blade's flexibility, ~ 1/E) and
+    the angular momentum after the spin-up is 315 x 6 (1.7e-9); (2) the elastic energy that
+    system.c assembles per element from sysgen.ef_elements (lengths and EA, EI ratios) equals
+    the body's symbolic energy at a random state (1e-10)."""
+    import casadi as ca
+
+    from flexsym import sysgen
+    from flexsym.kernels import SympyToCasadi
+    from flexsym.run import run_built
+
+    data = _stepped('{ variant = "ef", elements = 4 }')
+    data["output"]["columns"] = {"theta_h": "angle(hub_joint)", "H": "momentum"}
+    system = system_from_dict(data, "stepped_hub")
+    assert system.body("blade").model.body.nodes == (0.0, 2.5, 5.0, 7.5, 10.0)
+    r = run_built(sysgen.prepare_system(system), t_end=20.0, dt=1e-3, out_every=10, params={"E": 7e14})
+    assert np.abs(r["theta_h"] - _theta_p(r["t"])).max() < 1e-5
+    assert abs(r["H"][-1] - 315 * 6) < 1e-6 * 1890
+
+    der = sysgen.derive_system(system)
+    kernel = next(k for k in sysgen.build_system_kernels(der) if k.name == "ef_elastic").function
+    (body,) = sysgen.ef_elements(der)
+    n = len(der.q)
+    qs, ps = ca.SX.sym("q", n), ca.SX.sym("p", len(der.params))
+    symbols = {s: qs[i] for i, s in enumerate(der.q)} | {s: ps[i] for i, (_, s, _) in enumerate(der.params)}
+    dense = ca.Function("dense", [qs, ps], [SympyToCasadi(symbols, {s: 0 for s in symbols})(der.elastic[0])])
+    q = np.random.default_rng(5).uniform(-1e-3, 1e-3, n)
+    p = np.array([v for _, _, v in der.params])
+    L_, E_, A_, I_ = (p[i] for i in body["params"])
+    V = 0.0
+    for el, (ds, ea, ei) in zip(body["elements"], body["sections"]):
+        e = [(q[i] if i >= 0 else 0.0) + float(a) * L_ + float(b) for i, a, b in el]
+        V += float(kernel(e, [L_ * float(ds), E_, A_ * float(ea), I_ * float(ei)])[0])
+    Vd = float(dense(q, p))
+    assert [float(x[1]) for x in body["sections"]] == [1.0, 1.0, 0.5, 0.5]
+    assert [float(x[2]) for x in body["sections"]] == [1.0, 1.0, 0.25, 0.25]
+    assert abs(V - Vd) <= 1e-10 * abs(Vd)
