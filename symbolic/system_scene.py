@@ -56,11 +56,13 @@ from .system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Outpu
 SYSTEM_TABLES = ("system", "body", "joint", "driver", "gravity", "load", "solver", "output")
 _ARRAYS = ("body", "joint", "driver", "load")
 _RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene and o.maneuvers is None}
+UNIFORM_KEYS = ("length", "density", "youngs_modulus", "area", "inertia")
+FE_KEYS = ("segments", "point_masses", "elements", "ef_elements", "folder")  # scene.py's [body]
+EF_ELEMENTS = 32  # ef elements of a body from finite-element data (scene.py's [body] default)
 KEYS = {
     "system": {"name", "description"},
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
-    "beam": {"name", "kind", "length", "density", "youngs_modulus", "area", "inertia", "model",
-             "markers"} | {"segments", "point_masses", "elements", "ef_elements", "folder"},
+    "beam": {"name", "kind", "model", "markers", *UNIFORM_KEYS, *FE_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
@@ -71,9 +73,6 @@ KEYS = {
     "solver": {k.split(".")[1] for k in _RUN_KEYS if k.startswith("solver.")},
     "output": {"file", "columns"} | {k.split(".")[1] for k in _RUN_KEYS if k.startswith("output.")},
 }
-UNIFORM_KEYS = ("length", "density", "youngs_modulus", "area", "inertia")
-FE_KEYS = ("segments", "point_masses", "elements", "ef_elements", "folder")  # scene.py's [body]
-EF_ELEMENTS = 32  # ef elements of a body from finite-element data (scene.py's [body] default)
 MANEUVERS = {"spin-up": ("spin_up", {"omega": "ws", "duration": "ts"}),
              "constant": ("constant", {"omega": "ws"})}
 # A cut joint whose two markers are farther apart at t = 0 than this fraction of the
