@@ -266,3 +266,15 @@ def test_ef_body_rigid_limit_momentum_and_element_table():
     assert [float(x[1]) for x in body["sections"]] == [1.0, 1.0, 0.5, 0.5]
     assert [float(x[2]) for x in body["sections"]] == [1.0, 1.0, 0.25, 0.25]
     assert abs(V - Vd) <= 1e-10 * abs(Vd)
+
+
+def test_uniform_ef_body_is_the_analytic_ef():
+    """`ef` with a uniform body (one segment, 2 elements: lengths, EA/EI ratios and node
+    positions through the body's element table) gives S1's analytic `ef` rows bit for bit."""
+    ef = '{ variant = "ef", elements = 2 }'
+    ref = _run(tomllib.loads(HUB.replace('model = "m3"', f"model = {ef}")))
+    assert system_from_dict(_hub_with_fe_beam(100, ef), "hub").body("beam").model.body.elements == 2
+    fe = _run(_hub_with_fe_beam(100, ef))
+    for c in ("theta_h", "omega_h", "v_tip", "M_A"):
+        assert np.array_equal(fe[c], ref[c]), c
+    assert np.abs(ref["v_tip"]).max() > 0.4
