@@ -338,9 +338,9 @@ def derive_system(system: System) -> SystemDerivation:
         if isinstance(part, EfPart):
             T_, Vg_, H_, V_el = part.energies()
             der.T += T_.xreplace(actual)
-            V_grav += Vg_.xreplace(actual) - mass.xreplace(part.psyms) * gvec.dot(pose.R)
+            V_grav += Vg_.xreplace(actual) - part.mass * gvec.dot(pose.R)
             der.momentum += H_.xreplace(actual)
-            _record_body(der, b.name, mass.xreplace(part.psyms), pose, A_,
+            _record_body(der, b.name, part.mass, pose, A_,
                          [-sp.diff(Vg_, gk).xreplace(actual) for gk in ph[5:]],
                          H_.xreplace(actual))
             der.elastic.append(V_el)
@@ -352,6 +352,7 @@ def derive_system(system: System) -> SystemDerivation:
         def body_expr(expr, tab=tab, part=part, actual=actual):
             return expr.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
 
+        mass = mass * tab.integrate(fl.weights["mu"])  # 1 for a uniform beam; a body's own
         der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
         V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
             - body_expr(mass) * gvec.dot(pose.R)

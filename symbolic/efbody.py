@@ -10,16 +10,18 @@ in frame components, with (V_x, V_y) = A^T R' and omega = phi' of the frame:
 The elastic energy stays unexpanded (a square root per Gauss point): sysgen makes one element
 kernel of it (V, gradient, Hessian by casadi AD, as fe.py does for the one-beam `ef`) and
 system.c assembles it per element; the summed V_elastic here is for inspection and tests.
+A body from finite-element data (the model's fedata.BeamBody) sets the nodes, each element's
+section relative to the root's (rho A, E A, E I ratios: the run-time p scales the whole body)
+and point masses at nodes, which add m/2 |V + r' + omega k x r|^2, -m g.r and their momentum.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import sympy as sp
 
 from .energy import A, E, I, L, rho
-from .errors import SpecError
 from .fe import elastic_element, hermite, le, xi
 
 _E = sp.Matrix(sp.symbols("x1 y1 dx1 dy1 x2 y2 dx2 dy2", real=True))
@@ -47,6 +49,10 @@ def generic_element():
     return T, Vg, H, V, eps, kappa, stretch
 
 
+def _exact(x: float) -> sp.Rational:
+    return sp.Rational(repr(float(x)))
+
+
 @dataclass
 class EfPart:
     beam: object
@@ -54,17 +60,49 @@ class EfPart:
     q: dict  # coordinate name -> symbol (fe.FESpec.coordinates)
     qd: dict
     psyms: dict  # global beam parameter symbol -> this body's
+    body: object = None  # fedata.BeamBody or None (uniform)
 
     @property
     def coords(self) -> list[str]:
         return list(self.q)
+
+    @cached_property
+    def fractions(self) -> list:
+        """Node positions as exact fractions of L."""
+        if self.body is None:
+            return [sp.Rational(k, self.n) for k in range(self.n + 1)]
+        return [_exact(x) / _exact(self.body.length) for x in self.body.nodes]
+
+    @cached_property
+    def ratios(self) -> list[tuple]:
+        """Per element (rho A, E A, E I) relative to the root section (exact rationals)."""
+        if self.body is None:
+            return [(1, 1, 1)] * self.n
+        r = self.body.reference
+        return [(_exact(s.rho) * _exact(s.A) / (_exact(r.rho) * _exact(r.A)),
+                 _exact(s.E) * _exact(s.A) / (_exact(r.E) * _exact(r.A)),
+                 _exact(s.E) * _exact(s.I) / (_exact(r.E) * _exact(r.I))) for s in self.body.sections]
+
+    @cached_property
+    def point_masses(self) -> list[tuple[int, sp.Rational]]:
+        """(node, mass) of the body's point masses (rotary inertia is refused in fe.FESpec)."""
+        if self.body is None:
+            return []
+        return [(self.body.node_index(m.x), _exact(m.mass)) for m in self.body.masses if m.mass]
+
+    @property
+    def mass(self) -> sp.Expr:
+        """The body's mass in this body's parameters."""
+        f = self.fractions
+        mu = sum(r[0] * (f[e + 1] - f[e]) for e, r in enumerate(self.ratios))
+        return (rho * A * L * mu + sum(m for _, m in self.point_masses)).xreplace(self.psyms)
 
     def nodes(self, sym) -> list[list]:
         """Absolute nodal coordinates (x, y, x_x, y_x) of every node in the frame."""
         Ls = L
         out = [[sp.Integer(0), sp.Integer(0), 1 + sym["dx0"], sp.Integer(0)]]
         for k in range(1, self.n + 1):
-            out.append([Ls * sp.Rational(k, self.n) + sym[f"ux{k}"], sym[f"uy{k}"],
+            out.append([Ls * self.fractions[k] + sym[f"ux{k}"], sym[f"uy{k}"],
                         1 + sym[f"dx{k}"], sym[f"dy{k}"]])
         return out
 
@@ -78,7 +116,13 @@ class EfPart:
         nodes, rates = self.nodes(self.q), self.rates()
         vals = nodes[e] + nodes[e + 1]
         dvals = rates[e] + rates[e + 1]
-        return dict(zip(_E, vals)) | dict(zip(_ED, dvals)) | {le: L / self.n}
+        return dict(zip(_E, vals)) | dict(zip(_ED, dvals)) | {le: L * (self.fractions[e + 1] - self.fractions[e])}
+
+    def _section(self, e: int) -> dict:
+        """The element's section in the generic symbols (the energies are linear in rho A, and
+        depend on E A and E I only)."""
+        mu, ea, ei = self.ratios[e]
+        return {} if self.body is None else {rho: rho * mu, A: A * ea, I: I * ei}
 
     def energies(self):
         """(T, V_g, H, V_elastic) summed over the elements, in placeholders OM, VX, ... and
@@ -87,21 +131,30 @@ class EfPart:
         T = Vg = H = Vel = sp.Integer(0)
         for e in range(self.n):
             sub = self._element_subs(e)
-            T += Tg.xreplace(sub)
-            Vg += Vgg.xreplace(sub)
-            H += Hg.xreplace(sub)
-            Vel += Vg_el.xreplace(sub)
+            mu = self.ratios[e][0]
+            T += mu * Tg.xreplace(sub)
+            Vg += mu * Vgg.xreplace(sub)
+            H += mu * Hg.xreplace(sub)
+            Vel += Vg_el.xreplace(sub).xreplace(self._section(e))
+        nodes, rates = self.nodes(self.q), self.rates()
+        for k, m in self.point_masses:
+            (x, y), (xd, yd) = nodes[k][:2], rates[k][:2]
+            ax, ay = VX + xd - OM * y, VY + yd + OM * x
+            T += m * (ax**2 + ay**2) / 2
+            Vg += -m * (GX * x + GY * y)
+            H += m * ((RX + x) * ay - (RY + y) * ax)
         return tuple(x.xreplace(self.psyms) for x in (sp.expand(T), sp.expand(Vg), sp.expand(H), Vel))
 
     def _locate(self, x: float) -> list[tuple[int, sp.Expr, float]]:
         """(element, xi, weight): at an interior node the two adjacent element ends, averaged."""
-        s_ = sp.nsimplify(x) / sp.nsimplify(self.beam.length) * self.n
-        e = int(sp.floor(s_))
-        if s_ == e and 0 < e < self.n:
+        at = sp.nsimplify(x) / sp.nsimplify(self.beam.length)
+        f = self.fractions
+        e = max(k for k in range(self.n) if f[k] <= at)
+        if at == f[e] and e > 0:
             return [(e - 1, sp.Integer(1), 0.5), (e, sp.Integer(0), 0.5)]
-        if e >= self.n:
+        if at >= f[self.n]:
             return [(self.n - 1, sp.Integer(1), 1.0)]
-        return [(e, s_ - e, 1.0)]
+        return [(e, (at - f[e]) / (f[e + 1] - f[e]), 1.0)]
 
     def position(self, x: float):
         """(r_x, r_y, slope angle) at x in the frame (positions are continuous: one element)."""
@@ -117,15 +170,12 @@ class EfPart:
         expr = E * A * eps * stretch if fn == "N" else E * I * kappa
         out = sp.Integer(0)
         for e, at, wt in self._locate(x):
-            out += wt * expr.xreplace({xi: at}).xreplace(self._element_subs(e))
+            out += wt * expr.xreplace({xi: at}).xreplace(self._element_subs(e)).xreplace(self._section(e))
         return out.xreplace(self.psyms)
 
 
 def ef_part(beam, psyms) -> EfPart:
     spec = beam.model.validate()
-    if spec.body is not None:
-        raise SpecError(f"body '{beam.name}': 'ef' with finite-element data is not supported in a "
-                        "system yet")
     q = {c: sp.Symbol(f"{beam.name}_{c}", real=True) for c in spec.coordinates}
     qd = {c: sp.Symbol(f"{beam.name}_{c}_d", real=True) for c in spec.coordinates}
-    return EfPart(beam, spec.elements, q, qd, psyms)
+    return EfPart(beam, spec.elements, q, qd, psyms, spec.body)

@@ -138,7 +138,9 @@ def _ef_element_kernel(der: SystemDerivation) -> list:
 def ef_elements(der: SystemDerivation) -> list[dict]:
     """Per ef body, what system.c needs to assemble its elements: the parameter indices of
     [L, E, A, I], the element count, and per element and entry (x1 y1 x1' y1' x2 ...) the
-    coordinate index (-1: none) and the value a*L + b added to it (fixed root, node x = kL/n)."""
+    coordinate index (-1: none) and the value a*L + b added to it (fixed root, node x = kL/n,
+    or the body's node); a body from finite-element data also gets, per element, its length
+    as a fraction of L and its E A and E I relative to the root section ("sections")."""
     qindex = {s: i for i, s in enumerate(der.q)}
     pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
     out = []
@@ -148,10 +150,14 @@ def ef_elements(der: SystemDerivation) -> list[dict]:
         n = part.n
         node = [[(-1, 0.0, 0.0), (-1, 0.0, 0.0), (qindex[part.q["dx0"]], 0.0, 1.0), (-1, 0.0, 0.0)]]
         for k in range(1, n + 1):
-            node.append([(qindex[part.q[f"ux{k}"]], k / n, 0.0), (qindex[part.q[f"uy{k}"]], 0.0, 0.0),
+            node.append([(qindex[part.q[f"ux{k}"]], float(part.fractions[k]), 0.0), (qindex[part.q[f"uy{k}"]], 0.0, 0.0),
                          (qindex[part.q[f"dx{k}"]], 0.0, 1.0), (qindex[part.q[f"dy{k}"]], 0.0, 0.0)])
         params = [pindex[part.psyms[s]] for s in (L, E, A, I)]
-        out.append({"name": part.beam.name, "n": n, "params": params,
+        f = part.fractions
+        sections = [] if part.body is None else [
+            (c_double(float(f[k + 1] - f[k])), c_double(float(ea)), c_double(float(ei)))
+            for k, (_, ea, ei) in enumerate(part.ratios)]
+        out.append({"name": part.beam.name, "n": n, "params": params, "sections": sections,
                     "elements": [[(i, c_double(a), c_double(b)) for i, a, b in node[k] + node[k + 1]]
                                  for k in range(n)]})
     return out

@@ -96,7 +96,10 @@ class RigidBody:
 
 @dataclass(frozen=True)
 class FlexibleBeam:
-    """A straight uniform beam along its frame's x axis, clamped at x = 0 in its floating frame.
+    """A straight beam along its frame's x axis, clamped at x = 0 in its floating frame: uniform
+    (section), or with the sections and point masses of its model's finite-element data
+    (model.body, a fedata.BeamBody; then length and section are the body's length and root
+    section, the run-time parameters that scale it).
 
     model: the deformation model, a spec.VariantSpec (mode set + strain model) or a fe.FESpec
     ('ef' elements); only its deformation fields are used (its manoeuvre and outputs are not).

@@ -9,7 +9,11 @@ scene (symbolic/scene.py), unchanged.
                 markers = { name = [x, y] }                             (body frame, m)
                 name, kind = "beam": length, density, youngs_modulus, area, inertia,
                 model = "m3" | { variant = "ef", elements = 8 } | { strain, axial, bending },
-                markers = { name = x }   (x along the beam, m; root and tip always exist)
+                markers = { name = x }   (x along the beam, m; root and tip always exist);
+                or, for a beam from finite-element data, instead of length ... inertia:
+                segments + point_masses, or folder (relative to the scene file), with
+                elements and ef_elements: the one-beam scene's [body] keys, read by the same
+                reader (fedata.scene_body, feimport.scene_folder)
     [[joint]]   name, kind = revolute | prismatic | clamp, parent = "body.marker" | "ground"
                 (then point = [x, y]), child = "body.marker", axis = [ax, ay] (prismatic, in
                 the parent's frame), offset (rad, child frame angle relative to the parent's),
@@ -52,11 +56,13 @@ from .system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Outpu
 SYSTEM_TABLES = ("system", "body", "joint", "driver", "gravity", "load", "solver", "output")
 _ARRAYS = ("body", "joint", "driver", "load")
 _RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene and o.maneuvers is None}
+UNIFORM_KEYS = ("length", "density", "youngs_modulus", "area", "inertia")
+FE_KEYS = ("segments", "point_masses", "elements", "ef_elements", "folder")  # scene.py's [body]
+EF_ELEMENTS = 32  # ef elements of a body from finite-element data (scene.py's [body] default)
 KEYS = {
     "system": {"name", "description"},
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
-    "beam": {"name", "kind", "length", "density", "youngs_modulus", "area", "inertia", "model",
-             "markers"},
+    "beam": {"name", "kind", "model", "markers", *UNIFORM_KEYS, *FE_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
@@ -154,9 +160,11 @@ def _label(kind: str, k: int, tab: dict) -> str:
     return f"[[{kind}]] '{name}'" if isinstance(name, str) else f"[[{kind}]] #{k + 1}"
 
 
-def system_from_data(data: dict, prefix: str = "", name: str = "system", model: str | None = None):
+def system_from_data(data: dict, prefix: str = "", name: str = "system", model: str | None = None,
+                     base: Path = Path(".")):
     """(System, given run options, output file or None) from parsed scene data. prefix names
-    the source in every message ("scenes/hub.toml: "); model replaces every beam's model."""
+    the source in every message ("scenes/hub.toml: "); model replaces every beam's model; base:
+    the directory a body's folder is relative to (the scene file's)."""
     r = _Items(prefix)
     unknown = sorted(set(data) - set(SYSTEM_TABLES))
     if unknown:
@@ -169,7 +177,7 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     system_tab = data.get("system", {})
     name = r.string("[system]", system_tab, "name", default=name)
     description = r.string("[system]", system_tab, "description", default="")
-    bodies = tuple(_body(r, k, tab, model) for k, tab in enumerate(_entries(r, data, "body")))
+    bodies = tuple(_body(r, k, tab, model, base) for k, tab in enumerate(_entries(r, data, "body")))
     joints = tuple(_joint(r, k, tab) for k, tab in enumerate(_entries(r, data, "joint")))
     drivers = tuple(_driver(r, k, tab) for k, tab in enumerate(_entries(r, data, "driver")))
     kinds = {j.name: j.kind for j in joints}
@@ -209,7 +217,7 @@ def _markers(r, where, tab, beam: bool) -> tuple[Marker, ...]:
     return tuple(out)
 
 
-def _body(r: _Items, k: int, tab: dict, model: str | None):
+def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path):
     where = _label("body", k, tab)
     kind = tab.get("kind")
     if kind not in ("rigid", "beam"):
@@ -219,12 +227,68 @@ def _body(r: _Items, k: int, tab: dict, model: str | None):
     if kind == "rigid":
         return RigidBody(name, r.number(where, tab, "mass"), r.number(where, tab, "inertia"),
                          r.pair(where, tab, "com", default=(0.0, 0.0)), _markers(r, where, tab, False))
-    section = Section(*(r.number(where, tab, key, positive=True)
-                        for key in ("density", "youngs_modulus", "area", "inertia")))
-    return FlexibleBeam(name, r.number(where, tab, "length", positive=True), section,
-                        _model(r, f"{where} model", tab.get("model") if model is None else model,
-                               "--model" if model is not None else None),
-                        _markers(r, where, tab, True))
+    spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
+                  "--model" if model is not None else None)
+    markers = _markers(r, where, tab, True)
+    if "segments" not in tab and "folder" not in tab:
+        extra = [key for key in FE_KEYS if key in tab]
+        if extra:
+            r.fail(f"{where} {extra[0]}", "applies to a beam from finite-element data only (give "
+                   "segments or folder instead of length, density, youngs_modulus, area, inertia)")
+        section = Section(*(r.number(where, tab, key, positive=True)
+                            for key in ("density", "youngs_modulus", "area", "inertia")))
+        return FlexibleBeam(name, r.number(where, tab, "length", positive=True), section, spec, markers)
+    uniform = [key for key in UNIFORM_KEYS if key in tab]
+    if uniform:
+        r.fail(f"{where} {uniform[0]}", "give either length, density, youngs_modulus, area, "
+               "inertia (a uniform beam) or segments / folder (finite-element data), not both")
+    body = _fe_body(r, where, tab, base)
+    ref = body.reference
+    if spec.kind == "fe":  # ef: the body remeshed, as the one-beam scene's --model ef
+        given = tab.get("model") if model is None else None
+        n = given["elements"] if isinstance(given, dict) and "elements" in given else \
+            tab.get("ef_elements", EF_ELEMENTS)
+        mesh = body.remeshed(n)
+        spec = replace(spec, body=mesh, elements=mesh.elements)
+    else:
+        spec = replace(spec, body=body)
+    try:
+        spec.validate()
+    except SpecError as exc:
+        r.fail(f"{where} model", str(exc))
+    return FlexibleBeam(name, body.length, Section(ref.rho, ref.E, ref.A, ref.I), spec, markers)
+
+
+class _BodyData:
+    """A [[body]] entry seen as the one-beam scene's [body] table, so that its finite-element
+    data are read by the same reader (fedata.scene_body, feimport.scene_folder) with the same
+    checks; their messages name the entry instead of [body]."""
+
+    def __init__(self, r: _Items, where: str, tab: dict, base: Path):
+        self.r, self.where = r, where
+        self.data = {"body": {key: tab[key] for key in FE_KEYS if key in tab}}
+        self.path = base / "scene.toml"  # the reader takes folders relative to path.parent
+
+    def fail(self, where: str, msg: str):
+        self.r.fail(where.replace("[body]", self.where, 1), msg)
+
+    def string(self, table: str, key: str) -> str:
+        return self.r.string(f"{self.where}", self.data[table], key)
+
+
+def _fe_body(r: _Items, where: str, tab: dict, base: Path):
+    from .fedata import scene_body
+    from .feimport import scene_folder
+
+    reader = _BodyData(r, where, tab, base)
+    if "folder" not in tab:
+        return scene_body(reader)
+    try:
+        return scene_folder(reader)
+    except _Located:
+        raise
+    except SpecError as exc:  # the folder's own files: the message names the file
+        r.fail(f"{where} folder", str(exc))
 
 
 def _model(r: _Items, where: str, given, flag: str | None):
@@ -510,7 +574,7 @@ def load_system_scene(path: Path, data: dict, name: str, model: str | None = Non
     prefix = f"{path}: "
     if model is not None and (not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model)):
         raise SpecError(f"{prefix}--model: '{model}' is not a variant name")
-    system, given, output_file = system_from_data(data, prefix, name, model)
+    system, given, output_file = system_from_data(data, prefix, name, model, Path(path).parent)
     if model is not None:
         system = _model_outputs(system)
     options = validate(given, Where("scene", path))
@@ -534,9 +598,11 @@ def _model_outputs(system: System) -> System:
     return replace(system, bodies=bodies)
 
 
-def system_from_dict(data: dict, name: str = "system", t_end: float | None = None) -> System:
-    """The Python API: the same data as a scene (a dict of lists/tables), the same checks."""
-    system, given, _ = system_from_data(data, "system data: ", name)
+def system_from_dict(data: dict, name: str = "system", t_end: float | None = None,
+                     base: Path = Path(".")) -> System:
+    """The Python API: the same data as a scene (a dict of lists/tables), the same checks; a
+    body's folder is relative to base."""
+    system, given, _ = system_from_data(data, "system data: ", name, base=Path(base))
     return check_system(system, t_end if t_end is not None else validate(given).t_end)
 
 
@@ -555,6 +621,9 @@ def summary(system: System) -> str:
             s = b.section
             what = (f"beam L = {b.length:g} m, rho {s.rho:g}, E {s.E:g}, A {s.A:g}, I {s.I:g}; "
                     f"model {b.model.name}")
+            if getattr(b.model, "body", None) is not None:
+                what = what.replace(", rho", ", root section rho").replace(
+                    "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
         else:
             what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
         lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")
