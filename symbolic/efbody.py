@@ -10,6 +10,9 @@ in frame components, with (V_x, V_y) = A^T R' and omega = phi' of the frame:
 The elastic energy stays unexpanded (a square root per Gauss point): sysgen makes one element
 kernel of it (V, gradient, Hessian by casadi AD, as fe.py does for the one-beam `ef`) and
 system.c assembles it per element; the summed V_elastic here is for inspection and tests.
+T^e is not summed in sympy either: sysgen instantiates the generic T^e per element in casadi
+with the frame's actual (omega, V) and takes the body's Lagrange terms by casadi AD (expanding
+and differentiating the summed T in sympy took most of an ef system's build).
 """
 from __future__ import annotations
 
@@ -34,15 +37,21 @@ def _shape(e):
     return rx, ry
 
 
+def _integral01(expr):
+    """int_0^1 expr dxi of a polynomial in xi, term by term (exact, as sp.integrate, faster)."""
+    poly = sp.Poly(sp.expand(expr), xi)
+    return sp.Add(*[c / (k + 1) for (k,), c in poly.terms()])
+
+
 @lru_cache(maxsize=None)
 def generic_element():
     """(T, V_g, H, V_elastic, eps, kappa, stretch) of one element in the generic symbols."""
     rx, ry = _shape(_E)
     vx, vy = _shape(_ED)
     ax, ay = VX + vx - OM * ry, VY + vy + OM * rx
-    T = sp.expand(le * sp.integrate(sp.expand(rho * A / 2 * (ax**2 + ay**2)), (xi, 0, 1)))
-    Vg = sp.expand(le * sp.integrate(sp.expand(-rho * A * (GX * rx + GY * ry)), (xi, 0, 1)))
-    H = sp.expand(le * sp.integrate(sp.expand(rho * A * ((RX + rx) * ay - (RY + ry) * ax)), (xi, 0, 1)))
+    T = sp.expand(le * _integral01(rho * A / 2 * (ax**2 + ay**2)))
+    Vg = sp.expand(le * _integral01(-rho * A * (GX * rx + GY * ry)))
+    H = sp.expand(le * _integral01(rho * A * ((RX + rx) * ay - (RY + ry) * ax)))
     eps, kappa, stretch, V = elastic_element(rx, ry)
     return T, Vg, H, V, eps, kappa, stretch
 
@@ -81,17 +90,20 @@ class EfPart:
         return dict(zip(_E, vals)) | dict(zip(_ED, dvals)) | {le: L / self.n}
 
     def energies(self):
-        """(T, V_g, H, V_elastic) summed over the elements, in placeholders OM, VX, ... and
-        this body's parameters."""
-        Tg, Vgg, Hg, Vg_el, *_ = generic_element()
-        T = Vg = H = Vel = sp.Integer(0)
+        """(V_g, H) summed over the elements, in placeholders OM, VX, ... and this body's
+        parameters (T: sysgen.ef_kinetic_energy; V_elastic: elastic_energy)."""
+        _, Vgg, Hg, *_ = generic_element()
+        Vg = H = sp.Integer(0)
         for e in range(self.n):
             sub = self._element_subs(e)
-            T += Tg.xreplace(sub)
             Vg += Vgg.xreplace(sub)
             H += Hg.xreplace(sub)
-            Vel += Vg_el.xreplace(sub)
-        return tuple(x.xreplace(self.psyms) for x in (sp.expand(T), sp.expand(Vg), sp.expand(H), Vel))
+        return tuple(x.xreplace(self.psyms) for x in (sp.expand(Vg), sp.expand(H)))
+
+    def elastic_energy(self):
+        """The summed elastic energy (the V output and tests; the kernels use the element's)."""
+        V_el = generic_element()[3]
+        return sp.Add(*[V_el.xreplace(self._element_subs(e)) for e in range(self.n)]).xreplace(self.psyms)
 
     def _locate(self, x: float) -> list[tuple[int, sp.Expr, float]]:
         """(element, xi, weight): at an interior node the two adjacent element ends, averaged."""
