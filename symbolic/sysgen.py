@@ -6,6 +6,9 @@ Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = para
   ef_elastic(e, pe) -> V, g, H   one ANCF element's elastic energy (ef_elastic_grad: V, g):
                                  system.c adds it to force, residual_jac and energy per element
   outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
+An ef body's kinetic energy is not in the sympy derivation: ef_kinetic_energy instantiates the
+generic element's T per element in casadi and build_system_kernels adds its Lagrange terms (AD)
+to mass, force, residual_jac, energy and the outputs that read T.
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
 and templates) and this module, assemble.py, efbody.py, system.py and templates/system/.
