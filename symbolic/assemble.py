@@ -10,8 +10,9 @@ joint's coordinate; a flexible beam's frame is its root's tangent frame. Energie
   modal beam   T = int 1/2 rho A |V + r' + phi' k x r|^2 dx in frame components (energy.py's
                kinetic_density with the frame's actual motion), V_g = -m g.R - int rho A g.A r dx,
                strain terms and their `wrt` groups exactly as the variant's strain model.
-  ef beam      the same per ANCF element (efbody.py); its elastic energy is differentiated by
-               casadi AD in sysgen.py.
+  ef beam      the same per ANCF element (efbody.py); its kinetic and elastic energies are
+               differentiated by casadi AD in sysgen.py (der.T, M and f here leave them out;
+               outputs read them through the placeholders EF_T and ef_guided_force).
 Loads: gravity, motors, point forces, torques, spring-dampers. Cut joints give constraint rows
 Phi(q, theta) (cut_joint_rows); sysgen.py differentiates them.
 Lagrange with guided coordinates theta_k (p = dT/dq'):
@@ -100,6 +101,25 @@ class FlexPart:
 
 
 @dataclass
+class EfKinetic:
+    """An ef body's frame motion in frame components (omega, V = A^T R'), which sysgen feeds
+    to the generic element's kinetic energy (efbody.generic_element) per element."""
+
+    body: str
+    omega: sp.Expr
+    V: tuple[sp.Expr, sp.Expr]
+
+
+# Placeholders in output expressions for what sysgen computes in casadi from the ef bodies'
+# kinetic energy T_ef: T_ef itself, and per guided joint d/dt dT_ef/dtheta' - dT_ef/dtheta.
+EF_T = sp.Symbol("T_ef_", real=True)
+
+
+def ef_guided_force(joint: str) -> sp.Symbol:
+    return sp.Symbol(f"Q_ef_{joint}_", real=True)
+
+
+@dataclass
 class SystemDerivation:
     system: System
     tree: object
@@ -121,8 +141,9 @@ class SystemDerivation:
     outputs: dict[str, sp.Expr] = field(default_factory=dict)
     constraints: list[tuple[str, sp.Expr]] = field(default_factory=list)  # Phi(q, theta) rows
     lam: sp.Matrix = None  # their multipliers (outputs read them)
-    elastic: list = field(default_factory=list)  # ef bodies' elastic energies, unexpanded
-                                                 # (sysgen: Q = -dV/dq by casadi AD)
+    elastic: list = field(default_factory=list)  # ef bodies (EfPart) with elastic energy
+                                                 # (sysgen: per element, by casadi AD)
+    ef_kinetic: list[EfKinetic] = field(default_factory=list)  # not in T, M, f (sysgen)
     V_grav: sp.Expr = sp.Integer(0)
     # per body, ground frame: mass, first moment m r_G, angular momentum about the origin
     # (reactions of tree joints are the subtree's momentum balance)
@@ -157,7 +178,7 @@ class SystemDerivation:
 
     def energies(self) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
         """(T, V, h = T2 - T0 + V): h is conserved when nothing is guided or motored and every
-        term is conservative (then h = T + V)."""
+        term is conservative (then h = T + V). Without the ef bodies' T (sysgen adds it)."""
         T0 = self.T.xreplace({x: 0 for x in self.qd})
         T2 = sp.expand((self.qd.T * self.M * self.qd)[0, 0] / 2)
         return self.T, self.V, T2 - T0 + self.V
@@ -336,15 +357,16 @@ def derive_system(system: System) -> SystemDerivation:
                   ph[5]: gloc[0], ph[6]: gloc[1]}
         mass = BEAM_PARAMS[0].symbol * BEAM_PARAMS[2].symbol * BEAM_PARAMS[4].symbol
         if isinstance(part, EfPart):
-            T_, Vg_, H_, V_el = part.energies()
-            der.T += T_.xreplace(actual)
+            Vg_, H_ = part.energies()
+            der.ef_kinetic.append(EfKinetic(b.name, omega, (Vloc[0], Vloc[1])))
+            der.T += part.point_mass_kinetic().xreplace(actual)  # elements' T: sysgen, by AD
             V_grav += Vg_.xreplace(actual) - part.mass * gvec.dot(pose.R)
             der.momentum += H_.xreplace(actual)
             _record_body(der, b.name, part.mass, pose, A_,
                          [-sp.diff(Vg_, gk).xreplace(actual) for gk in ph[5:]],
                          H_.xreplace(actual))
-            der.elastic.append(V_el)
-            der.terms.append((b.name, "ancf_elastic", ("node",), V_el, None))
+            der.elastic.append(part)
+            der.terms.append((b.name, "ancf_elastic", ("node",), None, None))
             continue
         frame = FrameMotion(ph[0], ph[1], ph[2])
         tab, fl = part.table, part.fields
@@ -487,6 +509,8 @@ def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
     th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
     p = sp.diff(der.T, thd)
     tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
+    if der.ef_kinetic:
+        tau += ef_guided_force(driver.joint)
     for (_, phi), lam in zip(der.constraints, der.lam):
         tau += sp.diff(phi, th) * lam
     return sp.expand(tau)
@@ -539,9 +563,9 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
     if fn in ("x", "y"):
         return marker_pose(der, args[0])[0][0 if fn == "x" else 1]
     if fn == "T":
-        return der.T
+        return der.T + (EF_T if der.ef_kinetic else 0)
     if fn == "V":
-        return der.V + sp.Add(*der.elastic)
+        return der.V + sp.Add(*[part.elastic_energy() for part in der.elastic])
     if fn == "momentum":
         return der.momentum
     if fn == "torque":

@@ -7,6 +7,7 @@ compiles cleanly with -Wall -Wextra -Werror -pedantic and needs no work arrays.
 """
 from __future__ import annotations
 
+import math
 from collections import Counter
 from dataclasses import dataclass
 
@@ -32,6 +33,9 @@ _UNARY = {"NEG": "-{0}", "SQ": "{0} * {0}", "TWICE": "2.0 * {0}", "INV": "1.0 / 
 # Categories for operation counts (what a reader wants to compare between variants).
 _CATEGORY = {"ADD": "add", "SUB": "add", "NEG": "add", "MUL": "mul", "SQ": "mul", "TWICE": "mul",
              "DIV": "div", "INV": "div"}
+
+
+ZERO_LOOP = 16  # more zero entries in an output than this: one loop writes them
 
 
 @dataclass
@@ -70,46 +74,68 @@ def emit(kernel: Kernel, prefix: str) -> EmittedKernel:
         rows, cols = sp_.get_triplet()
         out_index.append([r * port.cols + c for r, c in zip(rows, cols)])
 
-    lines, used_inputs, registers = [], set(), set()
+    lines, used_inputs = [], set()  # lines: (C statement, register it assigns or None)
+    zero_regs: dict[int, int] = {}  # register holding the constant 0 -> line of that assignment
+    read: set[int] = set()  # lines of zero assignments that something reads
+    written = [set() for _ in kernel.outputs]  # output entries stored from a nonzero register
     ops: Counter = Counter()
     reg = lambda i: f"a{i}"
+
+    def assign(r, rhs, *reads):
+        for x in reads:
+            if x in zero_regs:
+                read.add(zero_regs[x])
+        zero_regs.pop(r, None)
+        lines.append((f"{reg(r)} = {rhs};", r))
+
     for k in range(fn.n_instructions()):
         op = _OPS[fn.instruction_id(k)]
         ins, outs = fn.instruction_input(k), fn.instruction_output(k)
         if op == "INPUT":
             port = kernel.inputs[ins[0]]
             used_inputs.add(port.name)
-            lines.append(f"{reg(outs[0])} = {port.name}[{_dense_in(fn, ins[0], ins[1], port)}];")
-            registers.add(outs[0])
+            assign(outs[0], f"{port.name}[{_dense_in(fn, ins[0], ins[1], port)}]")
         elif op == "OUTPUT":
+            if ins[0] in zero_regs:  # a zero entry: written with the zeros below
+                continue
             port = kernel.outputs[outs[0]]
-            lines.append(f"{port.name}[{out_index[outs[0]][outs[1]]}] = {reg(ins[0])};")
+            written[outs[0]].add(out_index[outs[0]][outs[1]])
+            lines.append((f"{port.name}[{out_index[outs[0]][outs[1]]}] = {reg(ins[0])};", None))
         elif op == "CONST":
-            lines.append(f"{reg(outs[0])} = {c_double(fn.instruction_constant(k))};")
-            registers.add(outs[0])
+            value = fn.instruction_constant(k)
+            assign(outs[0], c_double(value))
+            if value == 0.0 and math.copysign(1.0, value) > 0:  # +0.0 (-0.0 keeps its sign)
+                zero_regs[outs[0]] = len(lines) - 1
         elif op in _BINARY:
-            lines.append(f"{reg(outs[0])} = {_BINARY[op].format(reg(ins[0]), reg(ins[1]))};")
-            registers.add(outs[0])
+            assign(outs[0], _BINARY[op].format(reg(ins[0]), reg(ins[1])), ins[0], ins[1])
             ops[_CATEGORY.get(op, "other")] += 1
         elif op in _UNARY:
-            lines.append(f"{reg(outs[0])} = {_UNARY[op].format(reg(ins[0]))};")
-            registers.add(outs[0])
+            assign(outs[0], _UNARY[op].format(reg(ins[0])), ins[0])
             if op != "ASSIGN":
                 ops[_CATEGORY.get(op, "fun")] += 1
         else:
             raise ValueError(f"kernel {kernel.name}: casadi operation {op} has no C printer")
+    # a zero constant only stored to outputs is not needed (and would be an unused variable)
+    unread = {i for i, (text, r) in enumerate(lines)
+              if r is not None and text == f"{reg(r)} = 0.0;" and i not in read}
+    lines = [x for i, x in enumerate(lines) if i not in unread]
+    registers = {r for _, r in lines if r is not None}
 
     body = []
     for port in kernel.inputs:
         if port.name not in used_inputs:
             body.append(f"(void){port.name};  /* not needed by this variant */")
+    # Zero entries first, by a loop when there are many: thousands of separate zero stores
+    # (dense Jacobians of ef systems) cost gcc most of its time (alias analysis of stores).
     for k, port in enumerate(kernel.outputs):
-        nonzero = set(out_index[k])
-        zeros = [i for i in range(port.size) if i not in nonzero]
-        body.extend(f"{port.name}[{i}] = 0.0;" for i in zeros)
+        zeros = [i for i in range(port.size) if i not in written[k]]
+        if len(zeros) > ZERO_LOOP:
+            body.append(f"for (int i = 0; i < {port.size}; ++i) {port.name}[i] = 0.0;")
+        else:
+            body.extend(f"{port.name}[{i}] = 0.0;" for i in zeros)
     if registers:
         body.append("double " + ", ".join(reg(i) for i in sorted(registers)) + ";")
-    body.extend(lines)
+    body.extend(text for text, _ in lines)
     return EmittedKernel(kernel, c_name, signature, "\n".join("  " + b for b in body),
                          {c: ops.get(c, 0) for c in ("add", "mul", "div", "fun", "other")},
                          frozenset(used_inputs))

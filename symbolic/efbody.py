@@ -13,6 +13,9 @@ system.c assembles it per element; the summed V_elastic here is for inspection a
 A body from finite-element data (the model's fedata.BeamBody) sets the nodes, each element's
 section relative to the root's (rho A, E A, E I ratios: the run-time p scales the whole body)
 and point masses at nodes, which add m/2 |V + r' + omega k x r|^2, -m g.r and their momentum.
+T^e is not summed in sympy either: sysgen instantiates the generic T^e per element in casadi
+with the frame's actual (omega, V) and takes the body's Lagrange terms by casadi AD (expanding
+and differentiating the summed T in sympy took most of an ef system's build).
 """
 from __future__ import annotations
 
@@ -36,15 +39,21 @@ def _shape(e):
     return rx, ry
 
 
+def _integral01(expr):
+    """int_0^1 expr dxi of a polynomial in xi, term by term (exact, as sp.integrate, faster)."""
+    poly = sp.Poly(sp.expand(expr), xi)
+    return sp.Add(*[c / (k + 1) for (k,), c in poly.terms()])
+
+
 @lru_cache(maxsize=None)
 def generic_element():
     """(T, V_g, H, V_elastic, eps, kappa, stretch) of one element in the generic symbols."""
     rx, ry = _shape(_E)
     vx, vy = _shape(_ED)
     ax, ay = VX + vx - OM * ry, VY + vy + OM * rx
-    T = sp.expand(le * sp.integrate(sp.expand(rho * A / 2 * (ax**2 + ay**2)), (xi, 0, 1)))
-    Vg = sp.expand(le * sp.integrate(sp.expand(-rho * A * (GX * rx + GY * ry)), (xi, 0, 1)))
-    H = sp.expand(le * sp.integrate(sp.expand(rho * A * ((RX + rx) * ay - (RY + ry) * ax)), (xi, 0, 1)))
+    T = sp.expand(le * _integral01(rho * A / 2 * (ax**2 + ay**2)))
+    Vg = sp.expand(le * _integral01(-rho * A * (GX * rx + GY * ry)))
+    H = sp.expand(le * _integral01(rho * A * ((RX + rx) * ay - (RY + ry) * ax)))
     eps, kappa, stretch, V = elastic_element(rx, ry)
     return T, Vg, H, V, eps, kappa, stretch
 
@@ -125,25 +134,39 @@ class EfPart:
         return {} if self.body is None else {rho: rho * mu, A: A * ea, I: I * ei}
 
     def energies(self):
-        """(T, V_g, H, V_elastic) summed over the elements, in placeholders OM, VX, ... and
-        this body's parameters."""
-        Tg, Vgg, Hg, Vg_el, *_ = generic_element()
-        T = Vg = H = Vel = sp.Integer(0)
+        """(V_g, H) summed over the elements and point masses, in placeholders OM, VX, ... and
+        this body's parameters (T: sysgen.ef_kinetic_energy plus point_mass_kinetic;
+        V_elastic: elastic_energy)."""
+        _, Vgg, Hg, *_ = generic_element()
+        Vg = H = sp.Integer(0)
         for e in range(self.n):
             sub = self._element_subs(e)
             mu = self.ratios[e][0]
-            T += mu * Tg.xreplace(sub)
             Vg += mu * Vgg.xreplace(sub)
             H += mu * Hg.xreplace(sub)
-            Vel += Vg_el.xreplace(sub).xreplace(self._section(e))
+        for m, (x, y), (ax, ay) in self._point_mass_motion():
+            Vg += -m * (GX * x + GY * y)
+            H += m * ((RX + x) * ay - (RY + y) * ax)
+        return tuple(x.xreplace(self.psyms) for x in (sp.expand(Vg), sp.expand(H)))
+
+    def _point_mass_motion(self):
+        """(m, position, velocity) of each point mass in frame components (placeholders)."""
         nodes, rates = self.nodes(self.q), self.rates()
         for k, m in self.point_masses:
             (x, y), (xd, yd) = nodes[k][:2], rates[k][:2]
-            ax, ay = VX + xd - OM * y, VY + yd + OM * x
-            T += m * (ax**2 + ay**2) / 2
-            Vg += -m * (GX * x + GY * y)
-            H += m * ((RX + x) * ay - (RY + y) * ax)
-        return tuple(x.xreplace(self.psyms) for x in (sp.expand(T), sp.expand(Vg), sp.expand(H), Vel))
+            yield m, (x, y), (VX + xd - OM * y, VY + yd + OM * x)
+
+    def point_mass_kinetic(self) -> sp.Expr:
+        """The point masses' kinetic energy (placeholders; 0 for a uniform beam)."""
+        T = sum((m * (ax**2 + ay**2) / 2 for m, _, (ax, ay) in self._point_mass_motion()),
+                sp.Integer(0))
+        return sp.expand(T).xreplace(self.psyms)
+
+    def elastic_energy(self):
+        """The summed elastic energy (the V output and tests; the kernels use the element's)."""
+        V_el = generic_element()[3]
+        return sp.Add(*[V_el.xreplace(self._element_subs(e)).xreplace(self._section(e))
+                        for e in range(self.n)]).xreplace(self.psyms)
 
     def _locate(self, x: float) -> list[tuple[int, sp.Expr, float]]:
         """(element, xi, weight): at an interior node the two adjacent element ends, averaged."""

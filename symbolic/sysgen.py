@@ -6,6 +6,9 @@ Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = para
   ef_elastic(e, pe) -> V, g, H   one ANCF element's elastic energy (ef_elastic_grad: V, g):
                                  system.c adds it to force, residual_jac and energy per element
   outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
+An ef body's kinetic energy is not in the sympy derivation: ef_kinetic_energy instantiates the
+generic element's T per element in casadi and build_system_kernels adds its Lagrange terms (AD)
+to mass, force, residual_jac, energy and the outputs that read T.
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
 and templates) and this module, assemble.py, efbody.py, system.py and templates/system/.
@@ -19,14 +22,14 @@ from pathlib import Path
 import casadi as ca
 import sympy as sp
 
-from .assemble import SystemDerivation, derive_system
+from .assemble import EF_T, SystemDerivation, derive_system, ef_guided_force
 from .build import Built, build
 from .cemit import c_double, emit
-from .efbody import _E, EfPart, generic_element
-from .energy import A, E, I, L
+from .efbody import _E, _ED, OM, VX, VY, EfPart, generic_element
+from .energy import A, E, I, L, rho
 from .fe import le
 from .generate import MANIFEST, _environment, write_folder
-from .kernels import SympyToCasadi, _matrix_sx, make_kernels
+from .kernels import SympyToCasadi, _matrix_sx, group_by_parameters, make_kernels
 from .maneuver import t as t_sym
 from .paths import PACKAGE_DIR, cache_dir, file_lock, templates_dir
 from .system import System, length_scale, system_to_dict
@@ -62,30 +65,47 @@ def build_system_kernels(der: SystemDerivation) -> list:
             symbols[syms[i]], priority[syms[i]] = x[key][i], 2
     tr = SympyToCasadi(symbols, priority)
     psyms = [sym for _, sym, _ in der.params]
+    q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
+    # d depends on time only through the guided theta_k: d' = [1, then theta_k', theta_k'', 0
+    # per guided joint] (what is differentiated along the motion does not read theta_k'')
+    ddot = [ca.SX(1.0)]
+    for k in range(len(der.guided)):
+        ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
+    ddot = ca.vertcat(*ddot)
     M = _matrix_sx(tr, der.M, psyms)
     f = _matrix_sx(tr, der.f, psyms)
-    # outputs and ef elastic energies hold square roots and atan2: translated as they are
-    y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
     T_, V_, h_ = der.energies()
     # ef bodies' elastic energy is not in these kernels: system.c adds it per element with the
     # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
     en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
+    if der.ef_kinetic:
+        # Lagrange on the ef bodies' kinetic energy by AD: p = dT/dq', M = dp/dq',
+        # f = dT/dq - dp/dq q' - dp/dd d'
+        T_ef = ef_kinetic_energy(der, tr, x)
+        p_ef = ca.gradient(T_ef, qd)
+        M_ef = ca.jacobian(p_ef, qd)
+        M += M_ef
+        f += ca.gradient(T_ef, q) - ca.mtimes(ca.jacobian(p_ef, q), qd) - ca.mtimes(ca.jacobian(p_ef, d), ddot)
+        T0_ef = ca.substitute(T_ef, qd, ca.SX.zeros(qd.shape))
+        en += ca.vertcat(T_ef, 0, ca.mtimes(qd.T, ca.mtimes(M_ef, qd)) / 2 - T0_ef)
+        tr.symbols[EF_T] = T_ef
+        for k, g in enumerate(der.guided):  # d/dt dT_ef/dtheta' - dT_ef/dtheta (torque outputs)
+            p_th = ca.jacobian(T_ef, d[2 + 3 * k])
+            tr.symbols[ef_guided_force(g.joint)] = (
+                ca.mtimes(ca.jacobian(p_th, q), qd) + ca.mtimes(ca.jacobian(p_th, qd), qdd)
+                + ca.mtimes(ca.jacobian(p_th, d), ddot) - ca.jacobian(T_ef, d[1 + 3 * k]))
+    # outputs and ef elastic energies hold square roots and atan2: translated as they are
+    y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
     dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
     dtr = SympyToCasadi(dsyms, {})
     drive = [x["t"]]
     for g in der.guided:
         drive += [dtr(g.theta), dtr(sp.diff(g.theta, t_sym)), dtr(sp.diff(g.theta, t_sym, 2))]
     r = ca.mtimes(M, x["qdd"]) - f
-    q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
     constraint_kernels = []
     if der.constraints:
-        # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d', with
-        # d' = [1, then theta_k', theta_k'', 0 per guided joint] (Phi does not read theta_k')
+        # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d'
         phi = _matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
-        ddot = [ca.SX(1.0)]
-        for k in range(len(der.guided)):
-            ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
-        ddot = ca.vertcat(*ddot)
         phi_q = ca.jacobian(phi, q)
         phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
         phi_dot = ca.mtimes(phi_q, qd) + phi_t
@@ -135,6 +155,38 @@ def _ef_element_kernel(der: SystemDerivation) -> list:
              [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
 
 
+def ef_kinetic_energy(der: SystemDerivation, tr: SympyToCasadi, x: dict) -> ca.SX:
+    """The ef bodies' kinetic energy: efbody's generic element T^e(e, e'; omega, V; le, rho, A),
+    one casadi function instantiated per element with its nodal values and rates (the entries
+    of ef_elements) and the frame's actual omega and V."""
+    e, ed, fr, pe = ca.SX.sym("e", 8), ca.SX.sym("ed", 8), ca.SX.sym("fr", 3), ca.SX.sym("pe", 3)
+    symbols = ({s: e[i] for i, s in enumerate(_E)} | {s: ed[i] for i, s in enumerate(_ED)}
+               | {OM: fr[0], VX: fr[1], VY: fr[2], le: pe[0], rho: pe[1], A: pe[2]})
+    priority = {s: 2 for s in list(_E) + list(_ED)} | {OM: 1, VX: 1, VY: 1, le: 0, rho: 0, A: 0}
+    T_e = SympyToCasadi(symbols, priority)(
+        group_by_parameters(generic_element()[0], [le, rho, A]))
+    element = ca.Function("ef_kinetic", [e, ed, fr, pe], [T_e])
+    frames = {k.body: k for k in der.ef_kinetic}
+    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
+    q, qd, p = x["q"], x["qd"], x["p"]
+    T = ca.SX(0.0)
+    for body in ef_elements(der):
+        k = frames[body["name"]]
+        L_, A_ = p[body["params"][0]], p[body["params"][2]]
+        rho_ = p[pindex[der.flex[body["name"]].psyms[rho]]]
+        motion = ca.vertcat(tr(k.omega), tr(k.V[0]), tr(k.V[1]))
+        part = der.flex[body["name"]]
+        f = part.fractions
+        for e, el in enumerate(body["elements"]):
+            # a body from finite-element data: the element's length and rho A relative to the root's
+            section = (ca.vertcat(L_ / body["n"], rho_, A_) if part.body is None else
+                       ca.vertcat(L_ * float(f[e + 1] - f[e]), rho_ * float(part.ratios[e][0]), A_))
+            ev = ca.vertcat(*[(q[i] if i >= 0 else 0) + float(a) * L_ + float(b) for i, a, b in el])
+            edv = ca.vertcat(*[qd[i] if i >= 0 else ca.SX(0.0) for i, _, _ in el])
+            T += element(ev, edv, motion, section)
+    return T
+
+
 def ef_elements(der: SystemDerivation) -> list[dict]:
     """Per ef body, what system.c needs to assemble its elements: the parameter indices of
     [L, E, A, I], the element count, and per element and entry (x1 y1 x1' y1' x2 ...) the
@@ -166,9 +218,12 @@ def ef_elements(der: SystemDerivation) -> list[dict]:
 def generate_system_files(system: System) -> dict[str, str]:
     der = derive_system(system)
     fp = fingerprint(system)
-    emitted = [emit(k, C_PREFIX) for k in build_system_kernels(der)]
+    kernels = build_system_kernels(der)
+    emitted = [emit(k, C_PREFIX) for k in kernels]
     versions = tool_versions()
-    mass_constant = not (der.M.free_symbols & (set(der.q) | set(der.drive_symbols)))
+    mass = next(k.function for k in kernels if k.name == "mass")
+    qs, ds, ps = mass.sx_in()
+    mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds))
     scale = length_scale(system)
     names = [n for n, _, _ in der.params]
     beams = [b for b in system.bodies if b.flexible]

@@ -254,7 +254,7 @@ def test_ef_body_rigid_limit_momentum_and_element_table():
     n = len(der.q)
     qs, ps = ca.SX.sym("q", n), ca.SX.sym("p", len(der.params))
     symbols = {s: qs[i] for i, s in enumerate(der.q)} | {s: ps[i] for i, (_, s, _) in enumerate(der.params)}
-    dense = ca.Function("dense", [qs, ps], [SympyToCasadi(symbols, {s: 0 for s in symbols})(der.elastic[0])])
+    dense = ca.Function("dense", [qs, ps], [SympyToCasadi(symbols, {s: 0 for s in symbols})(der.elastic[0].elastic_energy())])
     q = np.random.default_rng(5).uniform(-1e-3, 1e-3, n)
     p = np.array([v for _, _, v in der.params])
     L_, E_, A_, I_ = (p[i] for i in body["params"])
