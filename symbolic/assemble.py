@@ -14,7 +14,7 @@ joint's coordinate; a flexible beam's frame is its root's tangent frame. Energie
                casadi AD in sysgen.py.
 Loads: gravity, motors, point forces, torques, spring-dampers. Cut joints give constraint rows
 Phi(q, theta) (cut_joint_rows); sysgen.py differentiates them.
-Lagrange with guided coordinates theta_k (p = dT/dq'):
+Lagrange with guided coordinates theta_k (p = dT/dq'), by lagrange.equations_of_motion:
   M = dp/dq',  f = dT/dq - (dp/dq) q' - sum_k (dp/dtheta_k theta_k' + dp/dtheta_k' theta_k'') + Q
 Q: strain terms (their groups only), gravity, motors, point forces and torques.
 
@@ -41,6 +41,7 @@ from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, buil
 from .efbody import EfPart, ef_part
 from .errors import SpecError
 from .integrals import BodyIntegralTable, IntegralTable
+from .lagrange import equations_of_motion, generalized_force, jacobi_integral
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from .modes import s
 from .outputs import field_at, output_expression
@@ -158,9 +159,7 @@ class SystemDerivation:
     def energies(self) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
         """(T, V, h = T2 - T0 + V): h is conserved when nothing is guided or motored and every
         term is conservative (then h = T + V)."""
-        T0 = self.T.xreplace({x: 0 for x in self.qd})
-        T2 = sp.expand((self.qd.T * self.M * self.qd)[0, 0] / 2)
-        return self.T, self.V, T2 - T0 + self.V
+        return self.T, self.V, jacobi_integral(self.T, self.M, self.qd, self.V)
 
 
 def _unsupported(system: System, tree) -> None:
@@ -364,8 +363,7 @@ def derive_system(system: System) -> SystemDerivation:
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
             V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
-            Qk = sp.Matrix([-sp.diff(V, x) if (c.body == b.name and c.group in wrt) else 0
-                            for c, x in zip(coords, q)])
+            Qk = generalized_force(V, q, [c.body == b.name and c.group in wrt for c in coords])
             der.terms.append((b.name, term_name, wrt, V, Qk))
             der.V += V
             Q += Qk
@@ -381,13 +379,7 @@ def derive_system(system: System) -> SystemDerivation:
     Q += _applied_forces(der, list(q))
     der.Q = Q.applyfunc(sp.expand)
 
-    pvec = sp.Matrix([sp.diff(der.T, x) for x in qd])
-    der.M = pvec.jacobian(qd).applyfunc(sp.expand)
-    f = sp.Matrix([sp.diff(der.T, x) for x in q]) - pvec.jacobian(q) * qd + der.Q
-    for gd in guided:
-        th, thd, thdd = gd.symbols
-        f -= pvec.diff(th) * thd + pvec.diff(thd) * thdd
-    der.f = f.applyfunc(sp.expand)
+    der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
     der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}

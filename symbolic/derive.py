@@ -1,13 +1,11 @@
 """Equations of motion of a variant by Lagrange's equations, kept as M(q) q'' = f(q, q', w, alpha).
 
 The root rotation theta(t) is guided, so the unknowns are the elastic coordinates only and
-w = theta', alpha = theta'' enter as known inputs:
+w = theta', alpha = theta'' enter as known inputs (T reads w, not theta):
 
     d/dt dT/dq' - dT/dq = Q,   Q_i = -sum over energy terms V_k with i in wrt(k) of dV_k/dq_i
 
-which gives M = d2T/dq'dq' and
-    f = dT/dq - (d2T/dq'dq) q' - (d2T/dq'dw) alpha + Q.
-M is never inverted symbolically: the C runtime solves with it.
+M and f come from lagrange.equations_of_motion, the same function a system's derivation uses.
 """
 from __future__ import annotations
 
@@ -17,6 +15,7 @@ import sympy as sp
 
 from .energy import BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, StrainModel, alpha, build_fields, kinetic_density, w
 from .integrals import BodyIntegralTable, IntegralTable
+from .lagrange import equations_of_motion, generalized_force, jacobi_integral
 from .maneuver import Maneuver, maneuver_of
 from .modes import Mode
 from .outputs import output_expression
@@ -80,11 +79,8 @@ class Derivation:
 
     def energies(self) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
         """(T, V, Jacobi integral h = T2 - T0 + V); h is conserved at constant w when conservative."""
-        zero_qd = {x: 0 for x in self.qd}
-        T0 = self.T.xreplace(zero_qd)
-        T2 = sp.expand((self.qd.T * self.M * self.qd)[0, 0] / 2)
         V = sp.Add(*[t.V for t in self.terms])
-        return self.T, V, sp.expand(T2 - T0 + V)
+        return self.T, V, sp.expand(jacobi_integral(self.T, self.M, self.qd, V))
 
     def stiffness_split(self) -> tuple[sp.Matrix, sp.Matrix]:
         """K_L (constant) and K_G(q, w) = -dQ/dq - K_L, the geometric stiffness."""
@@ -119,8 +115,7 @@ def derive(spec: VariantSpec) -> Derivation:
     for term_name, wrt in strain.terms:
         term = ENERGY_TERMS[term_name]
         V = table.integrate(term.density(fields))
-        Qk = sp.Matrix([-sp.diff(V, qi) if groups[n] in wrt else 0 for n, qi in zip(names, q)])
-        Qk = Qk.applyfunc(sp.expand)
+        Qk = generalized_force(V, q, [groups[n] in wrt for n in names]).applyfunc(sp.expand)
         der.terms.append(DerivedTerm(term_name, term.formula, wrt, V, Qk))
         Q += Qk
     der.Q = Q
@@ -130,10 +125,7 @@ def derive(spec: VariantSpec) -> Derivation:
         return finish(der)
 
     der.T = table.integrate(kinetic_density(fields))
-    p = sp.Matrix([sp.diff(der.T, x) for x in qd])
-    der.M = p.jacobian(qd).applyfunc(sp.expand)
-    rhs = sp.Matrix([sp.diff(der.T, x) for x in q]) - p.jacobian(q) * qd - sp.diff(p, w) * alpha + Q
-    der.f = rhs.applyfunc(sp.expand)
+    der.M, der.f = equations_of_motion(der.T, Q, q, qd, [(None, w, alpha)])
     if not maneuver.accelerates:
         der.f = der.f.xreplace({alpha: 0})
         der.dropped.append({"what": "theta'' (alpha) terms",

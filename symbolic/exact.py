@@ -45,6 +45,7 @@ from .derive import Derivation
 from .energy import A, E, I, L, alpha, rho, w
 from .errors import FlexsymError
 from .integrals import gauss_legendre
+from .lagrange import equations_of_motion_sx
 from .modes import s
 from .outputs import output_expression, point_of
 
@@ -272,15 +273,13 @@ class ExactDerivation(Derivation):
         return ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]]) + ca.gradient(V, q)
 
     def lagrange_equations(self, quad: Quadrature, x: dict, V):
-        """M = d2T/dq'2 and f from Lagrange's equations by casadi AD of T (an independent
-        route to the same equations, used by the tests)."""
+        """M = d2T/dq'2 and f from Lagrange's equations (lagrange.py) by casadi AD of T (an
+        independent route to the same equations, used by the tests)."""
         q, qd, drive, p = x["q"], x["qd"], x["drive"], x["p"]
         k = self.kinematics(quad, x)
         v = k["rd"] + drive[0] * ca.horzcat(-k["r"][:, 1], k["r"][:, 0])
         T = 0.5 * p[0] * p[2] * p[4] * ca.dot(ca.DM(quad.weights), ca.sum2(v * v))
-        M, grad_qd = ca.hessian(T, qd)
-        f = (ca.gradient(T, q) - ca.jtimes(grad_qd, q, qd) - ca.jacobian(grad_qd, drive[0]) * drive[1]
-             - ca.gradient(V, q))
+        M, f = equations_of_motion_sx(T, -ca.gradient(V, q), q, qd, [(None, drive[0], drive[1])])
         if not self.maneuver.accelerates:
             f = ca.substitute(f, drive[1], 0)
         return M, f

@@ -13,7 +13,7 @@ from .paths import PACKAGE_DIR, templates_dir
 
 # Modules whose code decides what is generated: a change in any of them changes the
 # fingerprint of every variant, so checked-in generated code is detected as stale.
-GENERATOR_MODULES = ("modes", "integrals", "energy", "maneuver", "outputs", "spec", "derive",
+GENERATOR_MODULES = ("modes", "integrals", "energy", "maneuver", "outputs", "spec", "lagrange", "derive",
                      "kernels", "cemit", "generate", "fe", "fedata", "exact", "beam_element")
 
 
