@@ -12,8 +12,9 @@ No rotation is linearised and no strain term is truncated:
 so the mass matrix is constant and the inertial terms are those of the modal variants.
 Euler-Bernoulli kinematics: no shear, no rotary inertia. The root node is clamped to the
 rotating frame (r = 0, and r_x along x: its length, the root stretch, stays free); the
-unknowns are the displacements q = e - e_ref from the straight beam. sympy derives T^e and V^e for one element; casadi
-differentiates V^e (AD) and emits element kernels; generated C assembles them.
+unknowns are the displacements q = e - e_ref from the straight beam. sympy derives T^e and V^e
+for one element (its inertial M^e, f^e by lagrange.equations_of_motion); casadi differentiates
+V^e (AD) and emits element kernels; generated C assembles them.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ import sympy as sp
 from .energy import A, E, I, alpha, rho, w
 from .errors import SpecError
 from .integrals import gauss_legendre
+from .lagrange import equations_of_motion
 from .maneuver import Maneuver, maneuver_of
 from .outputs import STRESS_OUTPUTS, check_output_names, point_of
 
@@ -129,10 +131,7 @@ def derive_element(spec: FESpec) -> ElementDerivation:
     vy = sum(Ni * ed[j] for Ni, j in zip(N, (1, 3, 5, 7)))
     density = rho * A / 2 * ((vx - w * ry)**2 + (vy + w * rx)**2)
     T = sp.expand(le * sp.integrate(sp.expand(density), (xi, 0, 1)))
-    p = sp.Matrix([sp.diff(T, v) for v in ed])
-    M = p.jacobian(ed).applyfunc(sp.expand)
-    f_in = (sp.Matrix([sp.diff(T, x) for x in e]) - p.jacobian(e) * ed - sp.diff(p, w) * alpha)
-    f_in = f_in.applyfunc(sp.expand)
+    M, f_in = equations_of_motion(T, sp.zeros(8, 1), e, ed, [(None, w, alpha)])  # inertial part
 
     eps, kappa, stretch, V = elastic_element(rx, ry)
     maneuver = maneuver_of(spec.maneuver)
