@@ -36,7 +36,7 @@ from types import SimpleNamespace
 
 import sympy as sp
 
-from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, build_fields,
+from .energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
                      gravity_density, kinetic_density, momentum_density, w)
 from .efbody import EfPart, ef_part
 from .errors import SpecError
@@ -45,6 +45,7 @@ from .lagrange import equations_of_motion, generalized_force, jacobi_integral
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from .modes import s
 from .outputs import field_at, output_expression
+from .strain_models import STRAIN_MODELS
 from .system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
                      beam_station, length_scale, parse_output)
 

@@ -41,13 +41,15 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from .derive import Derivation
-from .energy import A, E, I, L, alpha, rho, w
+from .energy import alpha, w
 from .errors import FlexsymError
 from .integrals import gauss_legendre
+from .kernels import make_kernels, maneuver_sx, translator
 from .lagrange import equations_of_motion_sx
+from .modal import Derivation, prepare
 from .modes import s
-from .outputs import output_expression, point_of
+from .output_names import point_of
+from .outputs import output_expression
 
 M_POINTS = 6  # Gauss points per segment (cumulative integrals cost m^2 per segment)
 QUAD_RTOL = 1e-6  # accuracy check of the quadrature (relative; see choose_quadrature)
@@ -312,8 +314,10 @@ class ExactDerivation(Derivation):
         return -p[0] * p[2] * (Fx * ca.cos(phi_at[0]) + Fy * ca.sin(phi_at[0]))
 
 
-def finish(der: ExactDerivation) -> ExactDerivation:
-    """Continuous expressions for `inspect`, the sympy outputs, and the quadrature choice."""
+def derive_exact(spec) -> ExactDerivation:
+    """Modes, fields and V as any modal variant (modal.prepare); then the sympy outputs, the
+    quadrature choice, and T as a placeholder (T, M, f live in casadi: equations())."""
+    der = prepare(spec, ExactDerivation)
     der.T = sp.Symbol("T_quadrature")
     der.outputs = {n: (None if der._exact_output(n) else output_expression(der, n))
                    for n in der.spec.outputs}
@@ -337,9 +341,7 @@ def continuous_formulas() -> dict[str, str]:
 
 
 def _symbolic_inputs(der):
-    from .kernels import translator
-
-    return translator(der.q, der.qd, der.qdd, der.params, der.maneuver)
+    return translator(der.q, der.qd, der.qdd, der.params, der.maneuver, (w, alpha))
 
 
 def _potential(der, tr):
@@ -408,8 +410,6 @@ def quadrature_error(der: ExactDerivation, q_rows, qd_rows, drive_rows, p, finer
 
 
 def build_exact_kernels(der: ExactDerivation) -> list:
-    from .kernels import make_kernels, maneuver_sx
-
     tr, x = _symbolic_inputs(der)
     q, qd, qdd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
     quad = der.quadrature

@@ -18,13 +18,13 @@ import jinja2
 import mpmath
 
 from .cemit import EmittedKernel, c_double, emit
-from .derive import derive
+from .derive import build_kernels, derive
 from .energy import BEAM_PARAMS
-from .kernels import build_kernels
+from .fe import build_element_kernels, c_prefix, derive_element, output_plan
 from .maneuver import maneuver_of
-from .outputs import info as output_info
+from .output_names import info as output_info
 from .paths import templates_dir
-from .spec import VariantSpec
+from .spec import CLAMP_OUTPUTS, QUAD_POINTS, VariantSpec
 from .versions import generator_hash, tool_versions
 
 MANIFEST = "manifest.json"
@@ -147,8 +147,6 @@ def _fe_body(body) -> dict | None:
 
 
 def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
-    from .fe import CLAMP_OUTPUTS, QUAD_POINTS, build_element_kernels, c_prefix, derive_element, output_plan
-
     der = derive_element(spec)
     emitted = [emit(k, c_prefix(k.name)) for k in build_element_kernels(der)]
     needs_clamp = any(o in CLAMP_OUTPUTS for o in spec.outputs)

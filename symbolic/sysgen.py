@@ -26,7 +26,7 @@ from .efbody import _E, EfPart, generic_element
 from .energy import A, E, I, L
 from .fe import le
 from .generate import MANIFEST, _environment, write_folder
-from .kernels import SympyToCasadi, _matrix_sx, make_kernels
+from .kernels import SympyToCasadi, matrix_sx, make_kernels
 from .maneuver import t as t_sym
 from .paths import PACKAGE_DIR, cache_dir, file_lock, templates_dir
 from .system import System, length_scale, system_to_dict
@@ -62,14 +62,14 @@ def build_system_kernels(der: SystemDerivation) -> list:
             symbols[syms[i]], priority[syms[i]] = x[key][i], 2
     tr = SympyToCasadi(symbols, priority)
     psyms = [sym for _, sym, _ in der.params]
-    M = _matrix_sx(tr, der.M, psyms)
-    f = _matrix_sx(tr, der.f, psyms)
+    M = matrix_sx(tr, der.M, psyms)
+    f = matrix_sx(tr, der.f, psyms)
     # outputs and ef elastic energies hold square roots and atan2: translated as they are
     y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
     T_, V_, h_ = der.energies()
     # ef bodies' elastic energy is not in these kernels: system.c adds it per element with the
     # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
-    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
+    en = matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
     dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
     dtr = SympyToCasadi(dsyms, {})
     drive = [x["t"]]
@@ -81,7 +81,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
     if der.constraints:
         # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d', with
         # d' = [1, then theta_k', theta_k'', 0 per guided joint] (Phi does not read theta_k')
-        phi = _matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
+        phi = matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
         ddot = [ca.SX(1.0)]
         for k in range(len(der.guided)):
             ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
