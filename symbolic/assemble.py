@@ -141,6 +141,16 @@ class SystemDerivation:
     def drive_params(self) -> list[Param]:
         return [p for g in self.guided for p in g.params]
 
+    @property
+    def outputs_use_acceleration(self) -> bool:
+        """The outputs read q'' (reactions, N and M from equilibrium): the runtime computes it."""
+        return any(e.has(*self.qdd) for e in self.outputs.values())
+
+    @property
+    def outputs_use_drive(self) -> bool:
+        """The outputs read t or a guided joint's theta_k, theta_k', theta_k''."""
+        return any(e.has(*self.drive_symbols) for e in self.outputs.values())
+
     def ddt(self, expr, order: int = 1):
         """Total time derivative along the motion (q, q', theta_k and their rates)."""
         if isinstance(expr, sp.MatrixBase):

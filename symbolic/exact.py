@@ -147,6 +147,11 @@ class ExactDerivation(Derivation):
         return any(self._exact_output(n) and n[0] in "NM" for n in self.spec.outputs)
 
     @property
+    def outputs_use_drive(self) -> bool:
+        """Equilibrium N and M read the frame's motion; v_tip, u_tip and EI dphi/dx do not."""
+        return any(n[0] in "NM" if e is None else e.has(w, alpha) for n, e in self.outputs.items())
+
+    @property
     def conservative(self) -> bool:
         return True
 

@@ -105,7 +105,7 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
         "outputs": [vars(output_info(o, spec.points)) for o in spec.outputs],
         "mass_constant": der.mass_constant,
         "outputs_use_acceleration": der.outputs_use_acceleration,
-        "outputs_use_drive": any("drive" in k.used_inputs for k in emitted if k.kernel.name == "outputs"),
+        "outputs_use_drive": der.outputs_use_drive,
     }
     integrals = []
     if spec.body is not None:

@@ -76,6 +76,11 @@ class Derivation:
         return any(e.has(*self.qdd) for e in self.outputs.values())
 
     @property
+    def outputs_use_drive(self) -> bool:
+        """The outputs read w or alpha: the runtime then evaluates the manoeuvre for them."""
+        return any(e.has(w, alpha) for e in self.outputs.values())
+
+    @property
     def conservative(self) -> bool:
         return self.strain.conservative(bool(self.spec.axial))
 

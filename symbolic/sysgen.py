@@ -169,7 +169,6 @@ def generate_system_files(system: System) -> dict[str, str]:
     length_param = names.index("L") if (len(beams) == 1 and beams[0].length == scale) else -1
     initial = [c_double(system.joint(c.joint).initial) if c.group == "joint" else "0.0"
                for c in der.coords]
-    used = {k.kernel.name: k.used_inputs for k in emitted}
     ctx = {
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
         "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
@@ -184,8 +183,8 @@ def generate_system_files(system: System) -> dict[str, str]:
                          for p in der.drive_params],
         "length_scale": c_double(scale), "length_param": length_param,
         "mass_constant": mass_constant, "initial": initial,
-        "outputs_use_acceleration": "qdd" in used["outputs"],
-        "outputs_use_drive": "d" in used["outputs"],
+        "outputs_use_acceleration": der.outputs_use_acceleration,
+        "outputs_use_drive": der.outputs_use_drive,
         "ef_bodies": ef_elements(der),
     }
     env = _environment()
