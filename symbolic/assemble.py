@@ -245,7 +245,10 @@ def _guided(system: System) -> list[Guided]:
     return out
 
 
-def derive_system(system: System) -> SystemDerivation:
+def derive_system(system: System, integral_symbols: bool = False) -> SystemDerivation:
+    """integral_symbols: keep the modal integrals of T and the energy terms as the table's
+    symbols (a one-beam variant's derivation, modal.py, which substitutes them at kernel
+    time and lists them in its manifest); valid with one flexible body only."""
     system.validate()
     tree = system.tree()
     _unsupported(system, tree)
@@ -360,7 +363,8 @@ def derive_system(system: System) -> SystemDerivation:
         tab, fl = part.table, part.fields
 
         def body_expr(expr, tab=tab, part=part, actual=actual):
-            return expr.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
+            values = {} if integral_symbols else tab.substitutions()
+            return expr.xreplace(values).xreplace(part.psyms).xreplace(actual)
 
         der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
         V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \

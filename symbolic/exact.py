@@ -41,15 +41,17 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from .energy import alpha, w
+from .energy import ENERGY_TERMS, alpha, build_fields, w
 from .errors import FlexsymError
-from .integrals import gauss_legendre
+from .integrals import IntegralTable, gauss_legendre
 from .kernels import make_kernels, maneuver_sx, translator
-from .lagrange import equations_of_motion_sx
-from .modal import Derivation, prepare
+from .lagrange import equations_of_motion_sx, generalized_force
+from .maneuver import maneuver_of
+from .modal import Derivation, DerivedTerm
 from .modes import s
 from .output_names import point_of
 from .outputs import output_expression
+from .strain_models import STRAIN_MODELS
 
 M_POINTS = 6  # Gauss points per segment (cumulative integrals cost m^2 per segment)
 QUAD_RTOL = 1e-6  # accuracy check of the quadrature (relative; see choose_quadrature)
@@ -145,6 +147,10 @@ class ExactDerivation(Derivation):
     @property
     def outputs_use_acceleration(self) -> bool:
         return any(self._exact_output(n) and n[0] in "NM" for n in self.spec.outputs)
+
+    @property
+    def integrals(self) -> list[sp.Symbol]:
+        return self.table.symbols  # V's and the sympy outputs' (T, M, f are quadratures)
 
     @property
     def outputs_use_drive(self) -> bool:
@@ -319,10 +325,40 @@ class ExactDerivation(Derivation):
         return -p[0] * p[2] * (Fx * ca.cos(phi_at[0]) + Fy * ca.sin(phi_at[0]))
 
 
+def _prepare(spec) -> "ExactDerivation":
+    """Modes, fields and the energy terms (sympy, quadratic: the linear model's strain energy)
+    with their generalised forces Q. `spec` is validated (derive.derive)."""
+    strain = STRAIN_MODELS[spec.strain]
+    maneuver = maneuver_of(spec.maneuver)
+    modes = {r.coordinate: spec.mode(r) for r in spec.modes}
+    groups = {r.coordinate: r.axis for r in spec.modes}
+    names = list(modes)
+    q = sp.Matrix([sp.Symbol(n, real=True) for n in names])
+    qd = sp.Matrix([sp.Symbol(n + "_d", real=True) for n in names])
+    qdd = sp.Matrix([sp.Symbol(n + "_dd", real=True) for n in names])
+    qmap, qdmap, qddmap = dict(zip(names, q)), dict(zip(names, qd)), dict(zip(names, qdd))
+
+    table = IntegralTable(modes)  # a uniform beam (spec.validate refuses a [body])
+    axial = [modes[r.coordinate] for r in spec.axial]
+    bending = [modes[r.coordinate] for r in spec.bending]
+    fields = build_fields(axial, bending, qmap, qdmap, table, strain.foreshortening, qddmap)
+    der = ExactDerivation(spec, strain, maneuver, modes, groups, q, qd, qdd, table, fields)
+
+    Q = sp.zeros(len(names), 1)
+    for term_name, wrt in strain.terms:
+        term = ENERGY_TERMS[term_name]
+        V = table.integrate(term.density(fields))
+        Qk = generalized_force(V, q, [groups[n] in wrt for n in names]).applyfunc(sp.expand)
+        der.terms.append(DerivedTerm(term_name, term.formula, wrt, V, Qk))
+        Q += Qk
+    der.Q = Q
+    return der
+
+
 def derive_exact(spec) -> ExactDerivation:
-    """Modes, fields and V as any modal variant (modal.prepare); then the sympy outputs, the
-    quadrature choice, and T as a placeholder (T, M, f live in casadi: equations())."""
-    der = prepare(spec, ExactDerivation)
+    """Modes, fields and V (_prepare); then the sympy outputs, the quadrature choice, and T as
+    a placeholder (T, M, f live in casadi: equations())."""
+    der = _prepare(spec)
     der.T = sp.Symbol("T_quadrature")
     der.outputs = {n: (None if der._exact_output(n) else output_expression(der, n))
                    for n in der.spec.outputs}

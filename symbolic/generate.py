@@ -110,7 +110,7 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
     integrals = []
     if spec.body is not None:
         ctx["summary"] += " " + spec.body.summary() + " (modes computed from it)."
-    for sym in der.table.symbols:
+    for sym in der.integrals:
         v = der.table.value(sym)
         integrals.append({"symbol": str(sym), "value": mpmath.nstr(v.value, 20),
                           "method": v.method, "error_estimate": float(f"{v.error:.3e}"),

@@ -132,7 +132,7 @@ class Report:
 
     def _integrals(self) -> None:
         self.title("Modal integrals (int_0^1 ... ds)")
-        for sym in self.der.table.symbols:
+        for sym in self.der.integrals:
             v = self.der.table.value(sym)
             how = f"exact = {v.exact}" if v.method == "exact" else \
                 f"Gauss-Legendre n={v.nodes}{' per element, double' if v.method == 'fe_gauss' else ''}, " \

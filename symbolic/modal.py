@@ -1,32 +1,37 @@
-"""A one-beam modal variant: its equations of motion by Lagrange's equations, kept as
-M(q) q'' = f(q, q', w, alpha), and its kernels.
+"""A one-beam modal variant: its equations of motion, kept as M(q) q'' = f(q, q', w, alpha),
+its outputs and its kernels.
 
 The root rotation theta(t) is guided, so the unknowns are the elastic coordinates only and
 w = theta', alpha = theta'' enter as known inputs (T reads w, not theta):
 
     d/dt dT/dq' - dT/dq = Q,   Q_i = -sum over energy terms V_k with i in wrt(k) of dV_k/dq_i
 
-M and f come from lagrange.equations_of_motion, the same function a system's derivation uses.
-`prepare` (modes, fields, energy terms) is shared with the exact kinematics (exact.py, which
-subclasses Derivation); derive.py picks one of the two by the strain model's kinematics.
+T, the energy terms, M and f are not derived here: they are the spin-up system's (S0, the
+variant's beam on a guided revolute to ground) from assemble.derive_system, renamed to the
+variant's symbols, so variants and systems share one derivation (and lagrange.py's equations).
+The exact kinematics (exact.py) subclasses Derivation; derive.py picks one of the two by the
+strain model's kinematics.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
-import sympy as sp
+from dataclasses import dataclass, field, replace
+from dataclasses import fields as dataclass_fields
 
 import casadi as ca
+import sympy as sp
 
-from .energy import BEAM_PARAMS, ENERGY_TERMS, alpha, build_fields, kinetic_density, w
-from .integrals import BodyIntegralTable, IntegralTable
+from .assemble import derive_system
+from .energy import BEAM_PARAMS, ENERGY_TERMS, alpha, w
+from .integrals import IntegralTable
 from .kernels import Kernel, make_kernels, maneuver_sx, matrix_sx, translator
-from .lagrange import equations_of_motion, generalized_force, jacobi_integral
+from .lagrange import jacobi_integral
 from .maneuver import Maneuver, maneuver_of
 from .modes import Mode
 from .outputs import output_expression
 from .spec import VariantSpec
 from .strain_models import STRAIN_MODELS, StrainModel
+from .system import Output, Section
+from .systems_library import spin_up_system
 
 
 @dataclass
@@ -76,6 +81,15 @@ class Derivation:
         return any(e.has(*self.qdd) for e in self.outputs.values())
 
     @property
+    def integrals(self) -> list[sp.Symbol]:
+        """The modal integrals that T, the energy terms, M, f and the outputs read (table order;
+        the table may hold more: the system derivation's frame-velocity terms)."""
+        used = set().union(self.T.free_symbols, self.M.free_symbols, self.f.free_symbols,
+                           *(t.V.free_symbols for t in self.terms),
+                           *(e.free_symbols for e in self.outputs.values()))
+        return [x for x in self.table.symbols if x in used]
+
+    @property
     def outputs_use_drive(self) -> bool:
         """The outputs read w or alpha: the runtime then evaluates the manoeuvre for them."""
         return any(e.has(w, alpha) for e in self.outputs.values())
@@ -102,42 +116,31 @@ class Derivation:
         return K_L, (K - K_L).applyfunc(sp.expand)
 
 
-def prepare(spec: VariantSpec, cls=None) -> Derivation:
-    """A `cls` (Derivation or a subclass) with modes, fields and energy terms with their
-    generalised forces Q; T, M, f and the outputs are the kinematics' own. `spec` is
-    validated (derive.derive)."""
-    strain = STRAIN_MODELS[spec.strain]
-    maneuver = maneuver_of(spec.maneuver)
-    modes = {r.coordinate: spec.mode(r) for r in spec.modes}
-    groups = {r.coordinate: r.axis for r in spec.modes}
-    names = list(modes)
+def derive_modal(spec: VariantSpec) -> Derivation:
+    """T, the energy terms, M and f are the spin-up system's (S0: this variant's beam on a
+    guided revolute to ground, assemble.derive_system), with its symbols renamed to the
+    variant's: coordinates without the body prefix, the hub's rate and acceleration w, alpha.
+    One derivation of the physics serves variants and systems."""
+    sd = derive_system(one_body_system(spec), integral_symbols=True)
+    part = next(iter(sd.flex.values()))
+    names = list(part.modes)
     q = sp.Matrix([sp.Symbol(n, real=True) for n in names])
     qd = sp.Matrix([sp.Symbol(n + "_d", real=True) for n in names])
     qdd = sp.Matrix([sp.Symbol(n + "_dd", real=True) for n in names])
-    qmap, qdmap, qddmap = dict(zip(names, q)), dict(zip(names, qd)), dict(zip(names, qdd))
-
-    table = IntegralTable(modes) if spec.body is None else BodyIntegralTable(spec.body, modes)
-    axial = [modes[r.coordinate] for r in spec.axial]
-    bending = [modes[r.coordinate] for r in spec.bending]
-    fields = build_fields(axial, bending, qmap, qdmap, table, strain.foreshortening, qddmap)
-    der = (cls or Derivation)(spec, strain, maneuver, modes, groups, q, qd, qdd, table, fields)
-
-    Q = sp.zeros(len(names), 1)
-    for term_name, wrt in strain.terms:
-        term = ENERGY_TERMS[term_name]
-        V = table.integrate(term.density(fields))
-        Qk = generalized_force(V, q, [groups[n] in wrt for n in names]).applyfunc(sp.expand)
-        der.terms.append(DerivedTerm(term_name, term.formula, wrt, V, Qk))
-        Q += Qk
-    der.Q = Q
-    return der
-
-
-def derive_modal(spec: VariantSpec) -> Derivation:
-    der = prepare(spec)
-    q, qd, groups, maneuver = der.q, der.qd, der.groups, der.maneuver
-    der.T = der.table.integrate(kinetic_density(der.fields))
-    der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [(None, w, alpha)])
+    _, hub_rate, hub_acc = sd.guided[0].symbols
+    rename = dict(zip(sd.q, q)) | dict(zip(sd.qd, qd)) | dict(zip(sd.qdd, qdd)) | {
+        hub_rate: w, hub_acc: alpha}
+    fields = replace(part.fields, **{f.name: getattr(part.fields, f.name).xreplace(rename)
+                                     for f in dataclass_fields(part.fields) if f.name != "weights"})
+    der = Derivation(spec, STRAIN_MODELS[spec.strain], maneuver_of(spec.maneuver), part.modes,
+                     part.groups, q, qd, qdd, part.table, fields)
+    for _, name, wrt, V, Qk in sd.terms:
+        der.terms.append(DerivedTerm(name, ENERGY_TERMS[name].formula, wrt, V.xreplace(rename),
+                                     Qk.xreplace(rename).applyfunc(sp.expand)))
+    der.Q = sd.Q.xreplace(rename)
+    der.T = sd.T.xreplace(rename)
+    der.M, der.f = sd.M.xreplace(rename), sd.f.xreplace(rename)
+    maneuver, groups = der.maneuver, der.groups
     if not maneuver.accelerates:
         der.f = der.f.xreplace({alpha: 0})
         der.dropped.append({"what": "theta'' (alpha) terms",
@@ -150,6 +153,17 @@ def derive_modal(spec: VariantSpec) -> Derivation:
     if not maneuver.accelerates:
         der.outputs = {k: v.xreplace({alpha: 0}) for k, v in der.outputs.items()}
     return der
+
+
+def one_body_system(spec: VariantSpec):
+    """S0 for this variant: its beam (the paper's section, or its finite-element body's root
+    section and length) on a guided revolute to ground."""
+    if spec.body is None:
+        system = spin_up_system(spec)
+    else:
+        r = spec.body.reference
+        system = spin_up_system(spec, Section(r.rho, r.E, r.A, r.I), spec.body.length)
+    return replace(system, outputs=(Output("theta", "angle(hub)"),))
 
 
 def build_modal_kernels(der: Derivation) -> list[Kernel]:
