@@ -15,7 +15,7 @@ joint's coordinate; a flexible beam's frame is its root's tangent frame. Energie
                outputs read them through the placeholders EF_T and ef_guided_force).
 Loads: gravity, motors, point forces, torques, spring-dampers. Cut joints give constraint rows
 Phi(q, theta) (cut_joint_rows); sysgen.py differentiates them.
-Lagrange with guided coordinates theta_k (p = dT/dq'):
+Lagrange with guided coordinates theta_k (p = dT/dq'), by lagrange.equations_of_motion:
   M = dp/dq',  f = dT/dq - (dp/dq) q' - sum_k (dp/dtheta_k theta_k' + dp/dtheta_k' theta_k'') + Q
 Q: strain terms (their groups only), gravity, motors, point forces and torques.
 
@@ -37,14 +37,16 @@ from types import SimpleNamespace
 
 import sympy as sp
 
-from .energy import (BEAM_PARAMS, ENERGY_TERMS, STRAIN_MODELS, FrameMotion, build_fields,
+from .energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
                      gravity_density, kinetic_density, momentum_density, w)
 from .efbody import EfPart, ef_part
 from .errors import SpecError
 from .integrals import BodyIntegralTable, IntegralTable
+from .lagrange import equations_of_motion, generalized_force, jacobi_integral
 from .maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from .modes import s
 from .outputs import field_at, output_expression
+from .strain_models import STRAIN_MODELS
 from .system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
                      beam_station, length_scale, parse_output)
 
@@ -160,6 +162,16 @@ class SystemDerivation:
     def drive_params(self) -> list[Param]:
         return [p for g in self.guided for p in g.params]
 
+    @property
+    def outputs_use_acceleration(self) -> bool:
+        """The outputs read q'' (reactions, N and M from equilibrium): the runtime computes it."""
+        return any(e.has(*self.qdd) for e in self.outputs.values())
+
+    @property
+    def outputs_use_drive(self) -> bool:
+        """The outputs read t or a guided joint's theta_k, theta_k', theta_k''."""
+        return any(e.has(*self.drive_symbols) for e in self.outputs.values())
+
     def ddt(self, expr, order: int = 1):
         """Total time derivative along the motion (q, q', theta_k and their rates)."""
         if isinstance(expr, sp.MatrixBase):
@@ -179,9 +191,7 @@ class SystemDerivation:
     def energies(self) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
         """(T, V, h = T2 - T0 + V): h is conserved when nothing is guided or motored and every
         term is conservative (then h = T + V). Without the ef bodies' T (sysgen adds it)."""
-        T0 = self.T.xreplace({x: 0 for x in self.qd})
-        T2 = sp.expand((self.qd.T * self.M * self.qd)[0, 0] / 2)
-        return self.T, self.V, T2 - T0 + self.V
+        return self.T, self.V, jacobi_integral(self.T, self.M, self.qd, self.V)
 
 
 def _unsupported(system: System, tree) -> None:
@@ -256,7 +266,10 @@ def _guided(system: System) -> list[Guided]:
     return out
 
 
-def derive_system(system: System) -> SystemDerivation:
+def derive_system(system: System, integral_symbols: bool = False) -> SystemDerivation:
+    """integral_symbols: keep the modal integrals of T and the energy terms as the table's
+    symbols (a one-beam variant's derivation, modal.py, which substitutes them at kernel
+    time and lists them in its manifest); valid with one flexible body only."""
     system.validate()
     tree = system.tree()
     _unsupported(system, tree)
@@ -372,7 +385,8 @@ def derive_system(system: System) -> SystemDerivation:
         tab, fl = part.table, part.fields
 
         def body_expr(expr, tab=tab, part=part, actual=actual):
-            return expr.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
+            values = {} if integral_symbols else tab.substitutions()
+            return expr.xreplace(values).xreplace(part.psyms).xreplace(actual)
 
         mass = mass * tab.integrate(fl.weights["mu"])  # 1 for a uniform beam; a body's own
         der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
@@ -387,8 +401,7 @@ def derive_system(system: System) -> SystemDerivation:
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
             V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
-            Qk = sp.Matrix([-sp.diff(V, x) if (c.body == b.name and c.group in wrt) else 0
-                            for c, x in zip(coords, q)])
+            Qk = generalized_force(V, q, [c.body == b.name and c.group in wrt for c in coords])
             der.terms.append((b.name, term_name, wrt, V, Qk))
             der.V += V
             Q += Qk
@@ -404,13 +417,7 @@ def derive_system(system: System) -> SystemDerivation:
     Q += _applied_forces(der, list(q))
     der.Q = Q.applyfunc(sp.expand)
 
-    pvec = sp.Matrix([sp.diff(der.T, x) for x in qd])
-    der.M = pvec.jacobian(qd).applyfunc(sp.expand)
-    f = sp.Matrix([sp.diff(der.T, x) for x in q]) - pvec.jacobian(q) * qd + der.Q
-    for gd in guided:
-        th, thd, thdd = gd.symbols
-        f -= pvec.diff(th) * thd + pvec.diff(thd) * thdd
-    der.f = f.applyfunc(sp.expand)
+    der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
     der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}

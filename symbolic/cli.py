@@ -551,7 +551,7 @@ def cmd_exact_study(args) -> int:
 
 
 def cmd_variants(args) -> int:
-    from .energy import STRAIN_MODELS
+    from .strain_models import STRAIN_MODELS
     from .modes import FAMILIES
     from .spec import BUILTIN
 

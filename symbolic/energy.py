@@ -1,14 +1,9 @@
-"""Kinematics of the beam in the moving frame, energy densities and strain models.
+"""Kinematics of the beam in the moving frame and energy densities.
 
 Densities are written per unit s = x/L (so an energy is int_0^1 density ds), in terms of
 factor placeholders from the IntegralTable; derivatives along the beam are d/dx = (1/L) d/ds.
-
-A strain model says *which energy term is differentiated with respect to which coordinate
-group*. That choice is the difference between the paper's variants #1/#2 (eq. 18-19: the
-cubic coupling term acts on the bending equations only) and the blind gradient of the
-truncated energy (eq. 5), which pulls the axial coordinate into compression and collapses
-(benchmark.md section 3). Keeping it as data makes it impossible to change silently and
-lets `flexsym inspect` print it.
+Which term is differentiated with respect to which coordinate group is the strain model's
+choice (strain_models.py).
 """
 from __future__ import annotations
 
@@ -149,51 +144,4 @@ ENERGY_TERMS: dict[str, EnergyTerm] = {t.name: t for t in (
                lambda f: E * A / (2 * L) * f.weights["ea"] * f.u_stretch_s**2),
     EnergyTerm("curvature", "EI/2 int (dphi/dx)^2 dx, phi = sum xi_k Phi_k'/L (exact)",
                lambda f: E * I / (2 * L**3) * f.weights["ei"] * f.v_ss**2),
-)}
-
-
-@dataclass(frozen=True)
-class StrainModel:
-    name: str
-    foreshortening: bool  # kinematic u_fs in the axial field
-    terms: tuple[tuple[str, tuple[str, ...]], ...]  # (energy term, coordinate groups differentiated)
-    needs_axial: bool
-    description: str
-    kinematics: str = "second_order"  # or "exact" (exact.py: positions from the rotation field)
-
-    def conservative(self, axial_present: bool) -> bool:
-        """True when every term is differentiated w.r.t. every coordinate group it depends on."""
-        for term, wrt in self.terms:
-            depends = {"axial": term in ("axial", "cubic", "stretch") and axial_present,
-                       "bending": term in ("bending", "cubic", "quartic", "prestress", "curvature")}
-            if any(dep and g not in wrt for g, dep in depends.items()):
-                return False
-        return True
-
-
-_BASE = (("axial", ("axial",)), ("bending", ("bending",)))
-
-STRAIN_MODELS: dict[str, StrainModel] = {m.name: m for m in (
-    StrainModel("linear", False, _BASE, False,
-                "linear strain: no geometric stiffening (variant #0)"),
-    StrainModel("geometric_stiffness", False, _BASE + (("cubic", ("bending",)),), True,
-                "eq. (18)-(19): K_G(eta) y acts on the bending coordinates only; the axial "
-                "equations see K_L alone (variants #1, #2)"),
-    StrainModel("cubic_energy", False, _BASE + (("cubic", ("axial", "bending")),), True,
-                "full gradient of the truncated energy (5): the trap of benchmark.md section 3, "
-                "unbounded below; offered only to show that it collapses"),
-    StrainModel("von_karman", False,
-                _BASE + (("cubic", ("axial", "bending")), ("quartic", ("axial", "bending"))),
-                True, "consistent energy (4) with the quartic term: bounded, but linear axial "
-                "modes lock (far too stiff)"),
-    StrainModel("foreshortening", True, _BASE, False,
-                "eq. (30)-(31): axial field carries u_fs = -1/2 int v_x^2; linear strain energy "
-                "(variant #3)"),
-    StrainModel("prestress", False, _BASE + (("prestress", ("bending",)),), False,
-                "bending modes with the centrifugal-prestress geometric stiffness "
-                "w^2 int N(x) v_x^2, N = rho A (L^2 - x^2)/2"),
-    StrainModel("exact", False, (("stretch", ("axial",)), ("curvature", ("bending",))), False,
-                "exact kinematics: bending modes' slopes are the section rotation, axial modes' "
-                "strains the stretch (none: inextensible); r = int (1 + eps)(cos phi, sin phi) dx, "
-                "no strain truncated (exact.py)", kinematics="exact"),
 )}

@@ -41,12 +41,17 @@ import mpmath
 import numpy as np
 import sympy as sp
 
-from .derive import Derivation
-from .energy import A, E, I, L, alpha, rho, w
+from .energy import ENERGY_TERMS, alpha, build_fields, w
 from .errors import FlexsymError
-from .integrals import gauss_legendre
+from .integrals import IntegralTable, gauss_legendre
+from .kernels import make_kernels, maneuver_sx, translator
+from .lagrange import equations_of_motion_sx, generalized_force
+from .maneuver import maneuver_of
+from .modal import Derivation, DerivedTerm
 from .modes import s
-from .outputs import output_expression, point_of
+from .output_names import point_of
+from .outputs import output_expression
+from .strain_models import STRAIN_MODELS
 
 M_POINTS = 6  # Gauss points per segment (cumulative integrals cost m^2 per segment)
 QUAD_RTOL = 1e-6  # accuracy check of the quadrature (relative; see choose_quadrature)
@@ -142,6 +147,15 @@ class ExactDerivation(Derivation):
     @property
     def outputs_use_acceleration(self) -> bool:
         return any(self._exact_output(n) and n[0] in "NM" for n in self.spec.outputs)
+
+    @property
+    def integrals(self) -> list[sp.Symbol]:
+        return self.table.symbols  # V's and the sympy outputs' (T, M, f are quadratures)
+
+    @property
+    def outputs_use_drive(self) -> bool:
+        """Equilibrium N and M read the frame's motion; v_tip, u_tip and EI dphi/dx do not."""
+        return any(n[0] in "NM" if e is None else e.has(w, alpha) for n, e in self.outputs.items())
 
     @property
     def conservative(self) -> bool:
@@ -272,15 +286,13 @@ class ExactDerivation(Derivation):
         return ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]]) + ca.gradient(V, q)
 
     def lagrange_equations(self, quad: Quadrature, x: dict, V):
-        """M = d2T/dq'2 and f from Lagrange's equations by casadi AD of T (an independent
-        route to the same equations, used by the tests)."""
+        """M = d2T/dq'2 and f from Lagrange's equations (lagrange.py) by casadi AD of T (an
+        independent route to the same equations, used by the tests)."""
         q, qd, drive, p = x["q"], x["qd"], x["drive"], x["p"]
         k = self.kinematics(quad, x)
         v = k["rd"] + drive[0] * ca.horzcat(-k["r"][:, 1], k["r"][:, 0])
         T = 0.5 * p[0] * p[2] * p[4] * ca.dot(ca.DM(quad.weights), ca.sum2(v * v))
-        M, grad_qd = ca.hessian(T, qd)
-        f = (ca.gradient(T, q) - ca.jtimes(grad_qd, q, qd) - ca.jacobian(grad_qd, drive[0]) * drive[1]
-             - ca.gradient(V, q))
+        M, f = equations_of_motion_sx(T, -ca.gradient(V, q), q, qd, [(None, drive[0], drive[1])])
         if not self.maneuver.accelerates:
             f = ca.substitute(f, drive[1], 0)
         return M, f
@@ -313,8 +325,40 @@ class ExactDerivation(Derivation):
         return -p[0] * p[2] * (Fx * ca.cos(phi_at[0]) + Fy * ca.sin(phi_at[0]))
 
 
-def finish(der: ExactDerivation) -> ExactDerivation:
-    """Continuous expressions for `inspect`, the sympy outputs, and the quadrature choice."""
+def _prepare(spec) -> "ExactDerivation":
+    """Modes, fields and the energy terms (sympy, quadratic: the linear model's strain energy)
+    with their generalised forces Q. `spec` is validated (derive.derive)."""
+    strain = STRAIN_MODELS[spec.strain]
+    maneuver = maneuver_of(spec.maneuver)
+    modes = {r.coordinate: spec.mode(r) for r in spec.modes}
+    groups = {r.coordinate: r.axis for r in spec.modes}
+    names = list(modes)
+    q = sp.Matrix([sp.Symbol(n, real=True) for n in names])
+    qd = sp.Matrix([sp.Symbol(n + "_d", real=True) for n in names])
+    qdd = sp.Matrix([sp.Symbol(n + "_dd", real=True) for n in names])
+    qmap, qdmap, qddmap = dict(zip(names, q)), dict(zip(names, qd)), dict(zip(names, qdd))
+
+    table = IntegralTable(modes)  # a uniform beam (spec.validate refuses a [body])
+    axial = [modes[r.coordinate] for r in spec.axial]
+    bending = [modes[r.coordinate] for r in spec.bending]
+    fields = build_fields(axial, bending, qmap, qdmap, table, strain.foreshortening, qddmap)
+    der = ExactDerivation(spec, strain, maneuver, modes, groups, q, qd, qdd, table, fields)
+
+    Q = sp.zeros(len(names), 1)
+    for term_name, wrt in strain.terms:
+        term = ENERGY_TERMS[term_name]
+        V = table.integrate(term.density(fields))
+        Qk = generalized_force(V, q, [groups[n] in wrt for n in names]).applyfunc(sp.expand)
+        der.terms.append(DerivedTerm(term_name, term.formula, wrt, V, Qk))
+        Q += Qk
+    der.Q = Q
+    return der
+
+
+def derive_exact(spec) -> ExactDerivation:
+    """Modes, fields and V (_prepare); then the sympy outputs, the quadrature choice, and T as
+    a placeholder (T, M, f live in casadi: equations())."""
+    der = _prepare(spec)
     der.T = sp.Symbol("T_quadrature")
     der.outputs = {n: (None if der._exact_output(n) else output_expression(der, n))
                    for n in der.spec.outputs}
@@ -338,9 +382,7 @@ def continuous_formulas() -> dict[str, str]:
 
 
 def _symbolic_inputs(der):
-    from .kernels import translator
-
-    return translator(der.q, der.qd, der.qdd, der.params, der.maneuver)
+    return translator(der.q, der.qd, der.qdd, der.params, der.maneuver, (w, alpha))
 
 
 def _potential(der, tr):
@@ -409,8 +451,6 @@ def quadrature_error(der: ExactDerivation, q_rows, qd_rows, drive_rows, p, finer
 
 
 def build_exact_kernels(der: ExactDerivation) -> list:
-    from .kernels import make_kernels, maneuver_sx
-
     tr, x = _symbolic_inputs(der)
     q, qd, qdd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
     quad = der.quadrature

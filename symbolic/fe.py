@@ -12,78 +12,27 @@ No rotation is linearised and no strain term is truncated:
 so the mass matrix is constant and the inertial terms are those of the modal variants.
 Euler-Bernoulli kinematics: no shear, no rotary inertia. The root node is clamped to the
 rotating frame (r = 0, and r_x along x: its length, the root stretch, stays free); the
-unknowns are the displacements q = e - e_ref from the straight beam. sympy derives T^e and V^e for one element; casadi
-differentiates V^e (AD) and emits element kernels; generated C assembles them.
+unknowns are the displacements q = e - e_ref from the straight beam. sympy derives T^e and V^e
+for one element (its inertial M^e, f^e by lagrange.equations_of_motion); casadi differentiates
+V^e (AD) and emits element kernels; generated C assembles them.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import casadi as ca
 import sympy as sp
 
 from .energy import A, E, I, alpha, rho, w
-from .errors import SpecError
 from .integrals import gauss_legendre
+from .kernels import make_kernels, maneuver_sx, translator
+from .lagrange import equations_of_motion
 from .maneuver import Maneuver, maneuver_of
-from .outputs import STRESS_OUTPUTS, check_output_names, point_of
+from .output_names import point_of
+from .spec import CLAMP_OUTPUTS, QUAD_POINTS, FESpec
 
-QUAD_POINTS = 5  # exact for EA eps^2 (degree 8 in xi); kappa^2 is rational
 xi = sp.Symbol("xi", real=True)
 le = sp.Symbol("l", positive=True)  # element length, p[L] / elements at run time
-CLAMP_OUTPUTS = ("N_A_clamp", "M_A_clamp")
-
-
-@dataclass(frozen=True)
-class FESpec:
-    name: str
-    elements: int = 16
-    maneuver: str = "spin_up"
-    outputs: tuple[str, ...] = ("v_tip", "u_tip") + STRESS_OUTPUTS + CLAMP_OUTPUTS
-    points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
-    left_out: tuple[tuple[str, str], ...] = ()
-    description: str = ""
-    aliases: tuple[str, ...] = field(default=(), compare=False)
-    body: object = None  # fedata.BeamBody: per-element sections and point masses
-    kind = "fe"
-
-    @property
-    def coordinates(self) -> tuple[str, ...]:
-        """x_x of the clamped root (free: it is the root stretch), then 4 per further node."""
-        return ("dx0",) + tuple(f"{c}{k}" for k in range(1, self.elements + 1)
-                                for c in ("ux", "uy", "dx", "dy"))
-
-    def to_dict(self) -> dict:
-        return {"name": self.name, "kind": "fe", "formulation": "ancf_cable",
-                "elements": self.elements, "quadrature": QUAD_POINTS, "maneuver": self.maneuver,
-                "outputs": list(self.outputs), "points": [list(p) for p in self.points],
-                "left_out": [list(x) for x in self.left_out]} | (
-                    {"body": self.body.to_dict()} if self.body is not None else {})
-
-    def validate(self) -> "FESpec":
-        from .spec import NAME_RE
-
-        if not NAME_RE.match(self.name):
-            raise SpecError(f"variant name '{self.name}': use lower-case letters, digits and _")
-        if not isinstance(self.elements, int) or not 1 <= self.elements <= 512:
-            raise SpecError(f"variant '{self.name}': elements must be an integer in 1..512 "
-                            f"(got {self.elements!r})")
-        if self.body is not None:
-            if self.body.elements != self.elements:
-                raise SpecError(f"variant '{self.name}': {self.elements} elements but its body has "
-                                f"{self.body.elements}")
-            if any(m.rotary for m in self.body.masses):
-                raise SpecError(f"variant '{self.name}': point rotary inertia is not modelled in "
-                                "'ef' (its nodes carry slopes, not rotations); modal variants take it")
-        maneuver_of(self.maneuver)
-        check_output_names(self, extra=CLAMP_OUTPUTS)
-        return self
-
-    def node_fractions(self) -> list:
-        """Node positions as exact fractions of L (uniform mesh) or the body's nodes."""
-        if self.body is None:
-            return [sp.Rational(k, self.elements) for k in range(self.elements + 1)]
-        return [sp.Rational(repr(float(x))) for x in self.body.s_nodes]
 
 
 def c_prefix(kernel_name: str) -> str:
@@ -129,10 +78,7 @@ def derive_element(spec: FESpec) -> ElementDerivation:
     vy = sum(Ni * ed[j] for Ni, j in zip(N, (1, 3, 5, 7)))
     density = rho * A / 2 * ((vx - w * ry)**2 + (vy + w * rx)**2)
     T = sp.expand(le * sp.integrate(sp.expand(density), (xi, 0, 1)))
-    p = sp.Matrix([sp.diff(T, v) for v in ed])
-    M = p.jacobian(ed).applyfunc(sp.expand)
-    f_in = (sp.Matrix([sp.diff(T, x) for x in e]) - p.jacobian(e) * ed - sp.diff(p, w) * alpha)
-    f_in = f_in.applyfunc(sp.expand)
+    M, f_in = equations_of_motion(T, sp.zeros(8, 1), e, ed, [(None, w, alpha)])  # inertial part
 
     eps, kappa, stretch, V = elastic_element(rx, ry)
     maneuver = maneuver_of(spec.maneuver)
@@ -160,10 +106,8 @@ def elastic_element(rx, ry):
 
 def build_element_kernels(der: ElementDerivation) -> list:
     """Element kernels over absolute nodal coordinates e (8) and pe = [rho, E, A, I, l]."""
-    from .kernels import make_kernels, maneuver_sx, translator
-
     pe = der.params
-    tr, x = translator(der.e, der.ed, der.edd, pe, der.maneuver)
+    tr, x = translator(der.e, der.ed, der.edd, pe, der.maneuver, (w, alpha))
     e, ed, edd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
     M = ca.vertcat(*[ca.horzcat(*[tr(der.M[i, j]) for j in range(8)]) for i in range(8)])
     f_in = ca.vertcat(*[tr(v) for v in der.f_inertial])

@@ -18,13 +18,13 @@ import jinja2
 import mpmath
 
 from .cemit import EmittedKernel, c_double, emit
-from .derive import derive
+from .derive import build_kernels, derive
 from .energy import BEAM_PARAMS
-from .kernels import build_kernels
+from .fe import build_element_kernels, c_prefix, derive_element, output_plan
 from .maneuver import maneuver_of
-from .outputs import info as output_info
+from .output_names import info as output_info
 from .paths import templates_dir
-from .spec import VariantSpec
+from .spec import CLAMP_OUTPUTS, QUAD_POINTS, VariantSpec
 from .versions import generator_hash, tool_versions
 
 MANIFEST = "manifest.json"
@@ -105,12 +105,12 @@ def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
         "outputs": [vars(output_info(o, spec.points)) for o in spec.outputs],
         "mass_constant": der.mass_constant,
         "outputs_use_acceleration": der.outputs_use_acceleration,
-        "outputs_use_drive": any("drive" in k.used_inputs for k in emitted if k.kernel.name == "outputs"),
+        "outputs_use_drive": der.outputs_use_drive,
     }
     integrals = []
     if spec.body is not None:
         ctx["summary"] += " " + spec.body.summary() + " (modes computed from it)."
-    for sym in der.table.symbols:
+    for sym in der.integrals:
         v = der.table.value(sym)
         integrals.append({"symbol": str(sym), "value": mpmath.nstr(v.value, 20),
                           "method": v.method, "error_estimate": float(f"{v.error:.3e}"),
@@ -147,8 +147,6 @@ def _fe_body(body) -> dict | None:
 
 
 def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
-    from .fe import CLAMP_OUTPUTS, QUAD_POINTS, build_element_kernels, c_prefix, derive_element, output_plan
-
     der = derive_element(spec)
     emitted = [emit(k, c_prefix(k.name)) for k in build_element_kernels(der)]
     needs_clamp = any(o in CLAMP_OUTPUTS for o in spec.outputs)

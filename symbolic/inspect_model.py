@@ -5,11 +5,11 @@ import mpmath
 import sympy as sp
 
 from .cemit import emit
-from .derive import Derivation, derive
-from .energy import STRAIN_MODELS
+from .derive import build_kernels, derive
 from .generate import C_PREFIX, fingerprint
-from .kernels import build_kernels
-from .spec import VariantSpec
+from .modal import Derivation
+from .spec import QUAD_POINTS, VariantSpec
+from .strain_models import STRAIN_MODELS
 
 SECTIONS = ("modes", "energy", "integrals", "mass", "stiffness", "equations", "ops")
 
@@ -132,7 +132,7 @@ class Report:
 
     def _integrals(self) -> None:
         self.title("Modal integrals (int_0^1 ... ds)")
-        for sym in self.der.table.symbols:
+        for sym in self.der.integrals:
             v = self.der.table.value(sym)
             how = f"exact = {v.exact}" if v.method == "exact" else \
                 f"Gauss-Legendre n={v.nodes}{' per element, double' if v.method == 'fe_gauss' else ''}, " \
@@ -170,7 +170,7 @@ class Report:
 
     # ----- the finite-element reference ------------------------------------------------
     def _render_fe(self, sections) -> str:
-        from .fe import QUAD_POINTS, build_element_kernels, c_prefix, hermite, le
+        from .fe import build_element_kernels, c_prefix, hermite, le
 
         d, s = self.der, self.spec
         self.add(f"variant {s.name}: {s.description}")

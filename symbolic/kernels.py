@@ -1,12 +1,8 @@
-"""Derived sympy expressions -> casadi SX functions (the kernels), with CSE and AD Jacobians.
+"""Derived sympy expressions -> casadi SX functions (the kernels), with CSE.
 
-Kernels (row-major dense outputs, p = beam parameters, drive = [w, alpha]):
-  mass(q, p) -> M                               mass matrix, symmetric positive definite
-  force(q, qd, drive, p) -> f                   M q'' = f
-  residual_jac(q, qd, qdd, drive, p) -> (dr_dq, dr_dqd) of r = M(q) q'' - f (Newton iterations)
-  outputs(q, qd, qdd, drive, p) -> y             v_tip, u_tip, N and M at points
-  energy(q, qd, drive, p) -> [T, V, h]           kinetic, potential, Jacobi integral
-  maneuver(t, mp) -> [theta, w, alpha]           guided root rotation
+Codegen only: it knows no physics. A derivation hands it sympy expressions and the symbols
+that stand for the kernel inputs (which kernels a model has is the model's: modal.py, exact.py,
+fe.py, sysgen.py); cemit.py prints the casadi functions as C.
 """
 from __future__ import annotations
 
@@ -16,11 +12,6 @@ from dataclasses import dataclass
 import casadi as ca
 import sympy as sp
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from .derive import Derivation
-from .energy import alpha, w
 from .maneuver import t as t_sym
 
 
@@ -153,20 +144,21 @@ def group_by_parameters(expr: sp.Expr, params: list[sp.Symbol]) -> sp.Expr:
     return sp.Add(*[g * sp.Add(*v) for g, v in groups.items()], evaluate=False)
 
 
-def _matrix_sx(tr: SympyToCasadi, mat: sp.Matrix, params) -> ca.SX:
+def matrix_sx(tr: SympyToCasadi, mat: sp.Matrix, params) -> ca.SX:
     rows = [[tr(group_by_parameters(mat[i, j], params)) for j in range(mat.cols)]
             for i in range(mat.rows)]
     return ca.vertcat(*[ca.horzcat(*r) for r in rows])
 
 
-def translator(q_syms, qd_syms, qdd_syms, params, maneuver) -> tuple[SympyToCasadi, dict]:
-    """casadi inputs {q, qd, qdd, drive, p, t, mp} and a translator from the sympy symbols."""
+def translator(q_syms, qd_syms, qdd_syms, params, maneuver, drive) -> tuple[SympyToCasadi, dict]:
+    """casadi inputs {q, qd, qdd, drive, p, t, mp} and a translator from the sympy symbols
+    (drive: the symbols of the two drive inputs, a guided hub's rate and acceleration)."""
     n = len(q_syms)
     sx = {"q": ca.SX.sym("q", n), "qd": ca.SX.sym("qd", n), "qdd": ca.SX.sym("qdd", n),
           "drive": ca.SX.sym("drive", 2), "p": ca.SX.sym("p", len(params)), "t": ca.SX.sym("t"),
           "mp": ca.SX.sym("mp", len(maneuver.params))}
-    symbols = {w: sx["drive"][0], alpha: sx["drive"][1], t_sym: sx["t"]}
-    priority = {w: 1, alpha: 1}
+    symbols = {drive[0]: sx["drive"][0], drive[1]: sx["drive"][1], t_sym: sx["t"]}
+    priority = {drive[0]: 1, drive[1]: 1}
     for i, ps in enumerate(params):
         symbols[ps] = sx["p"][i]
         priority[ps] = 0
@@ -180,7 +172,7 @@ def translator(q_syms, qd_syms, qdd_syms, params, maneuver) -> tuple[SympyToCasa
 
 
 def maneuver_sx(tr: SympyToCasadi, man) -> ca.SX:
-    return _matrix_sx(tr, sp.Matrix([man.theta, man.rate, man.acceleration]), [])
+    return matrix_sx(tr, sp.Matrix([man.theta, man.rate, man.acceleration]), [])
 
 
 def make_kernels(specs) -> list[Kernel]:
@@ -198,33 +190,3 @@ def make_kernels(specs) -> list[Kernel]:
                               tuple(Port(a, e.shape[0], e.shape[1]) for (a, _), e in zip(outs, out_exprs)),
                               fn))
     return kernels
-
-
-def build_kernels(der: "Derivation") -> list[Kernel]:
-    if getattr(der, "exact", False):
-        from .exact import build_exact_kernels
-
-        return build_exact_kernels(der)
-    params = der.params
-    tr, x = translator(der.q, der.qd, der.qdd, params, der.maneuver)
-    M = _matrix_sx(tr, der.numeric(der.M), params)
-    f = _matrix_sx(tr, der.numeric(der.f), params)
-    y = _matrix_sx(tr, der.numeric(sp.Matrix(list(der.outputs.values()))), params)
-    T, V, h = der.energies()
-    en = _matrix_sx(tr, der.numeric(sp.Matrix([T, V, h])), params)
-    r = ca.mtimes(M, x["qdd"]) - f
-    q, qd, qdd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
-    return make_kernels([
-        ("mass", "mass matrix M(q)", [("q", q), ("p", p)], [("M", M)]),
-        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("drive", drive), ("p", p)],
-         [("f", f)]),
-        ("residual_jac", "Jacobians of r = M(q) q'' - f", [("q", q), ("qd", qd), ("qdd", qdd),
-                                                          ("drive", drive), ("p", p)],
-         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
-        ("outputs", "output quantities " + ", ".join(der.outputs),
-         [("q", q), ("qd", qd), ("qdd", qdd), ("drive", drive), ("p", p)], [("y", y)]),
-        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
-         [("q", q), ("qd", qd), ("drive", drive), ("p", p)], [("e", en)]),
-        ("maneuver", f"[theta, w, alpha] of manoeuvre '{der.maneuver.name}'",
-         [("t", x["t"]), ("mp", x["mp"])], [("drive3", maneuver_sx(tr, der.maneuver))]),
-    ])

@@ -151,7 +151,7 @@ def load_scene(path, model: str | None = None):
         if not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model):
             r.fail("--model", f"'{model}' is not a variant name")
         data["model"] = {"variant": model, "name": f"{_default_name(path)}_{model}"[:48]}
-        from .outputs import axial_force_available
+        from .output_names import axial_force_available
         from .spec import builtin
 
         try:
@@ -229,7 +229,7 @@ def _outputs(r: _Reader, quantities: list[str], length: float):
     if not isinstance(named, dict):
         r.fail("[output] positions", "must be a table of name = position in metres")
     points, outputs, columns = {}, [], {}
-    from .outputs import LABEL_RE, POINTS
+    from .output_names import LABEL_RE, POINTS
 
     def position(label: str, x) -> None:
         if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):

@@ -1,7 +1,9 @@
 """Frozen variant specifications: the data that defines a model, and its fingerprint.
 
-A variant is data (strain model + axial modes + bending modes + manoeuvre + outputs) run
-through one derivation mechanism; nothing here is specific to one variant.
+A variant is data (strain model + axial modes + bending modes + manoeuvre + outputs, or a
+number of `ef` elements) run through one derivation mechanism; nothing here is specific to one
+variant. Checked against data only (names of strain models, modes, manoeuvres, outputs): the
+derivations (derive.py, fe.py) import this module, never the other way round.
 """
 from __future__ import annotations
 
@@ -10,11 +12,18 @@ import json
 import re
 from dataclasses import dataclass, field, replace
 
+import sympy as sp
+
 from .errors import SpecError
-from .fe import FESpec
+from .maneuver import maneuver_of
 from .modes import ModeRef, mode, parse_mode_token
+from .output_names import (STRESS_OUTPUTS, canonical_output, check_output_names, default_outputs,
+                           stress_method)
+from .strain_models import STRAIN_MODELS
 
 NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")  # used with match: \Z, not $ (a trailing newline)
+QUAD_POINTS = 5  # ef: Gauss points per element (exact for EA eps^2, degree 8 in xi; kappa^2 is rational)
+CLAMP_OUTPUTS = ("N_A_clamp", "M_A_clamp")  # ef: N and M at the root from the clamp reaction
 
 
 @dataclass(frozen=True)
@@ -70,8 +79,6 @@ class VariantSpec:
             {"moment": self.moment} if self.moment != "constitutive" else {})
 
     def validate(self) -> "VariantSpec":
-        from .energy import STRAIN_MODELS  # the physics owns the list of strain models
-
         if not isinstance(self.name, str) or not NAME_RE.match(self.name):
             raise SpecError(f"variant name {self.name!r}: use lower-case letters, digits and _ "
                             "(it becomes a C identifier), starting with a letter")
@@ -99,8 +106,6 @@ class VariantSpec:
         if "v_tip" in self.outputs and all(self.mode(r).value_at(0, 1) == 0 for r in self.bending):
             raise SpecError(f"variant '{self.name}': no bending mode moves the tip, so v_tip would "
                             "be identically zero (add the static mode or a clamped-free mode)")
-        from .maneuver import maneuver_of
-
         try:
             maneuver_of(self.maneuver)
         except SpecError as exc:
@@ -113,11 +118,61 @@ class VariantSpec:
         if self.axial_force not in ("constitutive", "equilibrium"):
             raise SpecError(f"variant '{self.name}': axial force '{self.axial_force}' must be "
                             "'constitutive' or 'equilibrium'")
-        from .outputs import check_output_names, stress_method
-
         stress_method(self)
         check_output_names(self)
         return self
+
+
+@dataclass(frozen=True)
+class FESpec:
+    """The finite-element reference `ef` (geometrically exact ANCF elements, fe.py)."""
+
+    name: str
+    elements: int = 16
+    maneuver: str = "spin_up"
+    outputs: tuple[str, ...] = ("v_tip", "u_tip") + STRESS_OUTPUTS + CLAMP_OUTPUTS
+    points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
+    left_out: tuple[tuple[str, str], ...] = ()
+    description: str = ""
+    aliases: tuple[str, ...] = field(default=(), compare=False)
+    body: object = None  # fedata.BeamBody: per-element sections and point masses
+    kind = "fe"
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        """x_x of the clamped root (free: it is the root stretch), then 4 per further node."""
+        return ("dx0",) + tuple(f"{c}{k}" for k in range(1, self.elements + 1)
+                                for c in ("ux", "uy", "dx", "dy"))
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "kind": "fe", "formulation": "ancf_cable",
+                "elements": self.elements, "quadrature": QUAD_POINTS, "maneuver": self.maneuver,
+                "outputs": list(self.outputs), "points": [list(p) for p in self.points],
+                "left_out": [list(x) for x in self.left_out]} | (
+                    {"body": self.body.to_dict()} if self.body is not None else {})
+
+    def validate(self) -> "FESpec":
+        if not NAME_RE.match(self.name):
+            raise SpecError(f"variant name '{self.name}': use lower-case letters, digits and _")
+        if not isinstance(self.elements, int) or not 1 <= self.elements <= 512:
+            raise SpecError(f"variant '{self.name}': elements must be an integer in 1..512 "
+                            f"(got {self.elements!r})")
+        if self.body is not None:
+            if self.body.elements != self.elements:
+                raise SpecError(f"variant '{self.name}': {self.elements} elements but its body has "
+                                f"{self.body.elements}")
+            if any(m.rotary for m in self.body.masses):
+                raise SpecError(f"variant '{self.name}': point rotary inertia is not modelled in "
+                                "'ef' (its nodes carry slopes, not rotations); modal variants take it")
+        maneuver_of(self.maneuver)
+        check_output_names(self, extra=CLAMP_OUTPUTS)
+        return self
+
+    def node_fractions(self) -> list:
+        """Node positions as exact fractions of L (uniform mesh) or the body's nodes."""
+        if self.body is None:
+            return [sp.Rational(k, self.elements) for k in range(self.elements + 1)]
+        return [sp.Rational(repr(float(x))) for x in self.body.s_nodes]
 
 
 def _refs(axis: str, tokens) -> tuple[ModeRef, ...]:
@@ -131,8 +186,6 @@ def _refs(axis: str, tokens) -> tuple[ModeRef, ...]:
 PAPER_BENDING = ("static", "cp1", "cp2")
 
 def with_default_outputs(spec: VariantSpec) -> VariantSpec:
-    from .outputs import default_outputs
-
     return replace(spec, outputs=default_outputs(spec))
 
 
@@ -175,8 +228,6 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
               maneuver=None, stress=None, axial_force=None, elements=None, points=None, moment=None):
     """A new variant from a base one with some fields replaced (mode lists as 'static,cp1,...').
     Outputs not given explicitly are the defaults of the new variant."""
-    from .outputs import canonical_output
-
     if isinstance(outputs, str):
         outputs = [o.strip() for o in outputs.split(",")]
     if outputs is not None and (not outputs or not all(outputs)):

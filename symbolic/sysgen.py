@@ -29,7 +29,8 @@ from .efbody import _E, _ED, OM, VX, VY, EfPart, generic_element
 from .energy import A, E, I, L, rho
 from .fe import le
 from .generate import MANIFEST, _environment, write_folder
-from .kernels import SympyToCasadi, _matrix_sx, group_by_parameters, make_kernels
+from .lagrange import equations_of_motion_sx
+from .kernels import SympyToCasadi, group_by_parameters, make_kernels, matrix_sx
 from .maneuver import t as t_sym
 from .paths import PACKAGE_DIR, cache_dir, file_lock, templates_dir
 from .system import System, length_scale, system_to_dict
@@ -72,20 +73,19 @@ def build_system_kernels(der: SystemDerivation) -> list:
     for k in range(len(der.guided)):
         ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
     ddot = ca.vertcat(*ddot)
-    M = _matrix_sx(tr, der.M, psyms)
-    f = _matrix_sx(tr, der.f, psyms)
+    M = matrix_sx(tr, der.M, psyms)
+    f = matrix_sx(tr, der.f, psyms)
     T_, V_, h_ = der.energies()
     # ef bodies' elastic energy is not in these kernels: system.c adds it per element with the
     # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
-    en = _matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
+    en = matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
     if der.ef_kinetic:
-        # Lagrange on the ef bodies' kinetic energy by AD: p = dT/dq', M = dp/dq',
-        # f = dT/dq - dp/dq q' - dp/dd d'
+        # Lagrange on the ef bodies' kinetic energy by AD (lagrange.equations_of_motion_sx)
         T_ef = ef_kinetic_energy(der, tr, x)
-        p_ef = ca.gradient(T_ef, qd)
-        M_ef = ca.jacobian(p_ef, qd)
+        guided = [(d[1 + 3 * k], d[2 + 3 * k], d[3 + 3 * k]) for k in range(len(der.guided))]
+        M_ef, f_ef = equations_of_motion_sx(T_ef, 0, q, qd, guided)
         M += M_ef
-        f += ca.gradient(T_ef, q) - ca.mtimes(ca.jacobian(p_ef, q), qd) - ca.mtimes(ca.jacobian(p_ef, d), ddot)
+        f += f_ef
         T0_ef = ca.substitute(T_ef, qd, ca.SX.zeros(qd.shape))
         en += ca.vertcat(T_ef, 0, ca.mtimes(qd.T, ca.mtimes(M_ef, qd)) / 2 - T0_ef)
         tr.symbols[EF_T] = T_ef
@@ -105,7 +105,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
     constraint_kernels = []
     if der.constraints:
         # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d'
-        phi = _matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
+        phi = matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
         phi_q = ca.jacobian(phi, q)
         phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
         phi_dot = ca.mtimes(phi_q, qd) + phi_t
@@ -230,7 +230,6 @@ def generate_system_files(system: System) -> dict[str, str]:
     length_param = names.index("L") if (len(beams) == 1 and beams[0].length == scale) else -1
     initial = [c_double(system.joint(c.joint).initial) if c.group == "joint" else "0.0"
                for c in der.coords]
-    used = {k.kernel.name: k.used_inputs for k in emitted}
     ctx = {
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
         "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
@@ -245,8 +244,8 @@ def generate_system_files(system: System) -> dict[str, str]:
                          for p in der.drive_params],
         "length_scale": c_double(scale), "length_param": length_param,
         "mass_constant": mass_constant, "initial": initial,
-        "outputs_use_acceleration": "qdd" in used["outputs"],
-        "outputs_use_drive": "d" in used["outputs"],
+        "outputs_use_acceleration": der.outputs_use_acceleration,
+        "outputs_use_drive": der.outputs_use_drive,
         "ef_bodies": ef_elements(der),
     }
     env = _environment()

@@ -18,8 +18,8 @@ import re
 from dataclasses import dataclass, field, fields
 
 from .errors import SpecError
+from .spec import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
-NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")
 GROUND = "ground"
 JOINT_KINDS = ("revolute", "prismatic", "clamp")
 DRIVER_KINDS = ("guided", "motor")

@@ -470,7 +470,7 @@ def _carried(system: System, o: Output) -> None:
     if model.kind != "modal":
         return  # finite elements carry every field
     s = sp.nsimplify(x / beam.length, rational=True) if 0 < x < beam.length else sp.Integer(int(x > 0))
-    from .outputs import axial_force_available
+    from .output_names import axial_force_available
 
     if fn in ("v", "w", "M"):
         order = 2 if fn == "M" else 0
@@ -588,7 +588,7 @@ def load_system_scene(path: Path, data: dict, name: str, model: str | None = Non
 def _model_outputs(system: System) -> System:
     """--model with a modal variant that has no axial mode: N comes from the axial inertial
     forces (as for one-beam scenes), so the scene's N outputs stay available."""
-    from .outputs import axial_force_available
+    from .output_names import axial_force_available
 
     wants_n = {parse_output(system, o.quantity)[1][0] for o in system.outputs
                if o.quantity.strip().startswith("N(")}

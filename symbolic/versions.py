@@ -13,8 +13,10 @@ from .paths import PACKAGE_DIR, templates_dir
 
 # Modules whose code decides what is generated: a change in any of them changes the
 # fingerprint of every variant, so checked-in generated code is detected as stale.
-GENERATOR_MODULES = ("modes", "integrals", "energy", "maneuver", "outputs", "spec", "derive",
-                     "kernels", "cemit", "generate", "fe", "fedata", "exact", "beam_element")
+GENERATOR_MODULES = ("modes", "integrals", "energy", "strain_models", "maneuver", "output_names",
+                     "system", "systems_library", "assemble", "efbody",
+                     "outputs", "spec", "lagrange", "modal", "derive", "kernels", "cemit", "generate",
+                     "fe", "fedata", "exact", "beam_element")
 
 
 def tool_versions() -> dict[str, str]:

@@ -12,7 +12,7 @@ import sympy as sp
 
 from flexsym.energy import BEAM_PARAMS, alpha, w
 from flexsym.generate import MANIFEST, check_folder, generate_files, read_manifest
-from flexsym.kernels import build_kernels
+from flexsym.derive import build_kernels
 from flexsym.maneuver import t as t_sym
 from flexsym.paths import generated_dir
 from flexsym.spec import BUILTIN, builtin

@@ -9,7 +9,7 @@ from scipy.integrate import solve_ivp
 from flexsym import exact as X
 from flexsym.derive import derive
 from flexsym.energy import BEAM_PARAMS
-from flexsym.kernels import build_kernels
+from flexsym.derive import build_kernels
 from flexsym.modes import mode
 from flexsym.spec import builtin, customize
 from flexsym.validity import assess, truncation_share

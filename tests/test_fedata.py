@@ -341,7 +341,7 @@ def test_model_option_needs_a_scene_and_a_known_variant(capsys):
 def test_fe_data_variant_c_matches_casadi_and_sympy():
     from test_codegen import RTOL, _random_inputs, _sympy_eval, _sympy_reference
 
-    from flexsym.kernels import build_kernels
+    from flexsym.derive import build_kernels
     from flexsym.pipeline import compiled
 
     body = BeamBody.from_segments([(5.0, PAPER), (5.0, OUTER)], 6,

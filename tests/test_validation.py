@@ -132,7 +132,7 @@ def test_bad_command_line_is_refused(capsys, workdir, argv, fragment):
 
 def test_names_with_a_newline_never_pass():
     """`$` matches before a trailing newline: the name checks use fullmatch / \\Z."""
-    from flexsym.outputs import LABEL_RE
+    from flexsym.output_names import LABEL_RE
     from flexsym.spec import NAME_RE
 
     assert NAME_RE.match("good") and not NAME_RE.match("good\n")
