@@ -4,8 +4,8 @@
 
 #include "flexsym/system.h"
 
-/* ali3p, genalpha3: the constrained integrators (ali3p.c, genalpha3.c); they also run models
- * without constraints (nc = 0). */
+/* One file per integrator (src/integrator.h). ali3p, genalpha3: the constrained integrators;
+ * they also run models without constraints (nc = 0). */
 typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4,
                FSR_ALI3P = 5, FSR_GENALPHA3 = 6 } fsr_method;
 
@@ -68,6 +68,8 @@ void fsr_default_options(fsr_options* o);
 fsr_status fsr_simulate(const fsr_options* o, fsr_result* r);
 void fsr_free(fsr_result* r);
 const char* fsr_method_name(fsr_method m);
+/* *m = the method named name (as fsr_method_name gives it); returns 0 when there is none. */
+int fsr_method_by_name(const char* name, fsr_method* m);
 /* The same for a model given as a struct (system.h); methods ali3p and genalpha3 only. Before
  * the first step the initial state is made consistent with the constraints (FSR_ASSEMBLY and a
  * message naming the constraint with the largest residual when it cannot be). */
