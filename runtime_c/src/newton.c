@@ -31,28 +31,6 @@ fsr_status newton_factor(sim* s, double t)
     return FSR_OK;
 }
 
-void newton_solve(sim* s, double* x)
-{
-    if (s->kb >= 0) fsr_band_lu_solve(s->S, s->N, s->kb, s->kb, s->piv, x);
-    else sim_apply_inverse(s, s->Sinv, s->N, x);
-}
-
-int newton_converged(const sim* s, const newton_state* ns, long k, double dq, double tol)
-{
-    if (dq <= tol) return 1;
-    if (s->o->newton_full || ns->theta < 0.0 || k - ns->theta_step > NEWTON_THETA_AGE) return 0;
-    return ns->theta < 1.0 && ns->theta / (1.0 - ns->theta) * dq <= tol;
-}
-
-int newton_contraction(newton_state* ns, long k, double dq, double dq_prev, double theta_max)
-{
-    if (dq_prev > 0.0) {
-        ns->theta = dq / dq_prev;
-        ns->theta_step = k;
-    }
-    return ns->theta > theta_max;
-}
-
 fsr_status newton_failed(sim* s, double t1, double dq, int it)
 {
     return sim_fail(s, FSR_NEWTON_FAILED,

@@ -37,15 +37,31 @@ void newton_rows(sim* s, int i, const double* cq, const double* cv);
 fsr_status newton_factor(sim* s, double t);
 
 /* x = S^-1 x */
-void newton_solve(sim* s, double* x);
+static inline void newton_solve(sim* s, double* x)
+{
+    if (s->kb >= 0) fsr_band_lu_solve(s->S, s->N, s->kb, s->kb, s->piv, x);
+    else sim_apply_inverse(s, s->Sinv, s->N, x);
+}
 
 /* Converged when the update is below tol, or (modified Newton) when the error it leaves,
  * theta / (1 - theta) |dq| for a contraction theta measured in the last NEWTON_THETA_AGE steps,
  * is (Hairer & Wanner II, IV.8): usually after one iteration instead of two. */
-int newton_converged(const sim* s, const newton_state* ns, long k, double dq, double tol);
+static inline int newton_converged(const sim* s, const newton_state* ns, long k, double dq, double tol)
+{
+    if (dq <= tol) return 1;
+    if (s->o->newton_full || ns->theta < 0.0 || k - ns->theta_step > NEWTON_THETA_AGE) return 0;
+    return ns->theta < 1.0 && ns->theta / (1.0 - ns->theta) * dq <= tol;
+}
 
 /* Record the contraction of an iteration; ask for a new matrix when it is too slow. */
-int newton_contraction(newton_state* ns, long k, double dq, double dq_prev, double theta_max);
+static inline int newton_contraction(newton_state* ns, long k, double dq, double dq_prev, double theta_max)
+{
+    if (dq_prev > 0.0) {
+        ns->theta = dq / dq_prev;
+        ns->theta_step = k;
+    }
+    return ns->theta > theta_max;
+}
 
 fsr_status newton_failed(sim* s, double t1, double dq, int it);
 

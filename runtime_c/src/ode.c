@@ -63,12 +63,6 @@ fsr_status sim_mass(sim* s, double t, const double* q, const double* d, int fact
 }
 
 /* x = A^-1 x by the explicit inverse of a dense A of size dim. */
-void sim_apply_inverse(sim* s, const double* Ainv, int dim, double* x)
-{
-    fsr_matvec(Ainv, dim, -1, x, s->tmp);
-    memcpy(x, s->tmp, sizeof(double) * (size_t)dim);
-}
-
 fsr_status sim_accel(sim* s, double t, const double* q, const double* v, double* a)
 {
     double* drive = s->dw + DW_ACCEL * s->nd;
@@ -128,11 +122,6 @@ fsr_status sim_store(sim* s, double t, const double* q, const double* v, const d
     if (s->o->energy) s->m->energy(q, v, drive, s->o->p, row + 1 + s->m->ny + s->n);
     r->nrows++;
     return FSR_OK;
-}
-
-double sim_time(const sim* s, long k)
-{
-    return k >= s->nsteps ? s->o->t_end : (double)k * s->o->dt;
 }
 
 /* Write the rows due in (t, t1]: the state (y1, a1) at t1, or the dense output of step d

@@ -10,8 +10,11 @@
 #ifndef FLEXSYM_ODE_H
 #define FLEXSYM_ODE_H
 
+#include <string.h>
+
 #include "common.h"
 #include "integrator.h"
+#include "linalg.h"
 
 /* drive vectors of the callers: DW_ACCEL, DW_ROW, DW_STEP (+ stage: 3 radau stages), nd each */
 enum { DW_ACCEL = 0, DW_ROW = 1, DW_STEP = 2, DW_COUNT = 2 + 3 };
@@ -67,7 +70,10 @@ void sim_close(sim* s);
 fsr_status sim_retune(sim* s, const fsr_integrator* it);
 fsr_status sim_fail(sim* s, fsr_status st, const char* fmt, ...);
 /* t_k: k dt, t_end for k >= nsteps */
-double sim_time(const sim* s, long k);
+static inline double sim_time(const sim* s, long k)
+{
+    return k >= s->nsteps ? s->o->t_end : (double)k * s->o->dt;
+}
 /* The drive vector d (nd) at t into d (the last two times cached). */
 void sim_drive(sim* s, double t, double* d);
 /* M(q, d) into Mraw and, with factor, its Cholesky factor into Mfac; once when M is constant. */
@@ -77,7 +83,11 @@ fsr_status sim_accel(sim* s, double t, const double* q, const double* v, double*
 /* k = y' = [q', q''] at (t, y). */
 fsr_status sim_deriv(sim* s, double t, const double* y, double* k);
 /* x = A^-1 x by the explicit inverse of a dense A of size dim. */
-void sim_apply_inverse(sim* s, const double* Ainv, int dim, double* x);
+static inline void sim_apply_inverse(sim* s, const double* Ainv, int dim, double* x)
+{
+    fsr_matvec(Ainv, dim, -1, x, s->tmp);
+    memcpy(x, s->tmp, sizeof(double) * (size_t)dim);
+}
 /* FSR_OK, or FSR_DIVERGED naming the coordinate: not finite, or beyond blowup x L. */
 fsr_status sim_check_state(sim* s, double t, const double* q, const double* v);
 /* Append a row: t, outputs, q (and T, V, h with energy). */
