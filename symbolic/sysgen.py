@@ -19,7 +19,7 @@ from pathlib import Path
 import casadi as ca
 import sympy as sp
 
-from .assemble import SystemDerivation, derive_system
+from .assemble import SystemDerivation, derive_system, length_param
 from .build import Built, build
 from .cemit import c_double, emit
 from .efbody import _E, EfPart, generic_element
@@ -157,6 +157,14 @@ def ef_elements(der: SystemDerivation) -> list[dict]:
     return out
 
 
+def _unbounded(system: System, c) -> bool:
+    """A coordinate the runtime's blow-up limit (blowup x the length scale, in m) does not
+    bound: a revolute joint's angle (it may turn without end), an ANCF node's slope (no unit)."""
+    if c.group == "joint":
+        return system.joint(c.joint).kind == "revolute"
+    return c.group == "node" and c.name.rsplit("_", 1)[-1].startswith("d")
+
+
 def generate_system_files(system: System) -> dict[str, str]:
     der = derive_system(system)
     fp = fingerprint(system)
@@ -164,9 +172,6 @@ def generate_system_files(system: System) -> dict[str, str]:
     versions = tool_versions()
     mass_constant = not (der.M.free_symbols & (set(der.q) | set(der.drive_symbols)))
     scale = length_scale(system)
-    names = [n for n, _, _ in der.params]
-    beams = [b for b in system.bodies if b.flexible]
-    length_param = names.index("L") if (len(beams) == 1 and beams[0].length == scale) else -1
     initial = [c_double(system.joint(c.joint).initial) if c.group == "joint" else "0.0"
                for c in der.coords]
     used = {k.kernel.name: k.used_inputs for k in emitted}
@@ -182,7 +187,8 @@ def generate_system_files(system: System) -> dict[str, str]:
         "params": [{"name": n, "c_default": c_double(v)} for n, _, v in der.params],
         "drive_params": [{"name": p.name, "c_default": c_double(p.default)}
                          for p in der.drive_params],
-        "length_scale": c_double(scale), "length_param": length_param,
+        "length_scale": c_double(scale), "length_param": length_param(der),
+        "unbounded": [int(_unbounded(system, c)) for c in der.coords],
         "mass_constant": mass_constant, "initial": initial,
         "outputs_use_acceleration": "qdd" in used["outputs"],
         "outputs_use_drive": "d" in used["outputs"],

@@ -46,6 +46,14 @@ double fsr_length_scale(const fsm_system* m, const double* p)
     return m->length_param >= 0 ? p[m->length_param] : m->length_scale;
 }
 
+fsr_status fsr_check_blowup(fsr_result* r, const fsm_system* m, const fsr_options* o, double limit, double t,
+                            int i, double qi)
+{
+    if (!(fabs(qi) > limit) || (m->coord_unbounded && m->coord_unbounded[i])) return FSR_OK;
+    return fsr_fail(r, FSR_DIVERGED, "diverged at t = %.6g s: |%s| = %.5g m exceeds %g x L = %.4g m (runaway growth)",
+                    t, m->coord_names[i], fabs(qi), o->blowup, limit);
+}
+
 fsr_alpha fsr_alpha_coefficients(double rho_inf)
 {
     fsr_alpha c;
@@ -74,6 +82,14 @@ fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* 
     if (rows > (double)FSR_MAX_ROWS || rows * r->ncols * 8.0 > (double)FSR_MAX_ROW_BYTES)
         return fsr_fail(r, FSR_BAD_OPTIONS, "%.3g output rows of %d columns exceed the limits (%ld rows, "
                         "%ld bytes)", rows, r->ncols, FSR_MAX_ROWS, FSR_MAX_ROW_BYTES);
+    return FSR_OK;
+}
+
+static fsr_status check_length_scale(const fsr_options* o, const fsm_system* m, fsr_result* r)
+{
+    double L = fsr_length_scale(m, o->p);
+    if (!(L > 0.0) || !isfinite(L))
+        return fsr_fail(r, FSR_BAD_OPTIONS, "model %s: the length scale must be > 0 (got %g)", m->name, L);
     return FSR_OK;
 }
 
@@ -108,7 +124,7 @@ fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_
         if (!isfinite(o->mp[i]))
             return fsr_fail(r, FSR_BAD_OPTIONS, "manoeuvre parameter %s must be finite",
                             m->drive_param_names[i]);
-    return FSR_OK;
+    return check_length_scale(o, m, r);
 }
 
 fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system* m, fsr_result* r,
@@ -122,6 +138,7 @@ fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system*
         return fsr_fail(r, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
     if (o->newton_max < 1 || !(o->newton_tol > 0.0))
         return fsr_fail(r, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
+    if (!(o->blowup > 0.0)) return fsr_fail(r, FSR_BAD_OPTIONS, "blowup must be > 0");
     if (!(o->penalty > 0.0) || !isfinite(o->penalty))
         return fsr_fail(r, FSR_BAD_OPTIONS, "penalty must be > 0 (got %g)", o->penalty);
     if (o->step != 0.0) return fsr_fail(r, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)", method);
@@ -132,13 +149,11 @@ fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system*
         return fsr_fail(r, FSR_BAD_OPTIONS, "model %s lacks a kernel its sizes need (system.h)", m->name);
     if (o->energy && !m->energy)
         return fsr_fail(r, FSR_BAD_OPTIONS, "model %s has no energy kernel", m->name);
-    if (!(m->length_scale > 0.0) || !isfinite(m->length_scale))
-        return fsr_fail(r, FSR_BAD_OPTIONS, "model %s: length_scale must be > 0", m->name);
     for (int i = 0; i < m->np; ++i)
         if (!isfinite(o->p[i]))
             return fsr_fail(r, FSR_BAD_OPTIONS, "parameter %s must be finite", m->param_names[i]);
     for (int i = 0; i < m->nmp; ++i)
         if (!isfinite(o->mp[i]))
             return fsr_fail(r, FSR_BAD_OPTIONS, "drive parameter %s must be finite", m->drive_param_names[i]);
-    return FSR_OK;
+    return check_length_scale(o, m, r);
 }

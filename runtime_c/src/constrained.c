@@ -2,7 +2,7 @@
  * (allocated once), consistent initial conditions, the constraint block solve, rows.
  * The methods themselves are ali3p.c and genalpha3.c (integrator.h); the run loop simulate.c.
  *
- * Row: t, outputs, violation = max_i |Phi_i(q, t)| / length_scale (only when nc > 0), q, and
+ * Row: t, outputs, violation = max_i |Phi_i(q, t)| / L (only when nc > 0), q, and
  * with energy T, V, h. Outputs receive the multipliers lambda (ali3p: its lambda*), so that a
  * joint reaction is an output.
  */
@@ -231,6 +231,10 @@ fsr_status cs_accept(csim* s, double t1)
         if (!isfinite(s->q[i]) || !isfinite(s->v[i]) || !isfinite(s->a[i]))
             return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: %s is not finite", t1,
                            s->m->coord_names[i]);
+    for (int i = 0; i < s->n; ++i) {
+        fsr_status st = fsr_check_blowup(s->r, s->m, s->o, s->o->blowup * s->L, t1, i, s->q[i]);
+        if (st) return st;
+    }
     fsr_result* r = s->r;
     double h = t1 - cs_time(s, s->k - 1);
     if (r->steps == 0 || h < r->h_min) r->h_min = h;
@@ -265,7 +269,7 @@ fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const
     fsr_status st = fsr_check_constrained_options(o, m, r, it->name);
     if (st) return st;
     const size_t n = (size_t)s->n, nc = (size_t)s->nc, nn = n * n;
-    s->L = m->length_scale;
+    s->L = fsr_length_scale(m, o->p);
     s->tol = o->newton_tol * s->L;
     s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
     if (s->nsteps < 1) s->nsteps = 1;

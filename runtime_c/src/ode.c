@@ -90,10 +90,8 @@ fsr_status sim_check_state(sim* s, double t, const double* q, const double* v)
         if (!isfinite(q[i]) || !isfinite(v[i]))
             return sim_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: %s is not finite",
                             t, s->m->coord_names[i]);
-        if (fabs(q[i]) > limit)
-            return sim_fail(s, FSR_DIVERGED,
-                            "diverged at t = %.6g s: |%s| = %.5g m exceeds %g x L = %.4g m (runaway growth)",
-                            t, s->m->coord_names[i], fabs(q[i]), s->o->blowup, limit);
+        fsr_status st = fsr_check_blowup(s->r, s->m, s->o, limit, t, i, q[i]);
+        if (st) return st;
     }
     return FSR_OK;
 }

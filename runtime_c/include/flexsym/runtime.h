@@ -31,17 +31,18 @@ typedef struct {
                                 polynomial; 0 = steps of dt */
     double rho_inf;          /* generalized-alpha spectral radius at infinity, in [0, 1] */
     double nm_gamma, nm_beta;/* Newmark parameters (method FSR_NEWMARK) */
-    double newton_tol;       /* on |delta q|_inf, relative to the beam length */
+    double newton_tol;       /* on |delta q|_inf, relative to the length scale (system.h) */
     int newton_max;
     int newton_full;         /* 1: new Jacobian and factorisation every iteration (reference);
                                 0: modified Newton, the iteration matrix is reused */
-    double tol;              /* dopri5: rtol = atol / L (see simulate.c); 0 = fixed steps dt */
+    double tol;              /* dopri5: rtol = atol / L (see erk.c); 0 = fixed steps dt */
     long max_steps;          /* dopri5: accepted + rejected steps before giving up */
-    double blowup;           /* diverged when any |q_i| or |v_tip| exceeds blowup * L */
+    double blowup;           /* diverged when a coordinate exceeds blowup x the length scale
+                                (system.h: coord_unbounded are exempt) */
     int energy;              /* 1: rows end with T, V and the Jacobi integral h (fsm_energy) */
     double penalty;          /* ali3p: kappa, the penalty term's weight against the mass matrix
                                 (alpha = kappa (4 / dt^2) tr M / |Phi_q|_F^2 at t = 0) */
-    const double* p;         /* beam parameters (model->np) */
+    const double* p;         /* parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
     const double* y0;        /* initial state [q, q'] (2 nq values); NULL: at rest */
 } fsr_options;
