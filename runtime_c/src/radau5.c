@@ -18,7 +18,6 @@ typedef struct {
     double wden[RADAU_STAGES + 1];          /* 1 / prod_{l != j} (x_j - x_l) */
 } radau_tableau;
 
-
 /* What the method carries from step to step (sim.ms) */
 typedef struct {
     radau_tableau rt;
