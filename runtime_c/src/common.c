@@ -46,10 +46,9 @@ double fsr_length_scale(const fsm_system* m, const double* p)
     return m->length_param >= 0 ? p[m->length_param] : m->length_scale;
 }
 
-fsr_status fsr_check_blowup(fsr_result* r, const fsm_system* m, const fsr_options* o, double limit, double t,
-                            int i, double qi)
+fsr_status fsr_blowup_fail(fsr_result* r, const fsm_system* m, const fsr_options* o, double limit, double t,
+                           int i, double qi)
 {
-    if (!(fabs(qi) > limit) || (m->coord_unbounded && m->coord_unbounded[i])) return FSR_OK;
     return fsr_fail(r, FSR_DIVERGED, "diverged at t = %.6g s: |%s| = %.5g m exceeds %g x L = %.4g m (runaway growth)",
                     t, m->coord_names[i], fabs(qi), o->blowup, limit);
 }

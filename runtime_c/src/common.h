@@ -28,10 +28,15 @@ fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system*
  * (newton_tol x it), the blow-up limit (blowup x it) and the violation column scale with it. */
 double fsr_length_scale(const fsm_system* m, const double* p);
 
-/* FSR_DIVERGED with the message when coordinate i (value qi at t) is beyond limit = blowup x
- * the length scale and m->coord_unbounded does not exempt it, else FSR_OK. */
-fsr_status fsr_check_blowup(fsr_result* r, const fsm_system* m, const fsr_options* o, double limit, double t,
-                            int i, double qi);
+/* Coordinate i (value qi) is beyond limit = blowup x the length scale, and m->coord_unbounded
+ * does not exempt it (inline: every step asks, for every coordinate). */
+static inline int fsr_beyond_blowup(const fsm_system* m, double limit, int i, double qi)
+{
+    return fabs(qi) > limit && !(m->coord_unbounded && m->coord_unbounded[i]);
+}
+/* FSR_DIVERGED, the message naming coordinate i (value qi at t) and the limit. */
+fsr_status fsr_blowup_fail(fsr_result* r, const fsm_system* m, const fsr_options* o, double limit, double t,
+                           int i, double qi);
 
 /* Generalized-alpha coefficients (Chung-Hulbert) from the spectral radius at infinity */
 typedef struct { double am, af, gam, bet; } fsr_alpha;

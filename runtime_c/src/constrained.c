@@ -227,13 +227,12 @@ static fsr_status store(csim* s, double t)
 
 fsr_status cs_accept(csim* s, double t1)
 {
-    for (int i = 0; i < s->n; ++i)
+    const double limit = s->o->blowup * s->L;
+    for (int i = 0; i < s->n; ++i) {
         if (!isfinite(s->q[i]) || !isfinite(s->v[i]) || !isfinite(s->a[i]))
             return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: %s is not finite", t1,
                            s->m->coord_names[i]);
-    for (int i = 0; i < s->n; ++i) {
-        fsr_status st = fsr_check_blowup(s->r, s->m, s->o, s->o->blowup * s->L, t1, i, s->q[i]);
-        if (st) return st;
+        if (fsr_beyond_blowup(s->m, limit, i, s->q[i])) return fsr_blowup_fail(s->r, s->m, s->o, limit, t1, i, s->q[i]);
     }
     fsr_result* r = s->r;
     double h = t1 - cs_time(s, s->k - 1);

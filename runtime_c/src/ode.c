@@ -90,8 +90,7 @@ fsr_status sim_check_state(sim* s, double t, const double* q, const double* v)
         if (!isfinite(q[i]) || !isfinite(v[i]))
             return sim_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: %s is not finite",
                             t, s->m->coord_names[i]);
-        fsr_status st = fsr_check_blowup(s->r, s->m, s->o, limit, t, i, q[i]);
-        if (st) return st;
+        if (fsr_beyond_blowup(s->m, limit, i, q[i])) return fsr_blowup_fail(s->r, s->m, s->o, limit, t, i, q[i]);
     }
     return FSR_OK;
 }
