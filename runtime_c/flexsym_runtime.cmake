@@ -5,9 +5,12 @@
 # SYSTEM: the sources define fsm_system_model() (system.h); without it, a one-beam model is
 # wrapped into that struct by src/model_adapter.c.
 set(FLEXSYM_RUNTIME_DIR "${CMAKE_CURRENT_LIST_DIR}")
-set(FLEXSYM_RUNTIME_SOURCES "${FLEXSYM_RUNTIME_DIR}/src/simulate.c" "${FLEXSYM_RUNTIME_DIR}/src/linalg.c"
-    "${FLEXSYM_RUNTIME_DIR}/src/constrained.c" "${FLEXSYM_RUNTIME_DIR}/src/ali3p.c"
-    "${FLEXSYM_RUNTIME_DIR}/src/genalpha3.c" "${FLEXSYM_RUNTIME_DIR}/src/batch.c")
+# The run loop (simulate.c), one file per integrator (integrator.h) and what they share.
+set(FLEXSYM_RUNTIME_SOURCES)
+foreach(f simulate.c batch.c rk4.c dopri5.c erk.c genalpha.c newmark.c radau5.c newton.c ode.c
+          ali3p.c genalpha3.c constrained.c common.c linalg.c)
+  list(APPEND FLEXSYM_RUNTIME_SOURCES "${FLEXSYM_RUNTIME_DIR}/src/${f}")
+endforeach()
 
 if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
   set(CMAKE_BUILD_TYPE Release)

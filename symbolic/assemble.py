@@ -618,16 +618,28 @@ def _stress(der, beam, x, fn, where):
     return expr.xreplace(part.table.substitutions()).xreplace(part.psyms).xreplace({w: omega})
 
 
+def length_param(der: SystemDerivation) -> int:
+    """Index in der.params of the parameter that is the length scale, or -1: the L of the one
+    flexible body when it sets the scale (then tolerances, blow-up and the violation follow
+    `--param L=...`, as for a one-beam variant); the runtime's fsm_system.length_param."""
+    scale = length_scale(der.system)
+    beams = [b for b in der.system.bodies if b.flexible]
+    names = [n for n, _, _ in der.params]
+    return names.index("L") if (len(beams) == 1 and beams[0].length == scale and "L" in names) else -1
+
+
 def violation(der: SystemDerivation) -> sp.Expr:
-    """max_i |Phi_i| / length_scale: the runtime's `violation` column as an output (0 with no
-    cut joint). A nest of Piecewise, as casadi's fmax takes two arguments."""
+    """max_i |Phi_i| / length scale (length_param's parameter, else length_scale): the
+    runtime's `violation` column as an output (0 with no cut joint). A nest of Piecewise, as
+    casadi's fmax takes two arguments."""
     rows = [sp.Abs(phi) for _, phi in der.constraints]
     if not rows:
         return sp.Integer(0)
     out = rows[0]
     for r in rows[1:]:
         out = sp.Piecewise((out, out >= r), (r, True))
-    return out / sp.Float(length_scale(der.system))
+    i = length_param(der)
+    return out / (der.params[i][1] if i >= 0 else sp.Float(length_scale(der.system)))
 
 
 def _cut_loads(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Matrix, sp.Matrix]:

@@ -22,7 +22,7 @@ from pathlib import Path
 import casadi as ca
 import sympy as sp
 
-from .assemble import EF_T, SystemDerivation, derive_system, ef_guided_force
+from .assemble import EF_T, SystemDerivation, derive_system, ef_guided_force, length_param
 from .build import Built, build
 from .cemit import c_double, emit
 from .efbody import _E, _ED, OM, VX, VY, EfPart, generic_element
@@ -215,6 +215,14 @@ def ef_elements(der: SystemDerivation) -> list[dict]:
     return out
 
 
+def _unbounded(system: System, c) -> bool:
+    """A coordinate the runtime's blow-up limit (blowup x the length scale, in m) does not
+    bound: a revolute joint's angle (it may turn without end), an ANCF node's slope (no unit)."""
+    if c.group == "joint":
+        return system.joint(c.joint).kind == "revolute"
+    return c.group == "node" and c.name.rsplit("_", 1)[-1].startswith("d")
+
+
 def generate_system_files(system: System) -> dict[str, str]:
     der = derive_system(system)
     fp = fingerprint(system)
@@ -225,9 +233,6 @@ def generate_system_files(system: System) -> dict[str, str]:
     qs, ds, ps = mass.sx_in()
     mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds))
     scale = length_scale(system)
-    names = [n for n, _, _ in der.params]
-    beams = [b for b in system.bodies if b.flexible]
-    length_param = names.index("L") if (len(beams) == 1 and beams[0].length == scale) else -1
     initial = [c_double(system.joint(c.joint).initial) if c.group == "joint" else "0.0"
                for c in der.coords]
     ctx = {
@@ -242,7 +247,8 @@ def generate_system_files(system: System) -> dict[str, str]:
         "params": [{"name": n, "c_default": c_double(v)} for n, _, v in der.params],
         "drive_params": [{"name": p.name, "c_default": c_double(p.default)}
                          for p in der.drive_params],
-        "length_scale": c_double(scale), "length_param": length_param,
+        "length_scale": c_double(scale), "length_param": length_param(der),
+        "unbounded": [int(_unbounded(system, c)) for c in der.coords],
         "mass_constant": mass_constant, "initial": initial,
         "outputs_use_acceleration": der.outputs_use_acceleration,
         "outputs_use_drive": der.outputs_use_drive,

@@ -223,3 +223,14 @@ def test_without_constraints_the_methods_are_the_plain_ones(simulate, method, pl
     assert a.columns == b.columns and "violation" not in a.columns
     assert np.abs(a["v_tip"]).max() > 0.5
     assert np.abs(a["v_tip"] - b["v_tip"]).max() < 1e-12
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_blowup_bounds_a_constrained_run_at_lengths_not_angles(runners, tmp_path, method):
+    """--blowup stops ali3p and genalpha3 too, at blowup x the length scale (0.45 m) on the
+    coordinates that are lengths: the slider's s (0.45 m at t = 0) beyond 0.5 x 0.45 m; the rod
+    angle beta, exempt, passes 4.5 rad in the run of the default limit (the closed-form test)."""
+    code, _, err, d = run(runners, "slider_crank", tmp_path / "b.csv", integrator=method,
+                          dt=1e-4, t_end=0.01, blowup=0.5)
+    assert code == 3, err
+    assert "|s| = 0.45" in err and "exceeds 0.5 x L = 0.225 m" in err

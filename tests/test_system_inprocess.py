@@ -107,3 +107,23 @@ def test_api_sweep_and_inprocess_take_a_system_scene(system, tmp_path):
     assert list(table["status"]) == ["ok", "ok"]
     assert np.array_equal(table["x_tip_min"], b.summary("x_tip", "min"))
     assert np.array_equal(b.rows[0], run_built(built, scene.options).data)
+
+
+@pytest.mark.parametrize("integrator", ["genalpha", "ali3p"])
+def test_blowup_bounds_lengths_not_the_angle_of_a_revolute_joint(system, integrator):
+    """The blow-up limit is blowup x the length scale (1 m for S3) on coordinates that are
+    lengths: the pendulum thrown over the top (q'(0) = 20 rad/s) turns past 10 rad and runs to
+    the end with both families of integrators (the angle has no such bound), while a limit at
+    half the peak of the beam's modal coordinates stops the same run at one of them."""
+    scene, model, _ = system("pendulum")
+    opts = settings_of(scene.options, True) | {"integrator": integrator, "t_end": 0.6}
+    turned = model.batch({"qd0_pin": [20.0]}, rows=True, **opts)
+    assert turned.status == ["ok"], turned.messages
+    r = turned.result(0)
+    assert r["pin"][-1] > 10.0  # rad: beyond blowup x L = 10, were it a length
+    modal = [c for c in model.coordinates if c != "pin"]
+    peak = max(np.abs(r[c]).max() for c in modal)
+    stopped = model.batch({"qd0_pin": [20.0]}, **(opts | {"blowup": 0.5 * peak}))
+    assert stopped.status == ["diverged"]
+    assert any(f"|{c}| =" in stopped.messages[0] for c in modal), stopped.messages[0]
+    assert f"exceeds {0.5 * peak:g} x L" in stopped.messages[0]

@@ -84,6 +84,24 @@ def test_violation_output_is_the_runtime_column(slider_crank_run):
     assert np.abs(r["viol"] - r["violation"]).max() <= 1e-15
 
 
+def test_violation_follows_the_rod_length_as_length_scale():
+    """The rod sets S2's size (length_param): the generated violation output divides by the
+    parameter L, not by the number 0.3, and with L changed the runtime's column (and so its
+    Newton tolerance and blow-up limit, fsr_length_scale) is relative to the same new L."""
+    from flexsym.assemble import derive_system, length_param, violation
+    from flexsym.run import run_built
+    from flexsym.sysgen import prepare_system
+
+    system = slider_crank_system(builtin("m3"))
+    der = derive_system(system)
+    i = length_param(der)
+    assert der.params[i][0] == "L" and der.params[i][1] in violation(der).free_symbols
+    built = prepare_system(replace(system, outputs=system.outputs + (Output("viol", "violation"),)))
+    r = run_built(built, t_end=0.05, dt=1e-4, integrator="ali3p", interval=1e-4, params={"L": 0.33})
+    assert r.status == "ok" and r["violation"].max() > 0.0
+    assert np.abs(r["viol"] - r["violation"]).max() <= 1e-15
+
+
 def test_rigid_pendulum_pin_force_at_the_bottom_is_m_g_plus_centripetal():
     """A rigid bar on a pin (tree joint): at the bottom the pin pulls up with m (g + omega^2 r)
     (Newton, omega from the run) and has no horizontal component. (The flexible S3 bar rings

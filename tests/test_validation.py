@@ -88,7 +88,7 @@ CLI_BAD = [
     (["run", "m3", "--penalty", "1e6"], "--penalty: applies to ali3p, not to integrator genalpha"),
     (["run", "m3", "--integrator", "genalpha3", "--penalty", "1e6"], "--penalty: applies to ali3p, not to integrator genalpha3"),
     (["run", "m3", "--integrator", "ali3p", "--penalty", "0"], "--penalty: must be > 0 and <= 1e+15 (got 0)"),
-    (["run", "m3", "--integrator", "ali3p", "--blowup", "5"], "--blowup: applies to rk4, dopri5, genalpha, newmark and radau5, not to integrator ali3p"),
+    (["run", "m3", "--integrator", "ali3p", "--blowup", "0"], "--blowup: must be > 0 and <= 1e+06 (got 0)"),
     (["run", "m3", "--integrator", "newmark", "--newmark-gamma", "0.9", "--newmark-beta", "0.3"],
      "--newmark-beta: 0.3 with gamma = 0.9 is not unconditionally stable"),
     (["run", "m3", "--rho-inf", "1.5"], "--rho-inf: must be >= 0 and <= 1 (got 1.5)"),

@@ -103,18 +103,19 @@ static void project(csim* s, double h, const double* e, double* x)
     for (int i = 0; i < n; ++i) x[i] -= s->w2[i];
 }
 
-fsr_status ali3p_begin(csim* s)
+static fsr_status ali3p_begin(csim* s)
 {
     const int n = s->n, nc = s->nc;
     double tr = 0.0, fro = 0.0;
     for (int i = 0; i < n; ++i) tr += s->M[i * n + i];
     for (int i = 0; i < nc * n; ++i) fro += s->Pq[i] * s->Pq[i];
+    s->P = s->work;
     s->alpha = fro > 0.0 ? s->o->penalty * 4.0 / (s->o->dt * s->o->dt) * tr / fro : 0.0;
     s->h_mat = 0.0;
     return FSR_OK;
 }
 
-fsr_status ali3p_step(csim* s)
+static fsr_status ali3p_step(csim* s)
 {
     const fsm_system* m = s->m;
     const fsr_options* o = s->o;
@@ -210,4 +211,19 @@ fsr_status ali3p_step(csim* s)
     memcpy(a, a1, sizeof(double) * (size_t)n);
     s->k = k + 1;
     return cs_accept(s, t1);
+}
+
+/* doubles: P (n x n) */
+static size_t ali3p_work_size(int n)
+{
+    return (size_t)n * (size_t)n;
+}
+
+static const fsr_integrator INTEGRATOR = {
+    .name = "ali3p", .method = FSR_ALI3P, .stages = 1, .work_size = ali3p_work_size,
+    .cs_begin = ali3p_begin, .cs_step = ali3p_step};
+
+const fsr_integrator* fsr_integrator_ali3p(void)
+{
+    return &INTEGRATOR;
 }

@@ -1,8 +1,8 @@
 /* A run of a model given as a struct (system.h) by a constrained integrator: options, workspace
  * (allocated once), consistent initial conditions, the constraint block solve, rows.
- * The methods themselves are ali3p.c and genalpha3.c.
+ * The methods themselves are ali3p.c and genalpha3.c (integrator.h); the run loop simulate.c.
  *
- * Row: t, outputs, violation = max_i |Phi_i(q, t)| / length_scale (only when nc > 0), q, and
+ * Row: t, outputs, violation = max_i |Phi_i(q, t)| / L (only when nc > 0), q, and
  * with energy T, V, h. Outputs receive the multipliers lambda (ali3p: its lambda*), so that a
  * joint reaction is an output.
  */
@@ -227,10 +227,13 @@ static fsr_status store(csim* s, double t)
 
 fsr_status cs_accept(csim* s, double t1)
 {
-    for (int i = 0; i < s->n; ++i)
+    const double limit = s->o->blowup * s->L;
+    for (int i = 0; i < s->n; ++i) {
         if (!isfinite(s->q[i]) || !isfinite(s->v[i]) || !isfinite(s->a[i]))
             return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: %s is not finite", t1,
                            s->m->coord_names[i]);
+        if (fsr_beyond_blowup(s->m, limit, i, s->q[i])) return fsr_blowup_fail(s->r, s->m, s->o, limit, t1, i, s->q[i]);
+    }
     fsr_result* r = s->r;
     double h = t1 - cs_time(s, s->k - 1);
     if (r->steps == 0 || h < r->h_min) r->h_min = h;
@@ -250,46 +253,9 @@ fsr_status cs_newton_failed(csim* s, double t1, double dq, int it)
                    "after %d iterations); reduce --dt", t1, dq, cs_max_abs(s->phi, s->nc), it);
 }
 
-static fsr_status check_options(csim* s)
-{
-    const fsr_options* o = s->o;
-    const fsm_system* m = s->m;
-    if (o->method != FSR_ALI3P && o->method != FSR_GENALPHA3)
-        return cs_fail(s, FSR_BAD_OPTIONS, "a model given as a struct runs with ali3p or genalpha3 "
-                       "(got method %d)", (int)o->method);
-    if (!(o->dt > 0.0) || !isfinite(o->dt)) return cs_fail(s, FSR_BAD_OPTIONS, "dt must be > 0 (got %g)", o->dt);
-    if (!(o->t_end > 0.0) || !isfinite(o->t_end))
-        return cs_fail(s, FSR_BAD_OPTIONS, "t_end must be > 0 (got %g)", o->t_end);
-    if (o->out_every < 1) return cs_fail(s, FSR_BAD_OPTIONS, "out_every must be >= 1 (got %d)", o->out_every);
-    if (!(o->rho_inf >= 0.0 && o->rho_inf <= 1.0))
-        return cs_fail(s, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
-    if (o->newton_max < 1 || !(o->newton_tol > 0.0))
-        return cs_fail(s, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
-    if (!(o->penalty > 0.0) || !isfinite(o->penalty))
-        return cs_fail(s, FSR_BAD_OPTIONS, "penalty must be > 0 (got %g)", o->penalty);
-    if (o->step != 0.0)
-        return cs_fail(s, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)",
-                       o->method == FSR_ALI3P ? "ali3p" : "genalpha3");
-    if (fsr_check_run(o, m, s->r)) return s->r->status;
-    if (!m->drive || !m->mass || !m->force || !m->residual_jac || !m->outputs
-        || (m->nc > 0 && (!m->constraints || !m->constraint_jac || !m->constraint_rate
-                          || !m->constraint_acc || !m->constraint_names)))
-        return cs_fail(s, FSR_BAD_OPTIONS, "model %s lacks a kernel its sizes need (system.h)", m->name);
-    if (o->energy && !m->energy)
-        return cs_fail(s, FSR_BAD_OPTIONS, "model %s has no energy kernel", m->name);
-    if (!(m->length_scale > 0.0) || !isfinite(m->length_scale))
-        return cs_fail(s, FSR_BAD_OPTIONS, "model %s: length_scale must be > 0", m->name);
-    for (int i = 0; i < m->np; ++i)
-        if (!isfinite(o->p[i]))
-            return cs_fail(s, FSR_BAD_OPTIONS, "parameter %s must be finite", m->param_names[i]);
-    for (int i = 0; i < m->nmp; ++i)
-        if (!isfinite(o->mp[i]))
-            return cs_fail(s, FSR_BAD_OPTIONS, "drive parameter %s must be finite", m->drive_param_names[i]);
-    return FSR_OK;
-}
-
 /* Workspace in one block: doubles, then ints. */
-fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r, long capacity)
+fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const fsr_options* o,
+                   fsr_result* r, long capacity)
 {
     memset(s, 0, sizeof *s);
     memset(r, 0, sizeof *r);
@@ -299,18 +265,19 @@ fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_resul
     s->n = m->nq;
     s->nc = m->nc;
     r->ncols = 1 + m->ny + (m->nc > 0) + m->nq + (o->energy ? 3 : 0);
-    fsr_status st = check_options(s);
+    fsr_status st = fsr_check_constrained_options(o, m, r, it->name);
     if (st) return st;
     const size_t n = (size_t)s->n, nc = (size_t)s->nc, nn = n * n;
-    s->L = m->length_scale;
+    s->L = fsr_length_scale(m, o->p);
     s->tol = o->newton_tol * s->L;
     s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
     if (s->nsteps < 1) s->nsteps = 1;
     s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
     s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
     size_t nz = n > nc ? n : nc;
-    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 6 * nn + 2 * nc * n + nc * nc
-                     + 2 * nc + nz + 1;
+    size_t work = it->work_size(s->n);
+    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + 2 * nc * n + nc * nc
+                     + 2 * nc + nz + 1 + work;
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
     double* x = calloc(doubles, sizeof(double));
     s->piv = malloc(sizeof(int) * (n + nc + 1));
@@ -325,7 +292,6 @@ fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_resul
     s->S = x; x += nn;
     s->Jq = x; x += nn;
     s->Jv = x; x += nn;
-    s->P = x; x += nn;
     s->H = x; x += nn;
     s->q = x; x += n;
     s->v = x; x += n;
@@ -352,6 +318,7 @@ fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_resul
     s->Pq = x; x += nc * n;
     s->Z = x; x += nc * n;
     s->G = x; x += nc * nc;
+    s->work = x; x += work;
     s->zero = x;
     s->cp = s->piv + n;
     return FSR_OK;
@@ -361,13 +328,7 @@ fsr_status cs_start(csim* s)
 {
     fsr_status st = cs_consistent_start(s);
     if (!st) st = store(s, 0.0);
-    if (!st) st = s->o->method == FSR_ALI3P ? ali3p_begin(s) : genalpha3_begin(s);
     return st;
-}
-
-fsr_status cs_step(csim* s)
-{
-    return s->o->method == FSR_ALI3P ? ali3p_step(s) : genalpha3_step(s);
 }
 
 void cs_close(csim* s)
@@ -376,15 +337,4 @@ void cs_close(csim* s)
     free(s->piv);
     s->M = NULL;
     s->piv = NULL;
-}
-
-fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r)
-{
-    csim s;
-    fsr_status st = cs_open(&s, m, o, r, 0);
-    if (!st) st = cs_start(&s);
-    while (!st && s.k < s.nsteps) st = cs_step(&s);
-    cs_close(&s);
-    r->status = st;
-    return st;
 }

@@ -1,15 +1,13 @@
 /* What the constrained integrators (ali3p.c, genalpha3.c) share: a run of a model given as a
- * struct (system.h), its workspace, rows, consistent initial conditions and the solve of the
- * constraint block (constrained.c). Internal to the runtime. */
+ * struct (system.h) with constraints (any nc), its workspace, rows, consistent initial
+ * conditions and the solve of the constraint block (constrained.c). Internal to the runtime. */
 #ifndef FLEXSYM_CONSTRAINED_H
 #define FLEXSYM_CONSTRAINED_H
 
-#include <stdarg.h>
+#include "common.h"
+#include "integrator.h"
 
-#include "flexsym/runtime.h"
-#include "flexsym/system.h"
-
-typedef struct {
+typedef struct csim {
     const fsm_system* m;
     const fsr_options* o;
     fsr_result* r;
@@ -31,6 +29,7 @@ typedef struct {
     double* y;       /* outputs */
     double *M, *S, *Jq, *Jv;  /* n x n; S: the LU-factored iteration matrix (ali3p: W) */
     double* P;       /* ali3p: M + (h/2) C + (h^2/4) K, W without the penalty term */
+    double* work;    /* the integrator's workspace (its work_size; zeros at the start) */
     int* piv;
     double *Pq, *phi, *phit, *gam;  /* Phi_q (nc x n), Phi, Phi_t, gamma */
     double* H;                      /* d(Phi_q^T e)/dq (n x n) */
@@ -46,14 +45,6 @@ typedef struct {
 } csim;
 
 fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...);
-/* simulate.c: r->message and r->status; and the checks every run makes (finite o->y0, the
- * run-size limits of limits.h; r->ncols set), FSR_OK or FSR_BAD_OPTIONS with the message. */
-fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...);
-fsr_status fsr_vfail(fsr_result* r, fsr_status st, const char* fmt, va_list ap);
-/* Generalized-alpha coefficients (Chung-Hulbert) from the spectral radius at infinity */
-typedef struct { double am, af, gam, bet; } fsr_alpha;
-fsr_alpha fsr_alpha_coefficients(double rho_inf);
-fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r);
 double cs_time(const csim* s, long k);
 /* s->d = the drive at t */
 void cs_drive(csim* s, double t);
@@ -73,17 +64,13 @@ fsr_status cs_consistent_start(csim* s);
 fsr_status cs_accept(csim* s, double t1);
 fsr_status cs_newton_failed(csim* s, double t1, double dq, int it);
 
-/* A run resumable step by step (fsr_simulate_system, fsr_stepper): cs_open with room for
- * `capacity` rows (0: every row of the run), cs_start (consistent initial state, the row at
- * t = 0, the method's start), cs_step until s->k == s->nsteps, cs_close. */
-fsr_status cs_open(csim* s, const fsm_system* m, const fsr_options* o, fsr_result* r, long capacity);
+/* A run of integrator `it`, resumable step by step (simulate.c: fsr_simulate_system,
+ * fsr_stepper): cs_open with room for `capacity` rows (0: every row of the run), cs_start
+ * (consistent initial state, the row at t = 0), then it->cs_begin, it->cs_step until
+ * s->k == s->nsteps, cs_close. */
+fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const fsr_options* o,
+                   fsr_result* r, long capacity);
 fsr_status cs_start(csim* s);
-fsr_status cs_step(csim* s);
 void cs_close(csim* s);
-
-fsr_status ali3p_begin(csim* s);
-fsr_status ali3p_step(csim* s);
-fsr_status genalpha3_begin(csim* s);
-fsr_status genalpha3_step(csim* s);
 
 #endif

@@ -230,14 +230,7 @@ int main(int argc, char** argv)
         } else if (!strcmp(a, "--repeat")) {
             if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (runs, 1 to FSR_MAX_REPEAT of flexsym/limits.h)", val);
         } else if (!strcmp(a, "--integrator")) {
-            if (!strcmp(val, "rk4")) o.method = FSR_RK4;
-            else if (!strcmp(val, "genalpha")) o.method = FSR_GENALPHA;
-            else if (!strcmp(val, "newmark")) o.method = FSR_NEWMARK;
-            else if (!strcmp(val, "dopri5")) o.method = FSR_DOPRI5;
-            else if (!strcmp(val, "radau5")) o.method = FSR_RADAU5;
-            else if (!strcmp(val, "ali3p")) o.method = FSR_ALI3P;
-            else if (!strcmp(val, "genalpha3")) o.method = FSR_GENALPHA3;
-            else return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5, ali3p, genalpha3)", val);
+            if (!fsr_method_by_name(val, &o.method)) return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5, ali3p, genalpha3)", val);
         } else if (!strcmp(a, "--param")) {
             if (!set_param(m, p, mp, val)) return usage("bad --param (NAME=VALUE with a known name)", val);
         } else return usage("unknown option", a);

@@ -1,7 +1,7 @@
 /* Index-3 generalized-alpha (Arnold & Bruls 2007: Chung-Hulbert's alpha_m, alpha_f, beta,
  * gamma from rho_inf; the equations of motion and the position constraints at t1,
  *     M(q1) a1 + Phi_q(q1)^T lambda1 = f(q1, v1, t1),   Phi(q1, t1) = 0,
- * q1, v1 from the algorithmic acceleration as in simulate.c's generalized-alpha) by Newton on
+ * q1, v1 from the algorithmic acceleration as in genalpha.c) by Newton on
  * [a1, lambda1] with the constraint block
  *     [S  Phi_q^T] [da  ]   [f - M a1 - Phi_q^T lambda1]
  *     [Phi_q   0 ] [dlam] = [-Phi / cb                 ],   S = M + cb K + cg C,
@@ -26,7 +26,7 @@
 
 #define GA3_THETA_MAX 0.1
 
-fsr_status genalpha3_begin(csim* s)
+static fsr_status genalpha3_begin(csim* s)
 {
     fsr_alpha c = fsr_alpha_coefficients(s->o->rho_inf);
     s->am = c.am;
@@ -41,7 +41,7 @@ fsr_status genalpha3_begin(csim* s)
     return FSR_OK;
 }
 
-fsr_status genalpha3_step(csim* s)
+static fsr_status genalpha3_step(csim* s)
 {
     const fsm_system* m = s->m;
     const fsr_options* o = s->o;
@@ -128,4 +128,19 @@ fsr_status genalpha3_step(csim* s)
     memcpy(s->mult, lam1, sizeof(double) * (size_t)nc);
     s->k = k + 1;
     return cs_accept(s, t1);
+}
+
+static size_t genalpha3_work_size(int n)
+{
+    (void)n;
+    return 0;
+}
+
+static const fsr_integrator INTEGRATOR = {
+    .name = "genalpha3", .method = FSR_GENALPHA3, .stages = 1, .work_size = genalpha3_work_size,
+    .cs_begin = genalpha3_begin, .cs_step = genalpha3_step};
+
+const fsr_integrator* fsr_integrator_genalpha3(void)
+{
+    return &INTEGRATOR;
 }

@@ -7,6 +7,7 @@
 
 enum { A, L1, L2, L3, RHO };
 static const char* const coord_names[] = {"psi1", "beta", "psi3"};
+static const unsigned char coord_unbounded[] = {1, 1, 1};  /* angles: no blow-up bound */
 static const char* const constraint_names[] = {"coupler_rocker.x", "coupler_rocker.y"};
 static const char* const output_names[] = {"x_pin", "y_pin", "lambda_x", "lambda_y"};
 static const char* const param_names[] = {"a", "l1", "l2", "l3", "rho_l"};
@@ -100,7 +101,8 @@ static const fsm_system model = {
     .nq = 3, .nd = 1, .nc = 2, .ny = 4, .np = 5, .nmp = 1,
     .length_scale = 0.3, .length_param = -1, .mass_constant = 0, .bandwidth = -1,
     .outputs_use_acceleration = 1, .outputs_use_drive = 1,
-    .coord_names = coord_names, .constraint_names = constraint_names, .output_names = output_names,
+    .coord_names = coord_names, .coord_unbounded = coord_unbounded,
+    .constraint_names = constraint_names, .output_names = output_names,
     .param_names = param_names, .param_defaults = param_defaults,
     .drive_param_names = drive_param_names, .drive_param_defaults = drive_param_defaults,
     .drive = drive, .mass = pl_mass, .force = pl_force, .residual_jac = pl_residual_jac,

@@ -9,6 +9,7 @@
 
 enum { A, L, RHO };
 static const char* const coord_names[] = {"psi1", "beta", "psi2", "psi3"};
+static const unsigned char coord_unbounded[] = {1, 1, 1, 1};  /* angles: no blow-up bound */
 static const char* const constraint_names[] = {"coupler_crank2.x", "coupler_crank2.y",
                                                 "coupler_crank3.x", "coupler_crank3.y"};
 static const char* const output_names[] = {"psi1_rate", "lambda_2x", "lambda_3x"};
@@ -98,7 +99,8 @@ static const fsm_system model = {
     .nq = 4, .nd = 1, .nc = 4, .ny = 3, .np = 3, .nmp = 1,
     .length_scale = 0.4, .length_param = -1, .mass_constant = 0, .bandwidth = -1,
     .outputs_use_acceleration = 1, .outputs_use_drive = 1,
-    .coord_names = coord_names, .constraint_names = constraint_names, .output_names = output_names,
+    .coord_names = coord_names, .coord_unbounded = coord_unbounded,
+    .constraint_names = constraint_names, .output_names = output_names,
     .param_names = param_names, .param_defaults = param_defaults,
     .drive_param_names = drive_param_names, .drive_param_defaults = drive_param_defaults,
     .drive = drive, .mass = pl_mass, .force = pl_force, .residual_jac = pl_residual_jac,

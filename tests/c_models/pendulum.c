@@ -5,6 +5,7 @@
 
 enum { L, RHO };
 static const char* const coord_names[] = {"psi"};
+static const unsigned char coord_unbounded[] = {1};  /* angles: no blow-up bound */
 static const char* const output_names[] = {"x_tip", "y_tip"};
 static const char* const param_names[] = {"l", "rho_l"};
 static const double param_defaults[] = {1.0, 1.0};
@@ -50,7 +51,7 @@ static const fsm_system model = {
     .nq = 1, .nd = 1, .nc = 0, .ny = 2, .np = 2, .nmp = 0,
     .length_scale = 1.0, .length_param = 0, .mass_constant = 1, .bandwidth = -1,
     .outputs_use_acceleration = 0, .outputs_use_drive = 0,
-    .coord_names = coord_names, .output_names = output_names,
+    .coord_names = coord_names, .coord_unbounded = coord_unbounded, .output_names = output_names,
     .param_names = param_names, .param_defaults = param_defaults,
     .drive = drive, .mass = pl_mass, .force = pl_force, .residual_jac = pl_residual_jac,
     .outputs = outputs, .energy = pl_energy};

@@ -12,6 +12,7 @@ static const double PI = 3.14159265358979323846;
 
 enum { R, LEN, MROD, MS };
 static const char* const coord_names[] = {"beta", "s"};
+static const unsigned char coord_unbounded[] = {1, 0};  /* beta: an angle, no blow-up bound */
 static const char* const constraint_names[] = {"slider_pin.x", "slider_pin.y"};
 static const char* const output_names[] = {"x_s", "phi", "a_s", "lambda_x", "lambda_y"};
 static const char* const param_names[] = {"r", "l", "m_rod", "m_s"};
@@ -92,7 +93,8 @@ static const fsm_system model = {
     .nq = 2, .nd = 4, .nc = 2, .ny = 5, .np = 4, .nmp = 3,
     .length_scale = 0.45, .length_param = -1, .mass_constant = 1, .bandwidth = -1,
     .outputs_use_acceleration = 1, .outputs_use_drive = 1,
-    .coord_names = coord_names, .constraint_names = constraint_names, .output_names = output_names,
+    .coord_names = coord_names, .coord_unbounded = coord_unbounded,
+    .constraint_names = constraint_names, .output_names = output_names,
     .param_names = param_names, .param_defaults = param_defaults,
     .drive_param_names = drive_param_names, .drive_param_defaults = drive_param_defaults,
     .drive = drive, .mass = pl_mass, .force = pl_force, .residual_jac = pl_residual_jac,

@@ -4,8 +4,8 @@
 
 #include "flexsym/system.h"
 
-/* ali3p, genalpha3: the constrained integrators (ali3p.c, genalpha3.c); they also run models
- * without constraints (nc = 0). */
+/* One file per integrator (src/integrator.h). ali3p, genalpha3: the constrained integrators;
+ * they also run models without constraints (nc = 0). */
 typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4,
                FSR_ALI3P = 5, FSR_GENALPHA3 = 6 } fsr_method;
 
@@ -31,17 +31,18 @@ typedef struct {
                                 polynomial; 0 = steps of dt */
     double rho_inf;          /* generalized-alpha spectral radius at infinity, in [0, 1] */
     double nm_gamma, nm_beta;/* Newmark parameters (method FSR_NEWMARK) */
-    double newton_tol;       /* on |delta q|_inf, relative to the beam length */
+    double newton_tol;       /* on |delta q|_inf, relative to the length scale (system.h) */
     int newton_max;
     int newton_full;         /* 1: new Jacobian and factorisation every iteration (reference);
                                 0: modified Newton, the iteration matrix is reused */
-    double tol;              /* dopri5: rtol = atol / L (see simulate.c); 0 = fixed steps dt */
+    double tol;              /* dopri5: rtol = atol / L (see erk.c); 0 = fixed steps dt */
     long max_steps;          /* dopri5: accepted + rejected steps before giving up */
-    double blowup;           /* diverged when any |q_i| or |v_tip| exceeds blowup * L */
+    double blowup;           /* diverged when a coordinate exceeds blowup x the length scale
+                                (system.h: coord_unbounded are exempt) */
     int energy;              /* 1: rows end with T, V and the Jacobi integral h (fsm_energy) */
     double penalty;          /* ali3p: kappa, the penalty term's weight against the mass matrix
                                 (alpha = kappa (4 / dt^2) tr M / |Phi_q|_F^2 at t = 0) */
-    const double* p;         /* beam parameters (model->np) */
+    const double* p;         /* parameters (model->np) */
     const double* mp;        /* manoeuvre parameters (model->nmp) */
     const double* y0;        /* initial state [q, q'] (2 nq values); NULL: at rest */
 } fsr_options;
@@ -68,6 +69,8 @@ void fsr_default_options(fsr_options* o);
 fsr_status fsr_simulate(const fsr_options* o, fsr_result* r);
 void fsr_free(fsr_result* r);
 const char* fsr_method_name(fsr_method m);
+/* *m = the method named name (as fsr_method_name gives it); returns 0 when there is none. */
+int fsr_method_by_name(const char* name, fsr_method* m);
 /* The same for a model given as a struct (system.h); methods ali3p and genalpha3 only. Before
  * the first step the initial state is made consistent with the constraints (FSR_ASSEMBLY and a
  * message naming the constraint with the largest residual when it cannot be). */

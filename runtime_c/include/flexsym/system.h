@@ -24,7 +24,8 @@ typedef struct fsm_system {
     int np;                      /* parameters p */
     int nmp;                     /* drive parameters (read by drive only) */
     double length_scale;         /* m: the mechanism's size. Newton tolerances (newton_tol x it),
-                                    blow-up and the violation column are relative to it. */
+                                    blow-up and the violation column are relative to it (to
+                                    p[length_param] when there is one). */
     int length_param;            /* index in p of a parameter that is the length scale (a one-beam
                                     model's L, so that it follows --param L=...), or -1 */
     int mass_constant;           /* 1 when M depends on neither q nor d: factored once */
@@ -69,6 +70,10 @@ typedef struct fsm_system {
      * Newton tangent (NULL: left out) */
     void (*constraint_hess)(const double* q, const double* e, const double* d, const double* p,
                             double* h);
+    /* nq flags: 1 for a coordinate that the blow-up limit does not bound (a revolute joint's
+     * angle may turn without end; an ANCF slope has no unit); NULL: every coordinate is bounded
+     * by blowup x the length scale */
+    const unsigned char* coord_unbounded;
 } fsm_system;
 
 /* The model linked into this program (a generated system, or model_adapter.c for a one-beam

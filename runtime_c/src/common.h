@@ -1,0 +1,52 @@
+/* What every run and every integrator of the runtime shares (common.c): the failure message,
+ * the option defaults and checks, the generalized-alpha coefficients. Internal; calls nothing
+ * of the runtime above linalg. */
+#ifndef FLEXSYM_COMMON_H
+#define FLEXSYM_COMMON_H
+
+#include <math.h>
+#include <stdarg.h>
+
+#include "flexsym/runtime.h"
+#include "flexsym/system.h"
+
+/* r->message from fmt, r->status = st; returns st. */
+fsr_status fsr_vfail(fsr_result* r, fsr_status st, const char* fmt, va_list ap);
+fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...);
+
+/* What every run checks: a finite o->y0 and the run-size limits of limits.h (r->ncols set). */
+fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r);
+/* The options of a run of M q'' = f by integrator `method` (rk4 ... radau5), with
+ * fsr_check_run; FSR_OK or FSR_BAD_OPTIONS with the message in r. */
+fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_result* r, const char* method);
+/* The same for a constrained run (ali3p, genalpha3), and the kernels the model's sizes need. */
+fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system* m, fsr_result* r,
+                                         const char* method);
+
+/* The model's length scale (system.h): p[length_param] when the model has one (a one-beam
+ * model's L, so that it follows --param L=...), else length_scale. Newton tolerances
+ * (newton_tol x it), the blow-up limit (blowup x it) and the violation column scale with it. */
+double fsr_length_scale(const fsm_system* m, const double* p);
+
+/* Coordinate i (value qi) is beyond limit = blowup x the length scale, and m->coord_unbounded
+ * does not exempt it (inline: every step asks, for every coordinate). */
+static inline int fsr_beyond_blowup(const fsm_system* m, double limit, int i, double qi)
+{
+    return fabs(qi) > limit && !(m->coord_unbounded && m->coord_unbounded[i]);
+}
+/* FSR_DIVERGED, the message naming coordinate i (value qi at t) and the limit. */
+fsr_status fsr_blowup_fail(fsr_result* r, const fsm_system* m, const fsr_options* o, double limit, double t,
+                           int i, double qi);
+
+/* Generalized-alpha coefficients (Chung-Hulbert) from the spectral radius at infinity */
+typedef struct { double am, af, gam, bet; } fsr_alpha;
+fsr_alpha fsr_alpha_coefficients(double rho_inf);
+
+/* max(m, |x|) for m >= 0 (libm's fmax is a call in strict C99). */
+static inline double fsr_max_abs(double m, double x)
+{
+    x = fabs(x);
+    return x > m ? x : m;
+}
+
+#endif
