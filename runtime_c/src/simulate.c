@@ -566,7 +566,9 @@ static fsr_status erk_advance(sim* s)
 static fsr_status estimate_omega_max(sim* s, double* omega)
 {
     int n = s->n;
-    double *x = s->work, *z = x + n, lam = 0.0, *drive = s->dw + DW_STEP * s->nd;
+    /* x, z past the 8n of the generalized-alpha / Newmark state, which a retuned conditionally
+     * stable Newmark run keeps (work holds at least 12n) */
+    double *x = s->work + 8 * n, *z = x + n, lam = 0.0, *drive = s->dw + DW_STEP * s->nd;
     drive_at(s, 0.0, drive);
     fsr_status st = mass_at(s, 0.0, s->zero, drive, 1);
     if (st) return st;
@@ -593,17 +595,40 @@ static fsr_status estimate_omega_max(sim* s, double* omega)
     return FSR_OK;
 }
 
-/* Refuse a fixed explicit step above the stability limit instead of integrating garbage. */
-static fsr_status check_fixed_step(sim* s, const erk_tableau* T)
+/* Refuse a fixed step above a method's stability limit (omega_max dt <= stability) instead of
+ * integrating garbage. */
+static fsr_status check_step_limit(sim* s, const char* name, double stability, const char* instead)
 {
-    double om = s->r->omega_max, limit = T->stability / om, dt = s->o->dt;
+    double om = s->r->omega_max, limit = stability / om, dt = s->o->dt;
     if (!(dt > limit)) return FSR_OK;
     int e = (int)floor(log10(limit));
     double mant = floor(limit / pow(10.0, e) * 10.0) / 10.0;
     return fail(s, FSR_UNSTABLE_STEP,
                 "%s step %g ms exceeds the stability limit %.3g ms of this model (omega_max = %.1f "
-                "rad/s); use --dt <= %.1fe%d or an implicit integrator", T->name, dt * 1e3,
-                limit * 1e3, om, mant, e);
+                "rad/s); use --dt <= %.1fe%d or %s", name, dt * 1e3, limit * 1e3, om, mant, e, instead);
+}
+
+static fsr_status check_fixed_step(sim* s, const erk_tableau* T)
+{
+    return check_step_limit(s, T->name, T->stability, "an implicit integrator");
+}
+
+/* Newmark with beta < gamma / 2 is only conditionally stable: omega dt <= 1 / sqrt(gamma / 2 -
+ * beta) undamped (sqrt(6) for Fox-Goodwin's beta = 1/12, whose period error is fourth order,
+ * (omega dt)^4 / 480, against (omega dt)^2 / 12 for the trapezoidal beta = 1/4). */
+static int newmark_conditional(const fsr_options* o)
+{
+    return o->method == FSR_NEWMARK && o->nm_beta < 0.5 * o->nm_gamma;
+}
+
+static fsr_status check_newmark_step(sim* s)
+{
+    const fsr_options* o = s->o;
+    if (!newmark_conditional(o)) return FSR_OK;
+    fsr_status st = estimate_omega_max(s, &s->r->omega_max);
+    if (st) return st;
+    return check_step_limit(s, "newmark", 1.0 / sqrt(0.5 * o->nm_gamma - o->nm_beta),
+                            "a larger --newmark-beta");
 }
 
 /* ------------------------------------------- implicit methods: the Newton iteration matrix */
@@ -1065,10 +1090,10 @@ static fsr_status check_options(sim* s)
     if (o->out_every < 1) return fail(s, FSR_BAD_OPTIONS, "out_every must be >= 1 (got %d)", o->out_every);
     if (!(o->rho_inf >= 0.0 && o->rho_inf <= 1.0))
         return fail(s, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
-    if (o->method == FSR_NEWMARK && !(o->nm_gamma >= 0.5 && o->nm_beta >= 0.25 * (0.5 + o->nm_gamma) * (0.5 + o->nm_gamma) - 1e-15))
-        return fail(s, FSR_BAD_OPTIONS,
-                    "Newmark gamma = %g, beta = %g is not unconditionally stable (need gamma >= 1/2, "
-                    "beta >= (gamma + 1/2)^2 / 4)", o->nm_gamma, o->nm_beta);
+    if (o->method == FSR_NEWMARK && !(o->nm_gamma >= 0.5 && o->nm_beta > 0.0))
+        return fail(s, FSR_BAD_OPTIONS, "Newmark gamma = %g, beta = %g: need gamma >= 1/2 and beta > 0 "
+                    "(beta < gamma / 2: stable for omega_max dt <= 1 / sqrt(gamma / 2 - beta))",
+                    o->nm_gamma, o->nm_beta);
     if (o->newton_max < 1 || !(o->newton_tol > 0.0))
         return fail(s, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
     if (!(o->tol >= 0.0 && o->tol < 1.0))
@@ -1096,7 +1121,10 @@ static fsr_status check_options(sim* s)
 static fsr_status sim_begin(sim* s)
 {
     fsr_method method = s->o->method;
-    if (method == FSR_GENALPHA || method == FSR_NEWMARK) return alpha_begin(s);
+    if (method == FSR_GENALPHA || method == FSR_NEWMARK) {
+        fsr_status st = check_newmark_step(s);
+        return st ? st : alpha_begin(s);
+    }
     if (method == FSR_RADAU5) return radau_begin(s);
     const erk_tableau* T = method == FSR_RK4 ? &RK4 : &DOPRI5;
     int fixed = !T->embedded || s->o->tol == 0.0;
@@ -1246,9 +1274,9 @@ fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
                  || (o->method == FSR_RADAU5 && (o->step == 0.0 || o->step == o->dt))))
         st = fail(s, FSR_BAD_OPTIONS, "%s: the stepper takes fixed steps of dt (dopri5 needs tol = 0, "
                   "radau5 no step other than dt)", fsr_method_name(o->method));
-    if (!st && drive && (o->method == FSR_RK4 || o->method == FSR_DOPRI5))
-        st = fail(s, FSR_BAD_OPTIONS, "%s: a drive given step by step needs an implicit method (the "
-                  "stability limit of explicit steps depends on the drive to come)",
+    if (!st && drive && (o->method == FSR_RK4 || o->method == FSR_DOPRI5 || newmark_conditional(o)))
+        st = fail(s, FSR_BAD_OPTIONS, "%s: a drive given step by step needs an unconditionally stable "
+                  "method (the stability limit of this one depends on the drive to come)",
                   fsr_method_name(o->method));
     if (!st && drive && s->nd != 4)
         st = fail(s, FSR_BAD_OPTIONS, "a drive given step by step needs a model with one guided joint "
@@ -1347,6 +1375,8 @@ fsr_status fsr_stepper_retune(fsr_stepper* p)
         st = estimate_omega_max(s, &r->omega_max);
         if (!st && !s->adaptive) st = check_fixed_step(s, s->T);
         s->have_k0 = 0;                       /* k[0] and the work space were overwritten */
+    } else if (!st) {
+        st = check_newmark_step(s);          /* a conditionally stable Newmark: likewise */
     }
     r->status = st;
     return st;
