@@ -1,6 +1,7 @@
 """`flexsym bench-systems`: CPU time against integration error on the mechanisms S1-S3.
 
-For each system scene x model x integrator x step, on the scene's own run (t_end, rows):
+For each system scene x model x case (integrator, step, options), on the scene's own run
+(t_end, rows):
   cpu_s        median CPU time of the integration inside the C runtime over --repeat runs
   err_<column> max |y - y(same model, reference step)| over the rows, divided by the peak
                |y| of the reference: the integrator's error, per output column
@@ -38,20 +39,37 @@ REF_DIVISOR = 10
 
 
 @dataclass(frozen=True)
+class Case:
+    integrator: str
+    dt: float  # divides the row interval
+    options: tuple[tuple[str, float], ...] = ()  # further run options, e.g. FOX_GOODWIN
+
+    @property
+    def label(self) -> str:
+        return " ".join([self.integrator] + [f"{k}={v:.4g}" for k, v in self.options])
+
+
+@dataclass(frozen=True)
 class SystemCases:
     models: tuple[str, ...]
-    cases: tuple[tuple[str, float], ...]  # (integrator, step); steps divide the row interval
+    cases: tuple[Case, ...]
 
 
+# Newmark beta = 1/12: fourth-order period error, stable for omega_max dt <= sqrt(6) (S3: the
+# released strip rings for 2 s, and M_mid's error is the phase of that ringing)
+FOX_GOODWIN = (("newmark_beta", 1 / 12),)
 SYSTEMS = {
     "hub": SystemCases(("m1", "m3", "prestress"),
-                       tuple(("genalpha", dt) for dt in (0.01, 0.005, 0.002, 0.001)) + (("rk4", 0.001),)),
-    # m3 has no axial mode for N_mid (its equilibrium N is not derived in systems yet)
-    "slider_crank": SystemCases(("m2",),
-                                tuple(("ali3p", dt) for dt in (2e-4, 1e-4, 5e-5))
-                                + tuple(("genalpha3", dt) for dt in (1e-4, 5e-5))),
+                       tuple(Case("genalpha", dt) for dt in (0.01, 0.005, 0.002, 0.001)) + (Case("rk4", 0.001),)),
+    # m3 has no axial coordinate: its N_mid comes from equilibrium (the scene's N output)
+    "slider_crank": SystemCases(("m2", "m3"),
+                                tuple(Case("ali3p", dt) for dt in (2e-4, 1e-4, 5e-5))
+                                + tuple(Case("genalpha3", dt) for dt in (1e-4, 5e-5))),
     "pendulum": SystemCases(("m1", "m3", "prestress"),
-                            tuple(("genalpha", dt) for dt in (1e-3, 5e-4, 2e-4, 1e-4, 5e-5)) + (("rk4", 1e-4),)),
+                            tuple(Case("genalpha", dt) for dt in (1e-3, 1e-4, 5e-5))
+                            + tuple(Case("rk4", dt) for dt in (2.5e-4, 1e-4))
+                            + (Case("dopri5", 1e-3, (("tol", 1e-5),)),)
+                            + tuple(Case("newmark", dt, FOX_GOODWIN) for dt in (5e-4, 1e-3 / 3, 2.5e-4))),
 }
 # The ef reference of each system: (elements, integrator, step); see README's convergence study.
 EF_REFERENCE = {"hub": (16, "genalpha", 5e-4), "slider_crank": (16, "ali3p", 5e-6),
@@ -61,14 +79,15 @@ EF_REFERENCE = {"hub": (16, "genalpha", 5e-4), "slider_crank": (16, "ali3p", 5e-
 # converges at the rate of the motion (0.2 % of the peak with 4 elements where the root
 # curvature is 3 % off; README "`ef` in systems").
 EF_EQUILIBRIUM = {"hub": {"M_A": ("reaction(clamp, moment)", -1.0)}}
-QUICK = {"pendulum": SystemCases(("m3",), (("genalpha", 1e-3), ("genalpha", 5e-4)))}
+QUICK = {"pendulum": SystemCases(("m3",), (Case("genalpha", 1e-3), Case("genalpha", 5e-4),
+                                           Case("newmark", 5e-4, FOX_GOODWIN)))}
 # --quick: a coarse ef (fast to build; 4 elements are 2e-1 of M_mid's history from converged)
 QUICK_EF_REFERENCE = {"pendulum": (4, "genalpha", 1e-4)}
 
 
-def _run(built, scene, integrator, dt, repeat=1):
+def _run(built, scene, integrator, dt, repeat=1, options=()):
     given = {"integrator": integrator, "dt": dt, "t_end": scene.options.t_end,
-             "interval": scene.options.out_every * scene.options.dt, "repeat": repeat}
+             "interval": scene.options.out_every * scene.options.dt, "repeat": repeat} | dict(options)
     return run_built(built, validate(given, Where("api")))
 
 
@@ -156,21 +175,22 @@ def run_system_bench(out: Path | None = None, systems=None, models=None, quick=F
             scene = load_scene(SCENES_DIR / f"{name}.toml", model=model)
             built = prepare_system(scene.system)
             columns = list(scene.columns)
-            ref_dt = min(dt for _, dt in spec.cases) / REF_DIVISOR
+            ref_dt = min(case.dt for case in spec.cases) / REF_DIVISOR
             ref_integrator = "rk4" if not scene.system.tree().cut else scene.options.integrator
             ref = _run(built, scene, ref_integrator, ref_dt)
             if not ref.ok:
                 raise RuntimeError(f"{name} {model}: the reference run stopped: {ref.message}")
             log(f"{name}, {model}: reference {ref_integrator} dt = {ref_dt:g} s")
-            for integrator, dt in spec.cases:
-                r = _run(built, scene, integrator, dt, repeat)
+            for case in spec.cases:
+                integrator, dt = case.label, case.dt
+                r = _run(built, scene, case.integrator, dt, repeat, case.options)
                 row = {"system": name, "model": model, "integrator": integrator, "dt": dt,
                        "cpu_s": r.summary["cpu_median"], "status": "ok" if r.ok else r.message}
                 row |= _errors(r, ref, columns, "err")
                 if ef is not None:
                     row |= _errors(r, ef, columns, "ef")
                 rows.append(row)
-                log(f"  {integrator:9s} dt = {dt:<8g} {row['cpu_s'] * 1e3:8.3f} ms  max error "
+                log(f"  {integrator:9s} dt = {dt:<8.4g} {row['cpu_s'] * 1e3:8.3f} ms  max error "
                     f"{row['err_max']:.2e} of the peak"
                     + (f", vs ef {row['ef_max']:.2e}" if ef is not None else "")
                     + f"  {'' if r.ok else r.message}")
@@ -196,7 +216,7 @@ def markdown(rows) -> str:
              "|---|---|---|---|---|---|---|"]
     for r in rows:
         ef = f"{r['ef_max']:.2e}" if "ef_max" in r else "-"
-        lines.append(f"| {r['system']} | {r['model']} | {r['integrator']} | {r['dt']:g} s | "
+        lines.append(f"| {r['system']} | {r['model']} | {r['integrator']} | {r['dt']:.4g} s | "
                      f"{r['cpu_s'] * 1e3:.3f} ms | {r['err_max']:.2e} | {ef}"
                      f"{'' if r['status'] == 'ok' else ' (' + r['status'] + ')'} |")
     lines.append("")

@@ -80,6 +80,22 @@ def test_stability_limit_includes_centrifugal_stiffening(simulate):
     assert slow.ok and slow.summary["omega_max"] == pytest.approx(68.73, abs=0.01)
 
 
+def test_fox_goodwin_newmark_is_checked_against_its_stability_limit(simulate, m3_reference):
+    """Newmark beta = 1/12 (below gamma/2 = 1/4: stable for omega_max dt <= sqrt(6)) is refused
+    above its limit like rk4, from the same omega_max (#3 spinning: 72.8 rad/s, limit 33.7 ms);
+    below it, its fourth-order period error makes it far more accurate than the trapezoidal
+    beta = 1/4 (measured 7.8e-8 m at 20 ms against 1.1e-5 m at 5 ms)."""
+    r = simulate("m3", integrator="newmark", newmark_beta=1 / 12, dt=0.04, t_end=20.0, **SPIN)
+    assert r.status == "failed" and r.summary["steps"] == 0
+    assert r.message == ("newmark step 40 ms exceeds the stability limit 33.7 ms of this model "
+                         "(omega_max = 72.8 rad/s); use --dt <= 3.3e-2 or a larger --newmark-beta")
+    fg = simulate("m3", integrator="newmark", newmark_beta=1 / 12, dt=0.02, out_every=1, t_end=20.0, **SPIN)
+    trap = simulate("m3", integrator="newmark", dt=0.005, out_every=4, t_end=20.0, **SPIN)
+    assert fg.ok and trap.ok, (fg.message, trap.message)
+    assert _error(fg, m3_reference) < 1e-2 * _error(trap, m3_reference)
+    assert trap.summary["omega_max"] == 0  # not estimated for an unconditionally stable method
+
+
 def test_cli_refuses_unstable_rk4_with_exit_code_3(capsys):
     code = main(["run", "m1", "--integrator", "rk4", "--dt", "5e-3", "--t-end", "1"])
     err = capsys.readouterr().err

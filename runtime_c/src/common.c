@@ -100,10 +100,10 @@ fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_
     if (o->out_every < 1) return fsr_fail(r, FSR_BAD_OPTIONS, "out_every must be >= 1 (got %d)", o->out_every);
     if (!(o->rho_inf >= 0.0 && o->rho_inf <= 1.0))
         return fsr_fail(r, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
-    if (o->method == FSR_NEWMARK && !(o->nm_gamma >= 0.5 && o->nm_beta >= 0.25 * (0.5 + o->nm_gamma) * (0.5 + o->nm_gamma) - 1e-15))
-        return fsr_fail(r, FSR_BAD_OPTIONS,
-                        "Newmark gamma = %g, beta = %g is not unconditionally stable (need gamma >= 1/2, "
-                        "beta >= (gamma + 1/2)^2 / 4)", o->nm_gamma, o->nm_beta);
+    if (o->method == FSR_NEWMARK && !(o->nm_gamma >= 0.5 && o->nm_beta > 0.0))
+        return fsr_fail(r, FSR_BAD_OPTIONS, "Newmark gamma = %g, beta = %g: need gamma >= 1/2 and beta > 0 "
+                        "(beta < gamma / 2: stable for omega_max dt <= 1 / sqrt(gamma / 2 - beta))",
+                        o->nm_gamma, o->nm_beta);
     if (o->newton_max < 1 || !(o->newton_tol > 0.0))
         return fsr_fail(r, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
     if (!(o->tol >= 0.0 && o->tol < 1.0))

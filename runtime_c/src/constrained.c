@@ -225,6 +225,11 @@ static fsr_status store(csim* s, double t)
     return FSR_OK;
 }
 
+int cs_row_due(const csim* s)
+{
+    return s->k + 1 == s->next_row;
+}
+
 fsr_status cs_accept(csim* s, double t1)
 {
     const double limit = s->o->blowup * s->L;

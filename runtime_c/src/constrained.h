@@ -60,6 +60,8 @@ void cs_solve(csim* s, const double* A, double* x);
 int cs_kkt(csim* s, const double* A, double* b, const double* c, double* lam);
 /* The state (q, v) made consistent at t = 0 and (a, lam) solved from the equations. */
 fsr_status cs_consistent_start(csim* s);
+/* 1 when the step being taken (k -> k + 1) ends on a row: work only the rows read can wait */
+int cs_row_due(const csim* s);
 /* An accepted step to t1 with the state in q, v, a, lam: finiteness, counters, row if due. */
 fsr_status cs_accept(csim* s, double t1);
 fsr_status cs_newton_failed(csim* s, double t1, double dq, int it);

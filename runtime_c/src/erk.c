@@ -1,6 +1,6 @@
 /* The explicit Runge-Kutta engine of rk4.c and dopri5.c (erk.h): the stages of a Butcher
  * tableau, dense output, and for an embedded pair (dopri5 with tol > 0) the step-size control;
- * fixed steps are refused above the stability limit of the model (estimate_omega_max). */
+ * fixed steps are refused above the stability limit of the model (ode.c: sim_omega_max). */
 #include "erk.h"
 
 #include <float.h>
@@ -101,57 +101,16 @@ static fsr_status initial_step(sim* s, const double* y, const double* k0, double
     return FSR_OK;
 }
 
-/* Largest natural frequency of the model linearised at rest: sqrt|lambda_max| of M(0)^-1 K,
- * K = dr/dq at q = q' = q'' = 0, by power iteration, maximised over the drive at five times
- * of the run (rotation stiffens: 68.7 rad/s at rest for #3, 72.8 rad/s at 6 rad/s). The
- * damping-like dr/dq' is left out. */
-static fsr_status estimate_omega_max(sim* s, double* omega)
-{
-    int n = s->n;
-    double *x = s->work, *z = x + n, lam = 0.0, *drive = s->dw + DW_STEP * s->nd;
-    sim_drive(s, 0.0, drive);
-    fsr_status st = sim_mass(s, 0.0, s->zero, drive, 1);
-    if (st) return st;
-    for (int i = 0; i < n; ++i) x[i] = (1.0 + 0.1 * i) / sqrt((double)n);
-    for (int sample = 0; sample < 5; ++sample) {
-        double est = 0.0;
-        sim_drive(s, s->o->t_end * sample / 4.0, drive);
-        s->m->residual_jac(s->zero, s->zero, s->zero, drive, s->o->p, s->Jq, s->Jv);
-        for (int it = 0; it < 1000; ++it) {
-            fsr_matvec(s->Jq, n, -1, x, z);
-            fsr_chol_solve(s->Mfac, n, z);
-            double nz = 0.0;
-            for (int i = 0; i < n; ++i) nz += z[i] * z[i];
-            nz = sqrt(nz);
-            if (!(nz > 0.0) || !isfinite(nz)) break;
-            for (int i = 0; i < n; ++i) x[i] = z[i] / nz;
-            int done = fabs(nz - est) <= 1e-10 * nz;
-            est = nz;
-            if (done) break;
-        }
-        if (est > lam) lam = est;
-    }
-    *omega = sqrt(lam);
-    return FSR_OK;
-}
-
 /* Refuse a fixed explicit step above the stability limit instead of integrating garbage. */
 static fsr_status check_fixed_step(sim* s, const erk_tableau* T)
 {
-    double om = s->r->omega_max, limit = T->stability / om, dt = s->o->dt;
-    if (!(dt > limit)) return FSR_OK;
-    int e = (int)floor(log10(limit));
-    double mant = floor(limit / pow(10.0, e) * 10.0) / 10.0;
-    return sim_fail(s, FSR_UNSTABLE_STEP,
-                    "%s step %g ms exceeds the stability limit %.3g ms of this model (omega_max = %.1f "
-                    "rad/s); use --dt <= %.1fe%d or an implicit integrator", T->name, dt * 1e3,
-                    limit * 1e3, om, mant, e);
+    return sim_check_step_limit(s, T->name, T->stability, "an implicit integrator");
 }
 
 fsr_status erk_begin(sim* s, const erk_tableau* T)
 {
     erk_state* e = s->ms;
-    fsr_status st = estimate_omega_max(s, &s->r->omega_max);
+    fsr_status st = sim_omega_max(s, s->work, &s->r->omega_max);
     if (!st && (!T->embedded || s->o->tol == 0.0)) st = check_fixed_step(s, T);
     if (st) return st;
     int m = 2 * s->n;
@@ -238,7 +197,7 @@ fsr_status erk_advance(sim* s)
 fsr_status erk_retune(sim* s)
 {
     erk_state* e = s->ms;
-    fsr_status st = estimate_omega_max(s, &s->r->omega_max);
+    fsr_status st = sim_omega_max(s, s->work, &s->r->omega_max);
     if (!st && !e->adaptive) st = check_fixed_step(s, e->T);
     e->have_k0 = 0;  /* k[0] and the work space were overwritten */
     return st;
@@ -247,4 +206,10 @@ fsr_status erk_retune(sim* s)
 size_t erk_work_size(int n)
 {
     return (size_t)(2 * MAX_STAGES + 4) * (size_t)n;
+}
+
+int erk_stability_limited(const fsr_options* o)
+{
+    (void)o;
+    return 1;
 }

@@ -42,5 +42,7 @@ fsr_status erk_advance(sim* s);
 fsr_status erk_retune(sim* s);
 /* doubles: 7 stages of 2n, y1 and a stage point */
 size_t erk_work_size(int n);
+/* explicit steps are always limited by stability */
+int erk_stability_limited(const fsr_options* o);
 
 #endif

@@ -17,7 +17,9 @@ struct csim;  /* constrained.h */
 typedef struct fsr_integrator {
     const char* name;           /* as in --integrator */
     fsr_method method;
-    int explicit_steps;         /* 1: explicit (a step limited by stability, see erk.c) */
+    /* 1 when these options make the step limited by stability (explicit methods; Newmark with
+     * beta < gamma / 2): a drive given step by step is refused. NULL: never */
+    int (*stability_limited)(const fsr_options* o);
     int stages;                 /* stages coupled in its Newton system (radau5: 3; else 1) */
     size_t state_size;          /* bytes of what it carries from step to step (sim.ms) */
     size_t (*work_size)(int n); /* doubles of workspace for n coordinates (sim.work, csim.work) */

@@ -69,6 +69,11 @@ void sim_close(sim* s);
 /* After the caller changed o->p or o->mp: options checked again, caches dropped. */
 fsr_status sim_retune(sim* s, const fsr_integrator* it);
 fsr_status sim_fail(sim* s, fsr_status st, const char* fmt, ...);
+/* Largest natural frequency of the model linearised at rest (power iteration on M^-1 K at five
+ * times of the run; scratch: 2n doubles); a step of a method stable up to omega_max dt <=
+ * stability refused above it, with `instead` suggested. */
+fsr_status sim_omega_max(sim* s, double* scratch, double* omega);
+fsr_status sim_check_step_limit(sim* s, const char* name, double stability, const char* instead);
 /* t_k: k dt, t_end for k >= nsteps */
 static inline double sim_time(const sim* s, long k)
 {

@@ -138,9 +138,9 @@ fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
     if (!st && it->fixed_grid && !it->fixed_grid(o))
         st = sim_fail(s, FSR_BAD_OPTIONS, "%s: the stepper takes fixed steps of dt (dopri5 needs tol = 0, "
                       "radau5 no step other than dt)", it->name);
-    if (!st && drive && it->explicit_steps)
-        st = sim_fail(s, FSR_BAD_OPTIONS, "%s: a drive given step by step needs an implicit method (the "
-                      "stability limit of explicit steps depends on the drive to come)", it->name);
+    if (!st && drive && it->stability_limited && it->stability_limited(o))
+        st = sim_fail(s, FSR_BAD_OPTIONS, "%s: a drive given step by step needs an unconditionally stable "
+                      "method (the stability limit of this one depends on the drive to come)", it->name);
     if (!st && drive && s->nd != 4)
         st = sim_fail(s, FSR_BAD_OPTIONS, "a drive given step by step needs a model with one guided joint "
                       "(this one has %d drive values)", s->nd);
