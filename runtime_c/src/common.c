@@ -92,7 +92,8 @@ static fsr_status check_length_scale(const fsr_options* o, const fsm_system* m, 
     return FSR_OK;
 }
 
-fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_result* r, const char* method)
+/* The options every run checks: step, end, rows, rho_inf, Newton, blow-up limit. */
+static fsr_status check_steps(const fsr_options* o, fsr_result* r)
 {
     if (!(o->dt > 0.0) || !isfinite(o->dt)) return fsr_fail(r, FSR_BAD_OPTIONS, "dt must be > 0 (got %g)", o->dt);
     if (!(o->t_end > 0.0) || !isfinite(o->t_end))
@@ -100,16 +101,22 @@ fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_
     if (o->out_every < 1) return fsr_fail(r, FSR_BAD_OPTIONS, "out_every must be >= 1 (got %d)", o->out_every);
     if (!(o->rho_inf >= 0.0 && o->rho_inf <= 1.0))
         return fsr_fail(r, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
+    if (o->newton_max < 1 || !(o->newton_tol > 0.0))
+        return fsr_fail(r, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
+    if (!(o->blowup > 0.0)) return fsr_fail(r, FSR_BAD_OPTIONS, "blowup must be > 0");
+    return FSR_OK;
+}
+
+fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_result* r, const char* method)
+{
+    if (check_steps(o, r)) return r->status;
     if (o->method == FSR_NEWMARK && !(o->nm_gamma >= 0.5 && o->nm_beta > 0.0))
         return fsr_fail(r, FSR_BAD_OPTIONS, "Newmark gamma = %g, beta = %g: need gamma >= 1/2 and beta > 0 "
                         "(beta < gamma / 2: stable for omega_max dt <= 1 / sqrt(gamma / 2 - beta))",
                         o->nm_gamma, o->nm_beta);
-    if (o->newton_max < 1 || !(o->newton_tol > 0.0))
-        return fsr_fail(r, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
     if (!(o->tol >= 0.0 && o->tol < 1.0))
         return fsr_fail(r, FSR_BAD_OPTIONS, "tol must be in [0, 1) (got %g; 0 = fixed steps)", o->tol);
     if (o->max_steps < 1) return fsr_fail(r, FSR_BAD_OPTIONS, "max_steps must be >= 1 (got %ld)", o->max_steps);
-    if (!(o->blowup > 0.0)) return fsr_fail(r, FSR_BAD_OPTIONS, "blowup must be > 0");
     if (!(o->step >= 0.0) || !isfinite(o->step))
         return fsr_fail(r, FSR_BAD_OPTIONS, "step must be >= 0 (got %g; 0 = steps of dt)", o->step);
     if (o->step > 0.0 && o->method != FSR_RADAU5)
@@ -129,15 +136,7 @@ fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_
 fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system* m, fsr_result* r,
                                          const char* method)
 {
-    if (!(o->dt > 0.0) || !isfinite(o->dt)) return fsr_fail(r, FSR_BAD_OPTIONS, "dt must be > 0 (got %g)", o->dt);
-    if (!(o->t_end > 0.0) || !isfinite(o->t_end))
-        return fsr_fail(r, FSR_BAD_OPTIONS, "t_end must be > 0 (got %g)", o->t_end);
-    if (o->out_every < 1) return fsr_fail(r, FSR_BAD_OPTIONS, "out_every must be >= 1 (got %d)", o->out_every);
-    if (!(o->rho_inf >= 0.0 && o->rho_inf <= 1.0))
-        return fsr_fail(r, FSR_BAD_OPTIONS, "rho_inf must be in [0, 1] (got %g)", o->rho_inf);
-    if (o->newton_max < 1 || !(o->newton_tol > 0.0))
-        return fsr_fail(r, FSR_BAD_OPTIONS, "newton_max must be >= 1 and newton_tol > 0");
-    if (!(o->blowup > 0.0)) return fsr_fail(r, FSR_BAD_OPTIONS, "blowup must be > 0");
+    if (check_steps(o, r)) return r->status;
     if (!(o->penalty > 0.0) || !isfinite(o->penalty))
         return fsr_fail(r, FSR_BAD_OPTIONS, "penalty must be > 0 (got %g)", o->penalty);
     if (o->step != 0.0) return fsr_fail(r, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)", method);
