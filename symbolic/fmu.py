@@ -27,7 +27,7 @@ PLATFORM = "x86_64-linux"
 INPUT_MODES = ("none", "drive")
 METHODS = {"rk4": "FSR_RK4", "genalpha": "FSR_GENALPHA", "newmark": "FSR_NEWMARK",
            "dopri5": "FSR_DOPRI5", "radau5": "FSR_RADAU5"}
-CONSTRAINED = {"ali3p": "FSR_ALI3P", "genalpha3": "FSR_GENALPHA3"}  # systems only
+CONSTRAINED = {"ali3p": "FSR_ALI3P", "genalpha3": "FSR_GENALPHA3", "rk4p": "FSR_RK4P"}  # systems only
 DRIVE_INPUTS = (("theta_dot", "rad/s", "guided angular rate; held with its slope theta_ddot over a "
                  "communication step"),
                 ("theta_ddot", "rad/s2", "guided angular acceleration, held over a communication step"))

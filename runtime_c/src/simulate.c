@@ -29,6 +29,7 @@ static const fsr_integrator* integrator_of(fsr_method m)
     case FSR_RADAU5: return fsr_integrator_radau5();
     case FSR_ALI3P: return fsr_integrator_ali3p();
     case FSR_GENALPHA3: return fsr_integrator_genalpha3();
+    case FSR_RK4P: return fsr_integrator_rk4p();
     }
     return NULL;
 }
@@ -70,7 +71,7 @@ static fsr_status open_constrained(csim* s, const fsr_integrator* it, const fsm_
     if (!it || !it->cs_step) {
         memset(s, 0, sizeof *s);
         memset(r, 0, sizeof *r);
-        return fsr_fail(r, FSR_BAD_OPTIONS, "a model given as a struct runs with ali3p or genalpha3 "
+        return fsr_fail(r, FSR_BAD_OPTIONS, "a model given as a struct runs with ali3p, genalpha3 or rk4p "
                         "(got method %d)", (int)o->method);
     }
     return cs_open(s, it, m, o, r, capacity);

@@ -4,10 +4,10 @@
 
 #include "flexsym/system.h"
 
-/* One file per integrator (src/integrator.h). ali3p, genalpha3: the constrained integrators;
+/* One file per integrator (src/integrator.h). ali3p, genalpha3, rk4p: the constrained integrators;
  * they also run models without constraints (nc = 0). */
 typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4,
-               FSR_ALI3P = 5, FSR_GENALPHA3 = 6 } fsr_method;
+               FSR_ALI3P = 5, FSR_GENALPHA3 = 6, FSR_RK4P = 7 } fsr_method;
 
 typedef enum {
     FSR_OK = 0,
