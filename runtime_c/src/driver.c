@@ -10,7 +10,7 @@
  * dopri5 adapts its step to --tol (0: fixed steps --dt); its rows are at the output grid,
  * multiples of out_every * dt, from its dense output. radau5 steps by --step (default --dt)
  * and writes rows every --dt from its collocation polynomial. --energy appends columns T, V, h
- * (kinetic and potential energy, Jacobi integral) to every row. ali3p and genalpha3 integrate
+ * (kinetic and potential energy, Jacobi integral) to every row. ali3p, genalpha3 and rk4p integrate
  * models with constraints (a column `violation` after the outputs when the model has any).
  *
  * stdout: one JSON line (status, steps, CPU time of the integration alone).

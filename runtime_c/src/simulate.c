@@ -1,7 +1,7 @@
 /* The run loop: a run of the model linked into this program (fsm_system_model) or of a model
  * given as a struct (fsr_simulate_system), by an integrator picked from the table below by
  * method or name (integrator.h: rk4.c, dopri5.c, genalpha.c, newmark.c, radau5.c on a run of
- * ode.h; ali3p.c, genalpha3.c on a run of constrained.h). It opens the run with the workspace
+ * ode.h; ali3p.c, genalpha3.c, rk4p.c on a run of constrained.h). It opens the run with the workspace
  * the integrator declares, writes the row at t = 0, calls begin, then step until the run is done
  * (fsr_simulate) or up to the time the caller asks for (fsr_stepper); so both give the same
  * rows bit for bit. It knows no integrator's internals.
