@@ -8,7 +8,7 @@ set(FLEXSYM_RUNTIME_DIR "${CMAKE_CURRENT_LIST_DIR}")
 # The run loop (simulate.c), one file per integrator (integrator.h) and what they share.
 set(FLEXSYM_RUNTIME_SOURCES)
 foreach(f simulate.c batch.c rk4.c dopri5.c erk.c genalpha.c newmark.c radau5.c newton.c ode.c
-          ali3p.c genalpha3.c constrained.c common.c linalg.c)
+          ali3p.c genalpha3.c rk4p.c constrained.c common.c linalg.c)
   list(APPEND FLEXSYM_RUNTIME_SOURCES "${FLEXSYM_RUNTIME_DIR}/src/${f}")
 endforeach()
 

@@ -6,7 +6,7 @@ time; the beam parameters and, unless the drive is an input, the manoeuvre param
 (tunable); with input="drive" the inputs theta_dot, theta_ddot; the outputs and the
 coordinates, named as the columns of `flexsym run`'s CSV. A system (symbolic/sysgen.py): its
 parameters p and drive parameters, its outputs (with the violation column when it has
-constraints) and coordinates; ali3p and genalpha3 too when it has constraints.
+constraints) and coordinates; ali3p, genalpha3 and rk4p too when it has constraints.
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ PLATFORM = "x86_64-linux"
 INPUT_MODES = ("none", "drive")
 METHODS = {"rk4": "FSR_RK4", "genalpha": "FSR_GENALPHA", "newmark": "FSR_NEWMARK",
            "dopri5": "FSR_DOPRI5", "radau5": "FSR_RADAU5"}
-CONSTRAINED = {"ali3p": "FSR_ALI3P", "genalpha3": "FSR_GENALPHA3"}  # systems only
+CONSTRAINED = {"ali3p": "FSR_ALI3P", "genalpha3": "FSR_GENALPHA3", "rk4p": "FSR_RK4P"}  # systems only
 DRIVE_INPUTS = (("theta_dot", "rad/s", "guided angular rate; held with its slope theta_ddot over a "
                  "communication step"),
                 ("theta_ddot", "rad/s2", "guided angular acceleration, held over a communication step"))
@@ -60,7 +60,7 @@ def check_request(opts: FmuOptions, out: Path | None, spec) -> None:
     offered = METHODS | (CONSTRAINED if spec is None else {})
     if opts.integrator not in offered:
         raise SpecError(f"--integrator {opts.integrator}: an FMU offers {', '.join(offered)}"
-                        + ("" if spec is None else " (ali3p, genalpha3: system scenes only)"))
+                        + ("" if spec is None else " (ali3p, genalpha3, rk4p: system scenes only)"))
     if opts.integrator == "dopri5" and opts.tol != 0:
         raise SpecError("--integrator dopri5 adapts its steps; the FMU takes fixed steps of dt: "
                         "use --tol 0 (dopri5 at fixed steps) or another integrator")

@@ -30,7 +30,7 @@ from .run import RunResult
 from .validity import VALIDITY_LIMIT, deflection_weights
 
 # fsr_method codes (runtime.h) and the driver's status words
-METHOD_CODES = {"rk4": 0, "genalpha": 1, "newmark": 2, "dopri5": 3, "radau5": 4, "ali3p": 5, "genalpha3": 6}
+METHOD_CODES = {"rk4": 0, "genalpha": 1, "newmark": 2, "dopri5": 3, "radau5": 4, "ali3p": 5, "genalpha3": 6, "rk4p": 7}
 STATUS_WORDS = {0: "ok", 1: "diverged"}  # any other fsr_status: "failed"
 SUMMARY_FIELDS = ("min", "max", "t_min", "t_max", "t_peak", "final")  # FSR_SUM_*, then `at`
 STAT_FIELDS = ("t_stop", "steps", "rejected_steps", "newton_iterations", "jacobian_evaluations",

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from .errors import SpecError
 
-INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5", "ali3p", "genalpha3")
+INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5", "ali3p", "genalpha3", "rk4p")
 IMPLICIT = ("genalpha", "newmark", "radau5", "ali3p", "genalpha3")
 
 # Limits of one run: beyond them a run is refused up front (and by the runtime as a last line).
@@ -100,7 +100,8 @@ _o = Option  # rows below: name, type, default, help, flag, scene key, driver fl
 OPTIONS: tuple[Option, ...] = (
     _o("integrator", str, "genalpha", "rk4, dopri5 (adaptive, see --tol), genalpha (default), newmark, "
        "radau5 (implicit, order 5, large steps), ali3p, genalpha3 (constrained systems; without "
-       "constraints: the trapezoidal rule, generalized-alpha)", "--integrator", "solver.integrator", "--integrator",
+       "constraints: the trapezoidal rule, generalized-alpha), rk4p (constrained systems, explicit, "
+       "order 4: RK4 on the index-1 form with projections)", "--integrator", "solver.integrator", "--integrator",
        choices=INTEGRATORS),
     _o("t_end", float, 20.0, "end time [s] (default 20)", "--t-end", "solver.t_end", "--t-end",
        low=0.0, low_open=True),
@@ -119,8 +120,8 @@ OPTIONS: tuple[Option, ...] = (
        "or full (rebuilt every iteration, a reference)", "--newton", "solver.newton", "--newton",
        choices=("modified", "full"), integrators=IMPLICIT),
     _o("newton_tol", float, None, "implicit integrators: Newton tolerance on max abs(dq), relative to L "
-       "(default 1e-12)", "--newton-tol", "solver.newton_tol", "--newton-tol", low=1e-16, high=1e-3,
-       integrators=IMPLICIT),
+       "(default 1e-12); rk4p: its projection's tolerance on max abs(Phi)", "--newton-tol",
+       "solver.newton_tol", "--newton-tol", low=1e-16, high=1e-3, integrators=IMPLICIT + ("rk4p",)),
     _o("rho_inf", float, None, "generalized-alpha spectral radius at infinity in [0, 1] (default 0.9)",
        "--rho-inf", "solver.rho_inf", "--rho-inf", low=0.0, high=1.0, integrators=("genalpha", "genalpha3")),
     _o("newmark_gamma", float, None, "Newmark gamma (default 0.5; the paper: 0.5)", "--newmark-gamma",

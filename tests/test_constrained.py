@@ -1,4 +1,4 @@
-"""Constrained integrators ali3p and genalpha3 (runtime_c/src/ali3p.c, genalpha3.c) on
+"""Constrained integrators ali3p, genalpha3 and rk4p (runtime_c/src/ali3p.c, genalpha3.c, rk4p.c) on
 hand-written planar models in relative coordinates with cut joints (tests/c_models: a rigid
 slider-crank, a four-bar under gravity, a parallelogram with a redundant bar), built with the
 runtime's driver as models that provide fsm_system_model() themselves, and on a generated
@@ -17,7 +17,8 @@ from scipy.integrate import solve_ivp
 from flexsym.build import find_cmake, find_compiler
 
 C_MODELS = Path(__file__).parent / "c_models"
-METHODS = ("ali3p", "genalpha3")
+METHODS = ("ali3p", "genalpha3")  # the second-order ones
+ALL_METHODS = METHODS + ("rk4p",)
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +65,7 @@ def slider_crank_exact():
     return (lambda tt: at(tt, 0)), (lambda tt: at(tt, 1))
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", ALL_METHODS)
 def test_slider_crank_follows_the_closed_form(runners, tmp_path, method):
     """Rigid slider-crank, crank guided through the paper's spin-up to 150 rad/s: the slider
     position is the closed form to the Newton tolerance, the cut joint's violation stays below
@@ -83,8 +84,8 @@ def test_slider_crank_follows_the_closed_form(runners, tmp_path, method):
     peak = np.abs(force).max()
     assert peak == pytest.approx(169.0, rel=0.01)
     # measured at dt = 0.1 ms: ali3p 2.5e-11 (the projection's 1/kappa), genalpha3 7.4e-5 of
-    # the peak (integration error)
-    tol = {"ali3p": 1e-9, "genalpha3": 3e-4}[method]
+    # the peak (integration error), rk4p 1.4e-12 (the multipliers of the index-1 solve)
+    tol = {"ali3p": 1e-9, "genalpha3": 3e-4, "rk4p": 1e-10}[method]
     assert np.abs(d["lambda_x"] - force)[1:].max() < tol * peak
 
 
@@ -111,8 +112,8 @@ def test_assembly_that_cannot_close_is_refused(runners, tmp_path):
 def test_todays_integrators_refuse_a_model_with_constraints(runners, tmp_path):
     code, summary, err, d = run(runners, "fourbar", tmp_path / "x.csv", integrator="genalpha", t_end=0.1)
     assert code == 2 and d is None
-    assert err.strip() == ("flexsym runtime: genalpha: this model has 2 constraint equations: use ali3p "
-                           "or genalpha3")
+    assert err.strip() == ("flexsym runtime: genalpha: this model has 2 constraint equations: use ali3p, "
+                           "genalpha3 or rk4p")
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -143,7 +144,7 @@ def parallelogram_reference(t, psi0, a=0.4, l=0.2, rho=1.0, g=9.81):
     return sol.y[0]
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", ALL_METHODS)
 def test_redundant_closed_loop(runners, tmp_path, method):
     """Parallelogram with a redundant middle bar (4 constraint equations of rank 3): it runs,
     the violation stays below 1e-10, and the motion is the one-degree-of-freedom pendulum it
@@ -180,6 +181,35 @@ def test_orders_and_agreement(runners, tmp_path):
     assert np.abs(refs["ali3p"] - refs["genalpha3"]).max() < 2e-7
 
 
+def test_rk4p_is_of_order_four_and_agrees_with_ali3p(runners, tmp_path):
+    """rk4p (RK4 on the index-1 form, positions and velocities projected after each step)
+    converges at order 4 on the four-bar (crank angle over 0.5 s against its own run at
+    dt = 1/16000 s), keeps the violation below 1e-10 of the size at every row, and agrees with
+    ali3p at the small step to ali3p's own error (order 2: ~5e-7 rad there)."""
+    def run_fb(method, dt):
+        code, _, err, d = run(runners, "fourbar", tmp_path / "o4.csv", integrator=method, dt=dt,
+                              t_end=0.5, out_every=round(0.01 / dt))
+        assert code == 0, err
+        assert d["violation"].max() < 1e-10
+        return d["psi1"]
+
+    ref = run_fb("rk4p", 1 / 16000)
+    errs = np.array([np.abs(run_fb("rk4p", dt) - ref).max() for dt in (1e-2, 5e-3, 2.5e-3, 1.25e-3)])
+    orders = np.log2(errs[:-1] / errs[1:])  # measured 4.26, 4.35, 4.23
+    assert np.all((orders > 3.7) & (orders < 4.6)), (errs, orders)
+    assert np.abs(ref - run_fb("ali3p", 1 / 16000)).max() < 2e-6  # measured 7.6e-7 rad
+
+
+def test_rk4p_refuses_a_step_above_its_stability_limit(runners, tmp_path):
+    """An explicit method: a step above 2.785 / omega_max (omega_max on the constraint manifold
+    at t = 0: 10.0 rad/s for the four-bar under gravity) is refused with the largest step that
+    is not."""
+    code, _, err, _ = run(runners, "fourbar", tmp_path / "u.csv", integrator="rk4p", dt=0.5, t_end=1.0)
+    assert code == 3
+    assert ("rk4p step 500 ms exceeds the stability limit 277 ms of this model (omega_max = 10.0 "
+            "rad/s on the constraint manifold at t = 0); use --dt <= 2.7e-1 or ali3p") in err
+
+
 def test_tree_model_runs_with_every_integrator(runners, tmp_path):
     """A model given as a struct without constraints or guided joints (nc = 0, nd = 1: the
     rigid compound pendulum released horizontally) runs with today's integrators too. At a
@@ -190,19 +220,21 @@ def test_tree_model_runs_with_every_integrator(runners, tmp_path):
     quarter = float(np.sqrt(2 * 1.0 / (3 * 9.81)) * ellipk(0.5))
     psi = {}
     for method, dt in (("rk4", 1e-3), ("dopri5", 1e-3), ("radau5", 1e-2), ("genalpha", 1e-3),
-                       ("genalpha3", 1e-3), ("newmark", 1e-3), ("ali3p", 1e-3)):
+                       ("genalpha3", 1e-3), ("newmark", 1e-3), ("ali3p", 1e-3),
+                       ("rk4p", 1e-3)):
         code, summary, err, d = run(runners, "pendulum", tmp_path / "p.csv", integrator=method, dt=dt,
                                     t_end=repr(quarter), tol=1e-10 if method == "dopri5" else 1e-6)
         assert code == 0, err
         assert d["t"][-1] == quarter
         psi[method] = d["psi"]
         # measured: 2e-12 (rk4), 4e-12 (dopri5), 1.3e-11 (radau5); 2.2e-6 rad (second order)
-        assert abs(d["psi"][-1] + np.pi / 2) < (1e-10 if method in ("rk4", "dopri5", "radau5") else 3e-6)
+        assert abs(d["psi"][-1] + np.pi / 2) < (1e-10 if method in ("rk4", "dopri5", "radau5", "rk4p") else 3e-6)
     assert np.abs(psi["genalpha"] - psi["genalpha3"]).max() < 1e-10
     assert np.abs(psi["newmark"] - psi["ali3p"]).max() < 1e-10
+    assert np.abs(psi["rk4"] - psi["rk4p"]).max() < 1e-12  # nc = 0: rk4p is RK4
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", ALL_METHODS)
 def test_stepper_rows_equal_the_run(runners, method):
     """fsr_stepper (an FMU's doStep) gives fsr_simulate's rows bit for bit, advanced one grid
     point at a time and three at a time (tests/c_models/stepper_check.c)."""
@@ -225,7 +257,7 @@ def test_without_constraints_the_methods_are_the_plain_ones(simulate, method, pl
     assert np.abs(a["v_tip"] - b["v_tip"]).max() < 1e-12
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", ALL_METHODS)
 def test_blowup_bounds_a_constrained_run_at_lengths_not_angles(runners, tmp_path, method):
     """--blowup stops ali3p and genalpha3 too, at blowup x the length scale (0.45 m) on the
     coordinates that are lengths: the slider's s (0.45 m at t = 0) beyond 0.5 x 0.45 m; the rod

@@ -1,6 +1,6 @@
 /* A run of a model given as a struct (system.h) by a constrained integrator: options, workspace
  * (allocated once), consistent initial conditions, the constraint block solve, rows.
- * The methods themselves are ali3p.c and genalpha3.c (integrator.h); the run loop simulate.c.
+ * The methods themselves are ali3p.c, genalpha3.c and rk4p.c (integrator.h); the run loop simulate.c.
  *
  * Row: t, outputs, violation = max_i |Phi_i(q, t)| / L (only when nc > 0), q, and
  * with energy T, V, h. Outputs receive the multipliers lambda (ali3p: its lambda*), so that a

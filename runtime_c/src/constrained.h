@@ -1,4 +1,4 @@
-/* What the constrained integrators (ali3p.c, genalpha3.c) share: a run of a model given as a
+/* What the constrained integrators (ali3p.c, genalpha3.c, rk4p.c) share: a run of a model given as a
  * struct (system.h) with constraints (any nc), its workspace, rows, consistent initial
  * conditions and the solve of the constraint block (constrained.c). Internal to the runtime. */
 #ifndef FLEXSYM_CONSTRAINED_H

@@ -1,7 +1,7 @@
 /* Command-line driver: integrate a generated model, write CSV, report a JSON summary.
  *
  *   flexsym_<variant> [--t-end T] [--dt H]
- *                     [--integrator rk4|dopri5|genalpha|newmark|radau5|ali3p|genalpha3]
+ *                     [--integrator rk4|dopri5|genalpha|newmark|radau5|ali3p|genalpha3|rk4p]
  *                     [--step H] [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
  *                     [--newmark-beta B] [--newton modified|full] [--newton-tol TOL]
  *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
@@ -10,7 +10,7 @@
  * dopri5 adapts its step to --tol (0: fixed steps --dt); its rows are at the output grid,
  * multiples of out_every * dt, from its dense output. radau5 steps by --step (default --dt)
  * and writes rows every --dt from its collocation polynomial. --energy appends columns T, V, h
- * (kinetic and potential energy, Jacobi integral) to every row. ali3p and genalpha3 integrate
+ * (kinetic and potential energy, Jacobi integral) to every row. ali3p, genalpha3 and rk4p integrate
  * models with constraints (a column `violation` after the outputs when the model has any).
  *
  * stdout: one JSON line (status, steps, CPU time of the integration alone).
@@ -230,7 +230,7 @@ int main(int argc, char** argv)
         } else if (!strcmp(a, "--repeat")) {
             if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (runs, 1 to FSR_MAX_REPEAT of flexsym/limits.h)", val);
         } else if (!strcmp(a, "--integrator")) {
-            if (!fsr_method_by_name(val, &o.method)) return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5, ali3p, genalpha3)", val);
+            if (!fsr_method_by_name(val, &o.method)) return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5, ali3p, genalpha3, rk4p)", val);
         } else if (!strcmp(a, "--param")) {
             if (!set_param(m, p, mp, val)) return usage("bad --param (NAME=VALUE with a known name)", val);
         } else return usage("unknown option", a);

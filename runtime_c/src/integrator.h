@@ -1,6 +1,6 @@
 /* The one interface of the runtime's integrators, one file each: rk4.c, dopri5.c (both on the
  * explicit Runge-Kutta engine erk.c), genalpha.c, newmark.c, radau5.c integrate M q'' = f on a
- * run of ode.h (nc = 0); ali3p.c, genalpha3.c integrate with constraints on a run of
+ * run of ode.h (nc = 0); ali3p.c, genalpha3.c, rk4p.c integrate with constraints on a run of
  * constrained.h (any nc). The run loop (simulate.c) picks one from its table by method or name,
  * opens the run with the workspace the integrator declares, calls begin once, then step until
  * the run is done. Internal to the runtime. */
@@ -42,5 +42,6 @@ const fsr_integrator* fsr_integrator_newmark(void);
 const fsr_integrator* fsr_integrator_radau5(void);
 const fsr_integrator* fsr_integrator_ali3p(void);
 const fsr_integrator* fsr_integrator_genalpha3(void);
+const fsr_integrator* fsr_integrator_rk4p(void);
 
 #endif

@@ -168,7 +168,7 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_
     r->ncols = 1 + m->ny + m->nq + (o->energy ? 3 : 0);
     fsr_status st = fsr_check_ode_options(o, m, r, it->name);
     if (!st && m->nc > 0)
-        st = sim_fail(s, FSR_BAD_OPTIONS, "%s: this model has %d constraint equations: use ali3p or genalpha3",
+        st = sim_fail(s, FSR_BAD_OPTIONS, "%s: this model has %d constraint equations: use ali3p, genalpha3 or rk4p",
                       it->name, m->nc);
     if (st) return st;
     int n = s->n;

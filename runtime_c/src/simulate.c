@@ -1,7 +1,7 @@
 /* The run loop: a run of the model linked into this program (fsm_system_model) or of a model
  * given as a struct (fsr_simulate_system), by an integrator picked from the table below by
  * method or name (integrator.h: rk4.c, dopri5.c, genalpha.c, newmark.c, radau5.c on a run of
- * ode.h; ali3p.c, genalpha3.c on a run of constrained.h). It opens the run with the workspace
+ * ode.h; ali3p.c, genalpha3.c, rk4p.c on a run of constrained.h). It opens the run with the workspace
  * the integrator declares, writes the row at t = 0, calls begin, then step until the run is done
  * (fsr_simulate) or up to the time the caller asks for (fsr_stepper); so both give the same
  * rows bit for bit. It knows no integrator's internals.
@@ -29,6 +29,7 @@ static const fsr_integrator* integrator_of(fsr_method m)
     case FSR_RADAU5: return fsr_integrator_radau5();
     case FSR_ALI3P: return fsr_integrator_ali3p();
     case FSR_GENALPHA3: return fsr_integrator_genalpha3();
+    case FSR_RK4P: return fsr_integrator_rk4p();
     }
     return NULL;
 }
@@ -70,7 +71,7 @@ static fsr_status open_constrained(csim* s, const fsr_integrator* it, const fsm_
     if (!it || !it->cs_step) {
         memset(s, 0, sizeof *s);
         memset(r, 0, sizeof *r);
-        return fsr_fail(r, FSR_BAD_OPTIONS, "a model given as a struct runs with ali3p or genalpha3 "
+        return fsr_fail(r, FSR_BAD_OPTIONS, "a model given as a struct runs with ali3p, genalpha3 or rk4p "
                         "(got method %d)", (int)o->method);
     }
     return cs_open(s, it, m, o, r, capacity);

@@ -4,10 +4,10 @@
 
 #include "flexsym/system.h"
 
-/* One file per integrator (src/integrator.h). ali3p, genalpha3: the constrained integrators;
+/* One file per integrator (src/integrator.h). ali3p, genalpha3, rk4p: the constrained integrators;
  * they also run models without constraints (nc = 0). */
 typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4,
-               FSR_ALI3P = 5, FSR_GENALPHA3 = 6 } fsr_method;
+               FSR_ALI3P = 5, FSR_GENALPHA3 = 6, FSR_RK4P = 7 } fsr_method;
 
 typedef enum {
     FSR_OK = 0,
@@ -71,7 +71,7 @@ void fsr_free(fsr_result* r);
 const char* fsr_method_name(fsr_method m);
 /* *m = the method named name (as fsr_method_name gives it); returns 0 when there is none. */
 int fsr_method_by_name(const char* name, fsr_method* m);
-/* The same for a model given as a struct (system.h); methods ali3p and genalpha3 only. Before
+/* The same for a model given as a struct (system.h); methods ali3p, genalpha3, rk4p only. Before
  * the first step the initial state is made consistent with the constraints (FSR_ASSEMBLY and a
  * message naming the constraint with the largest residual when it cannot be). */
 fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r);
@@ -81,7 +81,7 @@ fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_re
  * only (genalpha, newmark, rk4, dopri5 with tol = 0, radau5 with step 0 or dt).
  * drive: NULL to take theta', theta'' from the model's manoeuvre (o->mp), or [theta',
  * theta''] at t = 0 given by the caller, then by fsr_stepper_set_drive (implicit methods; a
- * model with one guided joint, nd = 4; theta is their integral from 0). ali3p and genalpha3:
+ * model with one guided joint, nd = 4; theta is their integral from 0). ali3p, genalpha3, rk4p:
  * the model's own drive only, no retuning yet.
  * Returns NULL only when out of memory; check fsr_stepper_result(p)->status. */
 typedef struct fsr_stepper fsr_stepper;

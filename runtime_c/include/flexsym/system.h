@@ -2,7 +2,7 @@
  * live in one process). Every integrator takes the model only through this struct; a one-beam
  * model generated before systems (model.h's global kernels) is wrapped into it by
  * runtime_c/src/model_adapter.c, with nc = 0. rk4, dopri5, genalpha, newmark and radau5 need
- * nc = 0; ali3p and genalpha3 take any nc.
+ * nc = 0; ali3p, genalpha3 and rk4p take any nc.
  *
  * Equations, with the drive vector d (size nd) = [t, then theta_k, theta_k', theta_k'' for each
  * guided joint k] and the parameters p:
