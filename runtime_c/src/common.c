@@ -2,6 +2,7 @@
  * the checks made once before a run starts, the generalized-alpha coefficients. */
 #include "common.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -39,6 +40,19 @@ fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...)
     fsr_vfail(r, st, fmt, ap);
     va_end(ap);
     return st;
+}
+
+fsr_status fsr_check_step_limit(fsr_result* r, const char* name, double dt, double stability,
+                                double omega, const char* where, const char* instead)
+{
+    double limit = stability / omega;
+    if (!(dt > limit)) return FSR_OK;
+    int e = (int)floor(log10(limit));
+    double mant = floor(limit / pow(10.0, e) * 10.0) / 10.0;
+    return fsr_fail(r, FSR_UNSTABLE_STEP,
+                    "%s step %g ms exceeds the stability limit %.3g ms of this model (omega_max = %.1f "
+                    "rad/s%s); use --dt <= %.1fe%d or %s", name, dt * 1e3, limit * 1e3, omega, where,
+                    mant, e, instead);
 }
 
 double fsr_length_scale(const fsm_system* m, const double* p)

@@ -13,6 +13,10 @@
 /* r->message from fmt, r->status = st; returns st. */
 fsr_status fsr_vfail(fsr_result* r, fsr_status st, const char* fmt, va_list ap);
 fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...);
+/* Refuse a fixed step dt above a method's stability limit omega dt <= stability (FSR_OK within
+ * it): one message for every method, `where` qualifies omega, `instead` is suggested. */
+fsr_status fsr_check_step_limit(fsr_result* r, const char* name, double dt, double stability,
+                                double omega, const char* where, const char* instead);
 
 /* What every run checks: a finite o->y0 and the run-size limits of limits.h (r->ncols set). */
 fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r);

@@ -283,11 +283,5 @@ fsr_status sim_omega_max(sim* s, double* scratch, double* omega)
  * integrating garbage. */
 fsr_status sim_check_step_limit(sim* s, const char* name, double stability, const char* instead)
 {
-    double om = s->r->omega_max, limit = stability / om, dt = s->o->dt;
-    if (!(dt > limit)) return FSR_OK;
-    int e = (int)floor(log10(limit));
-    double mant = floor(limit / pow(10.0, e) * 10.0) / 10.0;
-    return sim_fail(s, FSR_UNSTABLE_STEP,
-                    "%s step %g ms exceeds the stability limit %.3g ms of this model (omega_max = %.1f "
-                    "rad/s); use --dt <= %.1fe%d or %s", name, dt * 1e3, limit * 1e3, om, mant, e, instead);
+    return fsr_check_step_limit(s->r, name, s->o->dt, stability, s->r->omega_max, "", instead);
 }

@@ -74,17 +74,11 @@ static double omega_max(csim* s)
 
 static fsr_status rk4p_begin(csim* s)
 {
-    double om = omega_max(s), limit = RK4P_STABILITY / om, dt = s->o->dt;
-    s->r->omega_max = om;
+    s->r->omega_max = omega_max(s);
     cs_drive(s, 0.0);
     if (s->nc) cs_constraints(s, s->q);
-    if (!(dt > limit)) return FSR_OK;
-    int e = (int)floor(log10(limit));
-    double mant = floor(limit / pow(10.0, e) * 10.0) / 10.0;
-    return cs_fail(s, FSR_UNSTABLE_STEP,
-                   "rk4p step %g ms exceeds the stability limit %.3g ms of this model (omega_max = %.1f "
-                   "rad/s on the constraint manifold at t = 0); use --dt <= %.1fe%d or ali3p",
-                   dt * 1e3, limit * 1e3, om, mant, e);
+    return fsr_check_step_limit(s->r, "rk4p", s->o->dt, RK4P_STABILITY, s->r->omega_max,
+                                " on the constraint manifold at t = 0", "ali3p");
 }
 
 /* q1 onto Phi(q1, t1) = 0, then v1 onto Phi_q v1 = -Phi_t (M of the last stage in S) */
