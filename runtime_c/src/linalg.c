@@ -149,3 +149,21 @@ void fsr_matvec(const double* A, int n, int bw, const double* x, double* y)
         y[i] = s;
     }
 }
+
+double fsr_power_iteration(int n, double* x, double* z, int max_it,
+                           void (*apply)(void* ctx, const double* x, double* z), void* ctx)
+{
+    double est = 0.0;
+    for (int it = 0; it < max_it; ++it) {
+        apply(ctx, x, z);
+        double nz = 0.0;
+        for (int i = 0; i < n; ++i) nz += z[i] * z[i];
+        nz = sqrt(nz);
+        if (!(nz > 0.0) || !isfinite(nz)) break;
+        for (int i = 0; i < n; ++i) x[i] = z[i] / nz;
+        int done = fabs(nz - est) <= 1e-10 * nz;
+        est = nz;
+        if (done) break;
+    }
+    return est;
+}

@@ -20,5 +20,10 @@ void fsr_chol_inverse(const double* A, int n, double* Ainv, double* work);
 void fsr_lu_inverse(const double* A, int n, const int* piv, double* Ainv, double* work);
 /* y = A x for A with half-bandwidth bw (bw < 0: dense). */
 void fsr_matvec(const double* A, int n, int bw, const double* x, double* y);
+/* The largest |eigenvalue| of the operator apply(ctx, x, z): z = A x, by power iteration from
+ * x (n, updated to the unit eigenvector estimate; z: n of scratch), until two estimates agree
+ * to 1e-10 or after max_it; 0 when A x vanishes or is not finite. */
+double fsr_power_iteration(int n, double* x, double* z, int max_it,
+                           void (*apply)(void* ctx, const double* x, double* z), void* ctx);
 
 #endif

@@ -47,28 +47,25 @@ static fsr_status accel(csim* s, double t, const double* q, const double* v, dou
     return FSR_OK;
 }
 
+/* z = M^-1 (K x - Phi_q^T l) with Phi_q z = 0: K restricted to the constraint manifold */
+static void constrained_stiffness(void* ctx, const double* x, double* z)
+{
+    csim* s = ctx;
+    fsr_matvec(s->Jq, s->n, 1, x, z);        /* z = K x */
+    memset(s->e2, 0, sizeof(double) * (size_t)s->nc);
+    memcpy(s->gam, s->e2, sizeof(double) * (size_t)s->nc);
+    cs_kkt(s, s->S, z, s->gam, s->lam1);
+}
+
 /* omega_max on the constraint manifold at the consistent start (S: M(q0) factored) */
 static double omega_max(csim* s)
 {
     const int n = s->n;
-    double *x = s->w1, *z = s->res, est = 0.0;
+    double *x = s->w1, *z = s->res;
     s->m->residual_jac(s->q, s->v, s->a, s->d, s->o->p, s->Jq, s->Jv);
     s->r->jacobian_evaluations++;
     for (int i = 0; i < n; ++i) x[i] = (1.0 + 0.1 * i) / sqrt((double)n);
-    for (int it = 0; it < RK4P_POWER_ITER; ++it) {
-        fsr_matvec(s->Jq, n, 1, x, z);        /* z = K x */
-        memset(s->e2, 0, sizeof(double) * (size_t)s->nc);
-        memcpy(s->gam, s->e2, sizeof(double) * (size_t)s->nc);
-        cs_kkt(s, s->S, z, s->gam, s->lam1);  /* z = M^-1 (K x - Phi_q^T l), Phi_q z = 0 */
-        double nz = 0.0;
-        for (int i = 0; i < n; ++i) nz += z[i] * z[i];
-        nz = sqrt(nz);
-        if (!(nz > 0.0) || !isfinite(nz)) break;
-        for (int i = 0; i < n; ++i) x[i] = z[i] / nz;
-        int done = fabs(nz - est) <= 1e-10 * nz;
-        est = nz;
-        if (done) break;
-    }
+    double est = fsr_power_iteration(n, x, z, RK4P_POWER_ITER, constrained_stiffness, s);
     return sqrt(est);
 }
 
