@@ -16,23 +16,35 @@ if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
   set(CMAKE_BUILD_TYPE Release)
 endif()
 
-function(flexsym_add_model name)
-  set(objs flexsym_${name}_objects)
+# The flags of every model build: the driver, the shared library and an FMU compute the same
+# rows bit for bit only when compiled alike. The runtime's loops run over a few coordinates
+# (3 to 65): vector code costs more than it saves there (measured: 5-13 % faster integration
+# of #1-#3 without it, ef 3 %).
+set(FLEXSYM_WARNINGS -Wall -Wextra -Werror -pedantic)
+set(FLEXSYM_CODEGEN $<$<C_COMPILER_ID:GNU,Clang,AppleClang>:-fno-tree-vectorize>)
+
+# A model's sources: the given ones plus model_adapter.c (a one-beam model seen as an
+# fsm_system), or, when the first is SYSTEM, the rest alone (they define fsm_system_model()).
+function(_flexsym_model_sources out)
   set(sources ${ARGN})
   if(sources AND "${ARGV1}" STREQUAL "SYSTEM")
     list(REMOVE_AT sources 0)
   else()
     list(APPEND sources "${FLEXSYM_RUNTIME_DIR}/src/model_adapter.c")
   endif()
+  set(${out} ${sources} PARENT_SCOPE)
+endfunction()
+
+function(flexsym_add_model name)
+  set(objs flexsym_${name}_objects)
+  _flexsym_model_sources(sources ${ARGN})
   add_library(${objs} OBJECT ${sources} ${FLEXSYM_RUNTIME_SOURCES})
   set_target_properties(${objs} PROPERTIES POSITION_INDEPENDENT_CODE ON C_STANDARD 99
                         C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
   target_include_directories(${objs} PUBLIC "${FLEXSYM_RUNTIME_DIR}/include"
                              "${CMAKE_CURRENT_SOURCE_DIR}")
-  target_compile_options(${objs} PUBLIC -Wall -Wextra -Werror -pedantic)
-  # The runtime's loops run over a few coordinates (3 to 65): vector code costs more than it
-  # saves there (measured: 5-13 % faster integration of #1-#3 without it, ef 3 %).
-  target_compile_options(${objs} PRIVATE $<$<C_COMPILER_ID:GNU,Clang,AppleClang>:-fno-tree-vectorize>)
+  target_compile_options(${objs} PUBLIC ${FLEXSYM_WARNINGS})
+  target_compile_options(${objs} PRIVATE ${FLEXSYM_CODEGEN})
 
   add_executable(flexsym_${name} "${FLEXSYM_RUNTIME_DIR}/src/driver.c")
   set_target_properties(flexsym_${name} PROPERTIES C_STANDARD 99 C_STANDARD_REQUIRED ON
@@ -50,18 +62,12 @@ endfunction()
 # only the fmi3* functions are exported.
 # SYSTEM after CONFIG_DIR: as for flexsym_add_model (the sources define fsm_system_model()).
 function(flexsym_add_fmu id config_dir)
-  set(sources ${ARGN})
-  if(sources AND "${ARGV2}" STREQUAL "SYSTEM")
-    list(REMOVE_AT sources 0)
-  else()
-    list(APPEND sources "${FLEXSYM_RUNTIME_DIR}/src/model_adapter.c")
-  endif()
+  _flexsym_model_sources(sources ${ARGN})
   add_library(${id} MODULE ${sources} ${FLEXSYM_RUNTIME_SOURCES} "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
   set_target_properties(${id} PROPERTIES PREFIX "" C_STANDARD 99 C_STANDARD_REQUIRED ON
                         C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden)
   target_include_directories(${id} PRIVATE "${FLEXSYM_RUNTIME_DIR}/include" "${FLEXSYM_RUNTIME_DIR}/fmi3"
                              "${config_dir}")
-  target_compile_options(${id} PRIVATE -Wall -Wextra -Werror -pedantic
-                         $<$<C_COMPILER_ID:GNU,Clang,AppleClang>:-fno-tree-vectorize>)
+  target_compile_options(${id} PRIVATE ${FLEXSYM_WARNINGS} ${FLEXSYM_CODEGEN})
   target_link_libraries(${id} PRIVATE m)
 endfunction()
