@@ -47,6 +47,27 @@ typedef struct { double am, af, gam, bet; } fsr_alpha;
 fsr_alpha fsr_alpha_coefficients(double rho_inf);
 
 /* max(m, |x|) for m >= 0 (libm's fmax is a call in strict C99). */
+/* The steps of dt up to t_end (the last one shorter when dt does not divide t_end), at least 1 */
+static inline long fsr_step_count(const fsr_options* o)
+{
+    long n = (long)ceil(o->t_end / o->dt - 1e-9);
+    return n < 1 ? 1 : n;
+}
+
+/* t_k of a run of nsteps fixed steps: k dt, and exactly t_end from the last step on */
+static inline double fsr_step_time(const fsr_options* o, long nsteps, long k)
+{
+    return k >= nsteps ? o->t_end : (double)k * o->dt;
+}
+
+/* The output row after step `row` with a row every out_every steps: the last step always gets
+ * one, and after it there is none (nsteps + 1). From row 0 it is the first row. */
+static inline long fsr_next_row(long row, int out_every, long nsteps)
+{
+    long next = row + out_every;
+    return row == nsteps ? nsteps + 1 : (next < nsteps ? next : nsteps);
+}
+
 static inline double fsr_max_abs(double m, double x)
 {
     x = fabs(x);

@@ -33,7 +33,7 @@ fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...)
 
 double cs_time(const csim* s, long k)
 {
-    return k >= s->nsteps ? s->o->t_end : (double)k * s->o->dt;
+    return fsr_step_time(s->o, s->nsteps, k);
 }
 
 void cs_drive(csim* s, double t)
@@ -246,8 +246,7 @@ fsr_status cs_accept(csim* s, double t1)
     r->steps++;
     r->t_stop = t1;
     if (s->k != s->next_row) return FSR_OK;
-    long next = s->next_row + s->o->out_every;
-    s->next_row = s->next_row == s->nsteps ? s->nsteps + 1 : (next < s->nsteps ? next : s->nsteps);
+    s->next_row = fsr_next_row(s->next_row, s->o->out_every, s->nsteps);
     return store(s, t1);
 }
 
@@ -275,9 +274,8 @@ fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const
     const size_t n = (size_t)s->n, nc = (size_t)s->nc, nn = n * n;
     s->L = fsr_length_scale(m, o->p);
     s->tol = o->newton_tol * s->L;
-    s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
-    if (s->nsteps < 1) s->nsteps = 1;
-    s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
+    s->nsteps = fsr_step_count(o);
+    s->next_row = fsr_next_row(0, o->out_every, s->nsteps);
     s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
     size_t nz = n > nc ? n : nc;
     size_t work = it->work_size(s->n);

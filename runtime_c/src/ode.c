@@ -137,8 +137,7 @@ static fsr_status emit_rows(sim* s, double t1, const double* y1, const double* a
             st = sim_store(s, tr, ys, ys + n, NULL);
         }
         if (st) return st;
-        long next = s->next_row + s->o->out_every;
-        s->next_row = s->next_row == s->nsteps ? s->nsteps + 1 : (next < s->nsteps ? next : s->nsteps);
+        s->next_row = fsr_next_row(s->next_row, s->o->out_every, s->nsteps);
     }
     return FSR_OK;
 }
@@ -175,10 +174,9 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_
     s->nd = m->nd;
     s->L = fsr_length_scale(m, o->p);
     s->bw = m->bandwidth >= 0 && 2 * m->bandwidth + 1 < n ? m->bandwidth : -1;
-    s->nsteps = (long)ceil(o->t_end / o->dt - 1e-9);
-    if (s->nsteps < 1) s->nsteps = 1;
+    s->nsteps = fsr_step_count(o);
     s->msteps = s->nsteps;
-    s->next_row = o->out_every < s->nsteps ? o->out_every : s->nsteps;
+    s->next_row = fsr_next_row(0, o->out_every, s->nsteps);
     s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
     /* the Newton system: nst stages of n coordinates, interleaved (see newton.h) */
     s->nst = it->stages;

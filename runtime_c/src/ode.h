@@ -77,7 +77,7 @@ fsr_status sim_check_step_limit(sim* s, const char* name, double stability, cons
 /* t_k: k dt, t_end for k >= nsteps */
 static inline double sim_time(const sim* s, long k)
 {
-    return k >= s->nsteps ? s->o->t_end : (double)k * s->o->dt;
+    return fsr_step_time(s->o, s->nsteps, k);
 }
 /* The drive vector d (nd) at t into d (the last two times cached). */
 void sim_drive(sim* s, double t, double* d);

@@ -193,7 +193,7 @@ fsr_status fsr_stepper_advance(fsr_stepper* p, double t)
     double eps = 1e-9 * (dt > fabs(t) ? dt : fabs(t));
     long k = fabs(t - o->t_end) <= eps ? nsteps : (long)floor(x + 0.5);
     if (k > nsteps) k = nsteps;
-    double tk = k >= nsteps ? o->t_end : (double)k * dt;
+    double tk = fsr_step_time(o, nsteps, k);
     if (k <= now || !(fabs(tk - t) <= eps))
         return refuse(p, "t = %.17g s is not on the step grid (multiples of dt = %.17g s, and t_end)", t, dt);
     r->nrows = 0;
