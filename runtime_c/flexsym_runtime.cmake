@@ -57,7 +57,7 @@ function(flexsym_add_model name)
 endfunction()
 
 # flexsym_add_fmu(ID CONFIG_DIR sources...) builds ID.so, the binary of an FMI 3.0 Co-Simulation
-# FMU (runtime_c/fmi3, symbolic/fmu.py): the model's sources, this runtime and the fmi3 wrapper,
+# FMU (runtime_c/fmi3, flexsym/sim/fmu.py): the model's sources, this runtime and the fmi3 wrapper,
 # compiled with the flags of flexsym_add_model (so its rows equal the driver's bit for bit);
 # only the fmi3* functions are exported.
 # SYSTEM after CONFIG_DIR: as for flexsym_add_model (the sources define fsm_system_model()).

@@ -25,8 +25,8 @@ _models: dict = {}
 
 @pytest.fixture(scope="session")
 def derivation():
-    from flexsym.derive import derive
-    from flexsym.spec import builtin
+    from flexsym.codegen.derive import derive
+    from flexsym.spec.variant import builtin
 
     def get(name):
         spec = builtin(name)
@@ -39,8 +39,8 @@ def derivation():
 
 @pytest.fixture(scope="session")
 def model(isolated_cache):
-    from flexsym.pipeline import compiled
-    from flexsym.spec import builtin
+    from flexsym.toolchain.pipeline import compiled
+    from flexsym.spec.variant import builtin
 
     def get(name):
         spec = builtin(name)
@@ -54,9 +54,9 @@ def model(isolated_cache):
 @pytest.fixture(scope="session")
 def simulate(isolated_cache):
     """simulate(variant, **run options) -> RunResult (builds once per variant)."""
-    from flexsym.pipeline import prepare
-    from flexsym.run import run_built
-    from flexsym.spec import builtin
+    from flexsym.toolchain.pipeline import prepare
+    from flexsym.toolchain.run import run_built
+    from flexsym.spec.variant import builtin
 
     builds = {}
 

@@ -3,7 +3,7 @@ import csv
 
 import numpy as np
 
-from flexsym.cli import main
+from flexsym.apps.cli import main
 
 
 def test_bench_quick(tmp_path, capsys):

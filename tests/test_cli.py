@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from flexsym.cli import main
-from flexsym.paths import generated_dir
+from flexsym.apps.cli import main
+from flexsym.core.paths import generated_dir
 
 
 def run_cli(capsys, *argv):

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from flexsym.energy import BEAM_PARAMS, alpha, w
-from flexsym.generate import MANIFEST, check_folder, generate_files, read_manifest
-from flexsym.derive import build_kernels
-from flexsym.maneuver import t as t_sym
-from flexsym.paths import generated_dir
-from flexsym.spec import BUILTIN, builtin
+from flexsym.physics.energy import BEAM_PARAMS, alpha, w
+from flexsym.codegen.generate import MANIFEST, check_folder, generate_files, read_manifest
+from flexsym.codegen.derive import build_kernels
+from flexsym.spec.maneuver import t as t_sym
+from flexsym.core.paths import generated_dir
+from flexsym.spec.variant import BUILTIN, builtin
 
 from conftest import BUILTIN_NAMES
 
@@ -103,8 +103,8 @@ def test_generation_is_deterministic_within_a_process():
 
 
 def _hash_in_subprocess(seed: str) -> str:
-    code = ("import hashlib, json; from flexsym.generate import generate_files; "
-            "from flexsym.spec import builtin; "
+    code = ("import hashlib, json; from flexsym.codegen.generate import generate_files; "
+            "from flexsym.spec.variant import builtin; "
             "f = generate_files(builtin('m2')); "
             "print(hashlib.sha256(json.dumps(f, sort_keys=True).encode()).hexdigest())")
     env = dict(os.environ, PYTHONHASHSEED=seed)
@@ -119,7 +119,7 @@ def test_generation_is_deterministic_across_hash_seeds():
 @pytest.mark.parametrize("spec", BUILTIN, ids=lambda s: s.name)
 def test_checked_in_code_is_current(spec):
     """generated/ must be exactly what the generator produces now (regenerate with
-    `flexsym generate NAME` after changing symbolic/ or templates/)."""
+    `flexsym generate NAME` after changing flexsym/ or templates/)."""
     folder = generated_dir() / spec.name
     why = check_folder(spec, folder)
     assert why is None, why

@@ -14,7 +14,7 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from flexsym.build import find_cmake, find_compiler
+from flexsym.toolchain.build import find_cmake, find_compiler
 
 C_MODELS = Path(__file__).parent / "c_models"
 METHODS = ("ali3p", "genalpha3")  # the second-order ones

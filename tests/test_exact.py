@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from flexsym import exact as X
-from flexsym.derive import derive
-from flexsym.energy import BEAM_PARAMS
-from flexsym.derive import build_kernels
-from flexsym.modes import mode
-from flexsym.spec import builtin, customize
-from flexsym.validity import assess, truncation_share
+from flexsym.physics import exact as X
+from flexsym.codegen.derive import derive
+from flexsym.physics.energy import BEAM_PARAMS
+from flexsym.codegen.derive import build_kernels
+from flexsym.spec.modes import mode
+from flexsym.spec.variant import builtin, customize
+from flexsym.physics.validity import assess, truncation_share
 
 P0 = np.array([p.default for p in BEAM_PARAMS])
 # one compiled variant for every test: extensible (an axial mode), N and M from equilibrium
@@ -22,7 +22,7 @@ AMPLITUDE = np.array([1e-3, 2.0, 0.4, 0.1])  # u_ff1, v_cf1..v_cf3 [m]: tip slop
 
 @pytest.fixture(scope="module")
 def small():
-    from flexsym.pipeline import compiled
+    from flexsym.toolchain.pipeline import compiled
 
     spec = customize(builtin("exact"), **SMALL)
     return spec, derive(spec), compiled(spec, log=lambda m: None)
@@ -54,7 +54,7 @@ def _kinetic_scipy(der, q, qd, w, p=P0):
 def mode_slope(m):
     import sympy as sp
 
-    from flexsym.modes import s
+    from flexsym.spec.modes import s
 
     return sp.lambdify(s, sp.diff(m.expr, s), "numpy")
 
@@ -182,8 +182,8 @@ def test_validity_truncation_criterion(small):
     With three bending modes: the abrupt spin-up's first 2 s (tip 8.5 m sideways) keep cf3's
     share near 22 %; at omega_s = 20 it passes 25 % (the error against ef is then 2 % of the
     peak, exact_study)."""
-    from flexsym.pipeline import prepare
-    from flexsym.run import run_built
+    from flexsym.toolchain.pipeline import prepare
+    from flexsym.toolchain.run import run_built
 
     spec = small[0]
     built = prepare(spec, log=lambda m: None)
@@ -204,8 +204,8 @@ def test_agrees_with_ef_on_the_spin_up(small, simulate):
     the second-order #3 is 2 mm off: within 1e-4 m; peak root moment and axial force within
     1e-4 of ef's clamp reaction (ef's element resultants at the root converge slower: 16
     elements put M_A 0.14 % low and N_A 4 % high here)."""
-    from flexsym.pipeline import prepare
-    from flexsym.run import run_built
+    from flexsym.toolchain.pipeline import prepare
+    from flexsym.toolchain.run import run_built
 
     ref = simulate("ef", t_end=8.0, dt=1e-3, out_every=10)
     r = run_built(prepare(small[0], log=lambda m: None), t_end=8.0, dt=0.01, step=0.02,
@@ -216,8 +216,8 @@ def test_agrees_with_ef_on_the_spin_up(small, simulate):
 
 
 def test_bad_input_is_refused_with_one_line(capsys):
-    from flexsym.cli import main
-    from flexsym.errors import SpecError
+    from flexsym.apps.cli import main
+    from flexsym.core.errors import SpecError
 
     with pytest.raises(SpecError, match="stress method 'equilibrium' must be 'continuum' or 'element:N'"):
         customize(builtin("m3"), stress="equilibrium")
@@ -244,8 +244,8 @@ def test_jacobi_integral_is_conserved_at_large_deflection(small):
     """After the abrupt spin-up (T_s = 1 s) the frame turns at constant speed and the tip
     whirls 8.5 m sideways: the Jacobi integral h = T2 - T0 + V of the energy kernel stays
     constant under the force kernel's motion, to the integrator's order-5 error."""
-    from flexsym.pipeline import prepare
-    from flexsym.run import run_built
+    from flexsym.toolchain.pipeline import prepare
+    from flexsym.toolchain.run import run_built
 
     built = prepare(small[0], log=lambda m: None)
     drift = []

@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from flexsym import fedata
-from flexsym.cli import main
-from flexsym.derive import derive
-from flexsym.errors import SpecError
-from flexsym.fedata import BeamBody, PointMass, Section
-from flexsym.feimport import read_folder, write_folder
-from flexsym.modes import ModeRef, clamped_free_beta, clamped_pinned_beta
-from flexsym.spec import builtin, customize
+from flexsym.spec import fedata
+from flexsym.apps.cli import main
+from flexsym.codegen.derive import derive
+from flexsym.core.errors import SpecError
+from flexsym.spec.fedata import BeamBody, PointMass, Section
+from flexsym.scenes.feimport import read_folder, write_folder
+from flexsym.spec.modes import ModeRef, clamped_free_beta, clamped_pinned_beta
+from flexsym.spec.variant import builtin, customize
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "stepped_blade.toml"
@@ -31,11 +31,11 @@ def stepped(n):
 
 
 def test_element_matrices_are_the_papers_eq_7_8_and_the_consistent_mass():
-    from flexsym.outputs import element_matrices
+    from flexsym.physics.outputs import element_matrices
 
     l = 0.7
     M, K, KG = fedata.element_matrices(PAPER, l)
-    from flexsym.energy import A, E, I
+    from flexsym.physics.energy import A, E, I
 
     KL_s, KG_s = element_matrices(sp.Float(l))
     subs = {E: PAPER.E, A: PAPER.A, I: PAPER.I}
@@ -155,7 +155,7 @@ def test_invariants_from_the_discretisation_converge_to_the_analytic_ones():
 def test_modal_mass_and_stiffness_with_point_inertia_reproduce_the_fe_frequencies():
     """With a tip mass, a rotary inertia and a mid-span mass, the derived M and K_L of one
     clamped-free mode give exactly its finite-element frequency (mu, rot and ei weights)."""
-    from flexsym.energy import A, E, I, L, rho
+    from flexsym.physics.energy import A, E, I, L, rho
 
     body = BeamBody.from_segments([(5.0, PAPER), (5.0, OUTER)], 10,
                                   (PointMass(10.0, 0.5, 0.3), PointMass(5.0, 0.2)))
@@ -173,7 +173,7 @@ def test_geometric_stiffness_and_foreshortening_are_the_papers_element_sums():
     """K_G of #1 on a body is eq. (28)-(29): sum_e P_e X^T K_G^e X with P_e from the axial
     mode in each element; the foreshortening kernel at a node is the nodal sum of eq. (34)-(38),
     H_ab(x_n) = sum_{e < n} X_a^T K_G^e X_b."""
-    from flexsym.energy import A, E, L, w
+    from flexsym.physics.energy import A, E, L, w
 
     body = stepped(10)
     der = derive(customize(replace(builtin("m1"), body=body), outputs="v_tip"))
@@ -318,7 +318,7 @@ def test_malformed_fe_folders_are_refused_with_one_line(case, exported, tmp_path
 def test_generation_from_fe_data_is_deterministic_and_records_its_tools():
     import json
 
-    from flexsym.generate import generate_files
+    from flexsym.codegen.generate import generate_files
 
     spec = customize(replace(builtin("m2"), body=stepped(12)), name="fe_det")
     first = generate_files(spec)
@@ -341,8 +341,8 @@ def test_model_option_needs_a_scene_and_a_known_variant(capsys):
 def test_fe_data_variant_c_matches_casadi_and_sympy():
     from test_codegen import RTOL, _random_inputs, _sympy_eval, _sympy_reference
 
-    from flexsym.derive import build_kernels
-    from flexsym.pipeline import compiled
+    from flexsym.codegen.derive import build_kernels
+    from flexsym.toolchain.pipeline import compiled
 
     body = BeamBody.from_segments([(5.0, PAPER), (5.0, OUTER)], 6,
                                   (PointMass(10.0, 0.5, 0.02), PointMass(5.0, 0.3)))
@@ -370,8 +370,8 @@ def test_fe_data_variant_c_matches_casadi_and_sympy():
 
 
 def _run(spec, t_end, dt=1e-3):
-    from flexsym.pipeline import prepare
-    from flexsym.run import run_built
+    from flexsym.toolchain.pipeline import prepare
+    from flexsym.toolchain.run import run_built
 
     return run_built(prepare(spec, log=lambda m: None), t_end=t_end, dt=dt)
 
@@ -399,7 +399,7 @@ def test_s4_modal_against_ef_on_a_short_spin_up():
     static, cp1, cp2 from 100 elements, N and M from equilibrium) against ef on 32 elements
     (within 3e-7 m and 1.3 N of 64 elements, README study). Measured: 4.5e-4 m, 4.7 N,
     0.57 N m, 0.31 N m."""
-    from flexsym.scene import load_scene
+    from flexsym.scenes.scene import load_scene
 
     modal = load_scene(SCENE).spec
     ef = load_scene(SCENE, model="ef").spec
@@ -429,7 +429,7 @@ BAD_BODIES = [
 
 @pytest.mark.parametrize("body, expected", BAD_BODIES)
 def test_malformed_body_tables_are_refused_with_one_line(body, expected, tmp_path):
-    from flexsym.scene import load_scene
+    from flexsym.scenes.scene import load_scene
 
     text = SCENE.read_text()
     start, end = text.index("[body]"), text.index("[maneuver]")

@@ -14,9 +14,9 @@ from fmpy.fmi1 import FMICallException  # noqa: E402
 from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-from flexsym.build import find_compiler  # noqa: E402
-from flexsym.cli import main  # noqa: E402
-from flexsym.paths import runtime_dir  # noqa: E402
+from flexsym.toolchain.build import find_compiler  # noqa: E402
+from flexsym.apps.cli import main  # noqa: E402
+from flexsym.core.paths import runtime_dir  # noqa: E402
 
 # (id, target, run/export options): every fixed-step integrator, two variants and a scene
 CASES = {

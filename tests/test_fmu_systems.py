@@ -12,7 +12,7 @@ fmpy = pytest.importorskip("fmpy")
 from fmpy import read_model_description  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
-from flexsym.cli import main  # noqa: E402
+from flexsym.apps.cli import main  # noqa: E402
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
 CASES = ("hub", "slider_crank", "pendulum")
@@ -61,8 +61,8 @@ def test_system_fmu_parameter_start_value_changes_the_run(exported, tmp_path):
     md = read_model_description(str(fmu))
     e = float(next(v.start for v in md.modelVariables if v.name == "E"))
     res = fmpy.simulate_fmu(str(fmu), output_interval=0.001, stop_time=0.1, start_values={"E": 3 * e})
-    from flexsym.inprocess import load_system
-    from flexsym.scene import load_scene
+    from flexsym.sim.inprocess import load_system
+    from flexsym.scenes.scene import load_scene
 
     scene = load_scene(SCENES / "slider_crank.toml")
     b = load_system(scene.system).batch({"E": [3 * e]}, rows=True, integrator="ali3p", dt=1e-4,

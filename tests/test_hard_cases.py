@@ -9,10 +9,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from flexsym.pipeline import compiled, prepare
-from flexsym.run import run_built
-from flexsym.spec import builtin, customize
-from flexsym.validity import VALIDITY_LIMIT, assess
+from flexsym.toolchain.pipeline import compiled, prepare
+from flexsym.toolchain.run import run_built
+from flexsym.spec.variant import builtin, customize
+from flexsym.physics.validity import VALIDITY_LIMIT, assess
 
 L = 10.0
 _builds = {}

@@ -1,15 +1,15 @@
-"""In-process batch runs (runtime_c/src/batch.c, symbolic/inprocess.py): the same rows, bit for
+"""In-process batch runs (runtime_c/src/batch.c, flexsym/sim/inprocess.py): the same rows, bit for
 bit, as the driver behind `flexsym run`; summaries computed in C equal numpy's over those rows;
 one failing run of a batch leaves the others untouched; validity per run as validity.assess."""
 import numpy as np
 import pytest
 
-from flexsym import api
-from flexsym.errors import SpecError
-from flexsym.pipeline import prepare
-from flexsym.run import run_built
-from flexsym.spec import builtin
-from flexsym.validity import assess
+from flexsym.apps import api
+from flexsym.core.errors import SpecError
+from flexsym.toolchain.pipeline import prepare
+from flexsym.toolchain.run import run_built
+from flexsym.spec.variant import builtin
+from flexsym.physics.validity import assess
 
 # variant, run options, parameter sets: every integrator, modal and finite elements
 CASES = [

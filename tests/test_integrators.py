@@ -5,7 +5,7 @@ modes at large steps)."""
 import numpy as np
 import pytest
 
-from flexsym.cli import main
+from flexsym.apps.cli import main
 
 SPIN = dict(params={"ws": 6, "ts": 15})
 

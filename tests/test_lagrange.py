@@ -4,7 +4,7 @@ import casadi as ca
 import numpy as np
 import sympy as sp
 
-from flexsym.lagrange import equations_of_motion, equations_of_motion_sx, jacobi_integral
+from flexsym.physics.lagrange import equations_of_motion, equations_of_motion_sx, jacobi_integral
 
 m, a, l1, l2, g = sp.symbols("m a l1 l2 g", positive=True)
 y, yd, w, alpha = sp.symbols("y y_d w alpha", real=True)

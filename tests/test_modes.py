@@ -3,8 +3,8 @@ import mpmath
 import pytest
 import sympy as sp
 
-from flexsym.errors import SpecError
-from flexsym.modes import (FAMILIES, ModeRef, clamped_free_beta, clamped_pinned_beta, mode,
+from flexsym.core.errors import SpecError
+from flexsym.spec.modes import (FAMILIES, ModeRef, clamped_free_beta, clamped_pinned_beta, mode,
                            parse_mode_token, s)
 
 ALL_MODES = [ModeRef(axis, fam, k) for (axis, fam), f in FAMILIES.items()

@@ -1,7 +1,7 @@
 """`flexsym paper` end to end on a short horizon: files, tables, and the reference agreeing with ef."""
 import numpy as np
 
-from flexsym.cli import main
+from flexsym.apps.cli import main
 
 
 def test_paper_command_short(tmp_path, capsys):

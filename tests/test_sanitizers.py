@@ -7,9 +7,9 @@ import subprocess
 
 import pytest
 
-from flexsym.build import SANITIZE_FLAGS, build, find_compiler
-from flexsym.pipeline import generated_folder
-from flexsym.spec import BUILTIN
+from flexsym.toolchain.build import SANITIZE_FLAGS, build, find_compiler
+from flexsym.toolchain.pipeline import generated_folder
+from flexsym.spec.variant import BUILTIN
 
 VARIANTS = [v.name for v in BUILTIN]
 SHORT = {  # integrator -> options of a short run

@@ -9,12 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsym import api
-from flexsym.cli import main
-from flexsym.errors import SpecError
-from flexsym.generate import read_manifest
-from flexsym.paths import PACKAGE_DIR
-from flexsym.scene import load_scene
+from flexsym.apps import api
+from flexsym.apps.cli import main
+from flexsym.core.errors import SpecError
+from flexsym.codegen.generate import read_manifest
+from flexsym.core.paths import PACKAGE_DIR
+from flexsym.scenes.scene import load_scene
 
 SCENES = PACKAGE_DIR.parent / "scenes"
 
@@ -225,7 +225,7 @@ def test_concurrent_builds_of_one_variant_are_safe(tmp_path):
     """Two processes generate and build the same new variant at once into one cache: both
     succeed with identical binaries, and no temporary or half-built directory remains."""
     env = dict(os.environ, FLEXSYM_CACHE=str(tmp_path / "cache"))
-    cmd = [sys.executable, "-m", "flexsym.cli", "build", "m1", "--bending", "static,cp1,cp2,cp3",
+    cmd = [sys.executable, "-m", "flexsym.apps.cli", "build", "m1", "--bending", "static,cp1,cp2,cp3",
            "--name", "race"]
     procs = [subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
              for _ in range(2)]
@@ -240,7 +240,7 @@ def test_concurrent_builds_of_one_variant_are_safe(tmp_path):
 
 
 def test_select_picks_the_cheapest_model_within_tolerance(tmp_path, capsys):
-    from flexsym.select import choose, noise_band, select, table
+    from flexsym.analysis.model_select import choose, noise_band, select, table
 
     path, _ = write(tmp_path, GOOD.replace("t_end = 2.0", "t_end = 8.0").replace(
         'quantities = ["v_tip", "M(A)", "M(hub)", "M(2.5)"]', 'quantities = ["v_tip", "M(A)"]'))

@@ -3,9 +3,9 @@ against continuum, N from axial equilibrium."""
 import numpy as np
 import pytest
 
-from flexsym.pipeline import compiled, prepare
-from flexsym.run import run_built
-from flexsym.spec import builtin, customize
+from flexsym.toolchain.pipeline import compiled, prepare
+from flexsym.toolchain.run import run_built
+from flexsym.spec.variant import builtin, customize
 
 RHO, E, A, I, L = 3000.0, 7.0e10, 4.0e-4, 2.0e-7, 10.0
 OMEGA = 6.0
@@ -72,7 +72,7 @@ def test_constant_rotation_axial_force_modal():
 
 
 def test_foreshortening_has_no_axial_force_by_default():
-    from flexsym.errors import SpecError
+    from flexsym.core.errors import SpecError
 
     assert not any(o.startswith("N_") for o in builtin("m3").outputs)
     with pytest.raises(SpecError, match="N_A is not available.*--axial-force equilibrium"):

@@ -1,4 +1,4 @@
-"""Parameter sweeps (symbolic/sweep.py, `flexsym sweep`): the table, sampling reproducible by
+"""Parameter sweeps (flexsym/sim/sweep.py, `flexsym sweep`): the table, sampling reproducible by
 seed, resume after an interruption, Dask and local executors giving the same table, and
 malformed sweep specifications refused with one line and exit 2, before anything is written."""
 import io
@@ -7,14 +7,14 @@ import os
 import numpy as np
 import pytest
 
-from flexsym import api
-from flexsym.cli import main
-from flexsym.errors import SpecError
-from flexsym.pipeline import prepare
-from flexsym.progress import Progress
-from flexsym.run import run_built
-from flexsym.spec import builtin
-from flexsym.sweep import make_plan, read_table
+from flexsym.apps import api
+from flexsym.apps.cli import main
+from flexsym.core.errors import SpecError
+from flexsym.toolchain.pipeline import prepare
+from flexsym.core.progress import Progress
+from flexsym.toolchain.run import run_built
+from flexsym.spec.variant import builtin
+from flexsym.sim.sweep import make_plan, read_table
 
 pd = pytest.importorskip("pandas")
 
@@ -207,7 +207,7 @@ def test_ctrl_c_keeps_finished_runs_and_resume_completes(isolated_cache, tmp_pat
     import time
 
     out, part = tmp_path / "t.csv", tmp_path / "t.csv.partial"
-    cmd = [sys.executable, "-m", "flexsym.cli", "sweep", "m3", "--integrator", "radau5", "--dt", "0.01",
+    cmd = [sys.executable, "-m", "flexsym.apps.cli", "sweep", "m3", "--integrator", "radau5", "--dt", "0.01",
            "--step", "0.25", "--vary", "ws=2:8:4000", "--out", str(out), "--workers", "2"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 120

@@ -1,5 +1,5 @@
 """Beams from finite-element data in system scenes ([[body]] kind = "beam" with segments or
-folder; symbolic/system_scene.py): the scene equals the Python System, a uniform body equals the
+folder; flexsym/scenes/system_scene.py): the scene equals the Python System, a uniform body equals the
 analytic beam in S1 within its discretisation error, and malformed bodies are refused in one
 line naming the file and the item, exit 2, nothing written."""
 from __future__ import annotations
@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsym.cli import main
-from flexsym.errors import SpecError
-from flexsym.scene import load_scene
-from flexsym.system_scene import system_from_dict
+from flexsym.apps.cli import main
+from flexsym.core.errors import SpecError
+from flexsym.scenes.scene import load_scene
+from flexsym.scenes.system_scene import system_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -32,8 +32,8 @@ def _hub_with_fe_beam(elements: int, model: str) -> dict:
 
 
 def _run(data: dict, name: str = "hub", t_end: float = 20.0):
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
 
     return run_built(prepare_system(system_from_dict(data, name)), t_end=t_end, dt=1e-3, out_every=10)
 
@@ -44,11 +44,11 @@ def test_scene_equals_the_python_system_row_for_row(tmp_path):
     N and M from equilibrium): the same System, and the CLI's rows equal run_system's bit for bit."""
     from dataclasses import replace
 
-    from flexsym.fedata import BeamBody, PointMass
-    from flexsym.fedata import Section as FeSection
-    from flexsym.spec import VariantSpec, _refs
-    from flexsym.sysgen import run_system
-    from flexsym.systems_library import hub_system
+    from flexsym.spec.fedata import BeamBody, PointMass
+    from flexsym.spec.fedata import Section as FeSection
+    from flexsym.spec.variant import VariantSpec, _refs
+    from flexsym.toolchain.pipeline import run_system
+    from flexsym.spec.library import hub_system
 
     body = BeamBody.from_segments([(5.0, FeSection(7e10, 3000.0, 4e-4, 2e-7)),
                                    (5.0, FeSection(7e10, 3000.0, 2e-4, 5e-8))], 100,
@@ -83,13 +83,13 @@ def test_scene_equals_the_python_system_row_for_row(tmp_path):
 
 
 def lib_marker(name, x):
-    from flexsym.system import Marker
+    from flexsym.spec.system import Marker
 
     return Marker(name, x)
 
 
 def lib_output(column, quantity):
-    from flexsym.system import Output
+    from flexsym.spec.system import Output
 
     return Output(column, quantity)
 
@@ -127,9 +127,9 @@ def test_folder_body_reads_like_its_segments(tmp_path):
 
 
 def _bad_folder(tmp_path: Path, what: str) -> None:
-    from flexsym.fedata import BeamBody
-    from flexsym.fedata import Section as FeSection
-    from flexsym.feimport import write_folder
+    from flexsym.spec.fedata import BeamBody
+    from flexsym.spec.fedata import Section as FeSection
+    from flexsym.scenes.feimport import write_folder
 
     folder = write_folder(BeamBody.from_segments([(10.0, FeSection(7e10, 3000.0, 4e-4, 2e-7))], 4),
                           tmp_path / "fe")
@@ -236,15 +236,16 @@ def test_ef_body_rigid_limit_momentum_and_element_table():
     the body's symbolic energy at a random state (1e-10)."""
     import casadi as ca
 
-    from flexsym import sysgen
-    from flexsym.kernels import SympyToCasadi
-    from flexsym.run import run_built
+    from flexsym.codegen import sysgen
+    from flexsym.toolchain import pipeline
+    from flexsym.emit.kernels import SympyToCasadi
+    from flexsym.toolchain.run import run_built
 
     data = _stepped('{ variant = "ef", elements = 4 }')
     data["output"]["columns"] = {"theta_h": "angle(hub_joint)", "H": "momentum"}
     system = system_from_dict(data, "stepped_hub")
     assert system.body("blade").model.body.nodes == (0.0, 2.5, 5.0, 7.5, 10.0)
-    r = run_built(sysgen.prepare_system(system), t_end=20.0, dt=1e-3, out_every=10, params={"E": 7e14})
+    r = run_built(pipeline.prepare_system(system), t_end=20.0, dt=1e-3, out_every=10, params={"E": 7e14})
     assert np.abs(r["theta_h"] - _theta_p(r["t"])).max() < 1e-5
     assert abs(r["H"][-1] - 315 * 6) < 1e-6 * 1890
 

@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsym.cli import main
-from flexsym.inprocess import load_system
-from flexsym.run import run_built
-from flexsym.scene import load_scene
-from flexsym.sweep import read_table, settings_of
-from flexsym.sysgen import prepare_system
+from flexsym.apps.cli import main
+from flexsym.sim.inprocess import load_system
+from flexsym.toolchain.run import run_built
+from flexsym.scenes.scene import load_scene
+from flexsym.sim.sweep import read_table, settings_of
+from flexsym.toolchain.pipeline import prepare_system
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -97,7 +97,7 @@ def test_system_sweep_refuses_an_unknown_name_in_one_line(system, tmp_path, caps
 def test_api_sweep_and_inprocess_take_a_system_scene(system, tmp_path):
     """The pendulum (a tree under gravity): api.sweep over a shortened scene equals the batch of
     api.inprocess, whose run at the scene's values is `flexsym run SCENE`'s."""
-    from flexsym import api
+    from flexsym.apps import api
 
     scene, _, built = system("pendulum")
     model = api.inprocess(SCENES / "pendulum.toml")

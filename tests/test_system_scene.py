@@ -1,4 +1,4 @@
-"""System scenes (symbolic/system_scene.py): the grammar, the shipped scenes S1-S3, and
+"""System scenes (flexsym/scenes/system_scene.py): the grammar, the shipped scenes S1-S3, and
 malformed systems refused in one line naming the file and the item, exit 2, nothing written."""
 from __future__ import annotations
 
@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from flexsym import systems_library as lib
-from flexsym.cli import main
-from flexsym.errors import SpecError
-from flexsym.scene import load_scene
-from flexsym.spec import builtin
-from flexsym.system_scene import ASSEMBLY_TOL, check_assembly, system_from_dict
+from flexsym.spec import library as lib
+from flexsym.apps.cli import main
+from flexsym.core.errors import SpecError
+from flexsym.scenes.scene import load_scene
+from flexsym.spec.variant import builtin
+from flexsym.scenes.system_scene import ASSEMBLY_TOL, check_assembly, system_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -150,7 +150,7 @@ def test_model_override_refused_in_one_line(tmp_path, capsys):
 
 
 def test_exaggerate_scales_only_the_distance_from_the_chord():
-    from flexsym.system_plot import chord_distance, exaggerate
+    from flexsym.analysis.system_plot import chord_distance, exaggerate
 
     rng = np.random.default_rng(3)
     p = np.column_stack([np.linspace(0, 1, 7), 0.01 * rng.standard_normal(7)]) @ [[0.6, 0.8], [-0.8, 0.6]]
@@ -164,7 +164,7 @@ def test_exaggerate_scales_only_the_distance_from_the_chord():
 def test_plot_of_a_system_from_synthetic_rows(tmp_path):
     """The slider-crank's picture from rows of a known motion (crank turning, rod bent by a
     sine of amplitude 0.2 mm): every extra column is a marker position, the scale is stated."""
-    from flexsym.system_plot import plot_system, with_plot_outputs
+    from flexsym.analysis.system_plot import plot_system, with_plot_outputs
 
     base = load_scene(SCENES / "slider_crank.toml").system
     system, geometry = with_plot_outputs(base)
@@ -208,11 +208,11 @@ def test_readme_example_is_the_slider_crank_scene_and_its_pd_law_reads():
 
 
 def test_pendulum_scene_runs_with_csv_and_plot(tmp_path, capsys):
-    """S3 end to end (derivation and generation by symbolic/assemble.py, sysgen.py): the CSV
+    """S3 end to end (derivation and generation by flexsym/physics/assemble.py, sysgen.py): the CSV
     has the benchmark's columns at 1 ms rows, and the picture's columns agree with the run's
     own outputs: the tip station is (x_tip, y_tip) and the mid station's distance from the
     chord is w_mid (sign included), computed independently from the station positions."""
-    from flexsym.system_plot import chord_distance
+    from flexsym.analysis.system_plot import chord_distance
 
     out, plot = tmp_path / "s3.csv", tmp_path / "s3.png"
     assert main(["run", str(SCENES / "pendulum.toml"), "--out", str(out), "--plot", str(plot)]) == 0
@@ -234,7 +234,7 @@ def test_pendulum_scene_runs_with_csv_and_plot(tmp_path, capsys):
 def test_api_system_checks_python_systems_like_scenes():
     from dataclasses import replace
 
-    from flexsym import api
+    from flexsym.apps import api
 
     good = lib.pendulum_system(builtin("m3"))
     assert api.system(good) == good
@@ -261,7 +261,7 @@ def test_bench_systems_quick(tmp_path):
     integration error shrinks when the step is halved, and at the same step the fourth-order
     period error of beta = 1/12 is at least 10x below generalized-alpha's in every output
     (measured 16x for M_mid, 77-340x for the others)."""
-    from flexsym.system_bench import run_system_bench
+    from flexsym.analysis.system_bench import run_system_bench
 
     rows = run_system_bench(tmp_path, quick=True, log=lambda m: None)
     assert [(r["integrator"], r["dt"]) for r in rows] == [

@@ -3,11 +3,11 @@ from dataclasses import replace
 
 import pytest
 
-from flexsym.errors import SpecError
-from flexsym.spec import builtin
-from flexsym.system import (Driver, FlexibleBeam, Joint, Marker, Output, RigidBody, System,
+from flexsym.core.errors import SpecError
+from flexsym.spec.variant import builtin
+from flexsym.spec.system import (Driver, FlexibleBeam, Joint, Marker, Output, RigidBody, System,
                              spanning_tree)
-from flexsym.systems_library import (PAPER_SECTION, hub_system, pendulum_system,
+from flexsym.spec.library import (PAPER_SECTION, hub_system, pendulum_system,
                                       slider_crank_system, spin_up_system)
 
 M3 = builtin("m3")
@@ -75,7 +75,7 @@ def test_spanning_tree_prefers_root_of_flexible_body():
 
 
 def test_describe_shows_tree_coordinates_terms_and_ops():
-    from flexsym.sysgen import describe
+    from flexsym.codegen.sysgen import describe
 
     text = describe(pendulum_system(builtin("m1")))
     assert "tree beam <- pin" in text and "pin (joint)" in text and "beam_u_static (axial)" in text
@@ -90,8 +90,8 @@ def test_system_generation_is_deterministic_across_hash_seeds():
     import subprocess
     import sys
 
-    code = ("import hashlib, json; from flexsym.sysgen import generate_system_files; "
-            "from flexsym.system import *; "
+    code = ("import hashlib, json; from flexsym.codegen.sysgen import generate_system_files; "
+            "from flexsym.spec.system import *; "
             "s = System('osc', bodies=(RigidBody('block', 2.0, 0.01, markers=(Marker('c', 0.0),)),), "
             "joints=(Joint('slide', 'prismatic', 'ground', 'block.c', axis=(1.0, 0.0), initial=0.1),), "
             "loads=(SpringDamper('ground', 'block.c', 50.0, 2.0, 1.0, point_a=(-1.0, 0.0)), Gravity()), "

@@ -5,11 +5,11 @@ import random
 import pytest
 import sympy as sp
 
-from flexsym.assemble import derive_system
-from flexsym.derive import derive
-from flexsym.energy import BEAM_PARAMS, alpha, w
-from flexsym.spec import builtin
-from flexsym.systems_library import spin_up_system
+from flexsym.physics.assemble import derive_system
+from flexsym.codegen.derive import derive
+from flexsym.physics.energy import BEAM_PARAMS, alpha, w
+from flexsym.spec.variant import builtin
+from flexsym.spec.library import spin_up_system
 
 PARAMS = {p.symbol: p.default for p in BEAM_PARAMS}
 
@@ -38,9 +38,9 @@ def test_s0_equations_equal_todays_variant(variant):
 def test_s0_generated_system_runs_as_todays_m3():
     """The one-body system through system.h (generated fsm_system struct) against today's
     generated m3 through the adapter: the same rows (20 s spin-up, generalized-alpha)."""
-    from flexsym.pipeline import prepare
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.pipeline import prepare
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
 
     spec = builtin("m3")
     kw = dict(t_end=20.0, dt=1e-3)
@@ -57,8 +57,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from flexsym.system import Output
-from flexsym.systems_library import hub_system, pendulum_system
+from flexsym.spec.system import Output
+from flexsym.spec.library import hub_system, pendulum_system
 
 J_TOTAL = 40.0 + 3000 * 4e-4 * 10.0**3 / 3  # J_h + rho A L^3 / 3 (hub + rigid beam)
 
@@ -74,7 +74,7 @@ def _spin_up(t, ws=6.0, ts=15.0):
 
 @pytest.fixture(scope="module")
 def hub_built():
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.pipeline import prepare_system
 
     system = hub_system(builtin("m3"))
     return prepare_system(replace(system, outputs=system.outputs + (Output("H", "momentum"),)))
@@ -82,7 +82,7 @@ def hub_built():
 
 @pytest.fixture(scope="module")
 def pendulum_built():
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.pipeline import prepare_system
 
     system = pendulum_system(builtin("m3"))
     extra = (Output("T", "T"), Output("V", "V"), Output("theta", "angle(pin)"))
@@ -93,7 +93,7 @@ def test_s1_angular_momentum_equals_torque_impulse(hub_built):
     """H (angular momentum about the axis, integrated over the bodies independently of the
     equations of motion) = int tau dt = J_total theta_P'(t); 2.4e-9 of the peak measured at
     dt = 1 ms, 5.9e-10 at 0.5 ms (order 2)."""
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     errs = []
     for dt in (1e-3, 5e-4):
@@ -107,7 +107,7 @@ def test_s1_angular_momentum_equals_torque_impulse(hub_built):
 def test_s1_rigid_limit_follows_theta_p(hub_built):
     """EI -> infinity: the hub follows the manoeuvre the torque was designed for; the lag falls
     as 1/E (measured 4.9e-4 rad at 100 E, 5.0e-6 rad at 10^4 E)."""
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     lag = []
     for E in (7e12, 7e14):
@@ -121,7 +121,7 @@ def test_s1_rigid_limit_follows_theta_p(hub_built):
 def test_s3_energy_conserved(pendulum_built):
     """Pendulum released horizontal: T + V = 0 (V = 0 at release); measured 1.7e-8 of m g L/2
     at dt = 0.1 ms with generalized-alpha (1.3e-6 at 1 ms: order 2)."""
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     r = run_built(pendulum_built, t_end=2.0, dt=1e-4)
     assert r.ok
@@ -135,7 +135,7 @@ def test_s3_rigid_limit_is_the_compound_pendulum(pendulum_built):
     two passages through the bottom. Measured -1.8e-7 relative at 10^4 E (7.6e-5 at E)."""
     from scipy.special import ellipk
 
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     r = run_built(pendulum_built, t_end=2.0, dt=1e-4, params={"E": 7e14})
     y, t = r["theta"] + np.pi / 2, r.t
@@ -150,8 +150,8 @@ def test_system_kernels_c_casadi_sympy(hub_built):
     """S1's generated C kernels against their casadi functions against the sympy expressions."""
     import ctypes
 
-    from flexsym.assemble import derive_system
-    from flexsym.sysgen import build_system_kernels
+    from flexsym.physics.assemble import derive_system
+    from flexsym.codegen.sysgen import build_system_kernels
 
     system = hub_system(builtin("m3"))
     system = replace(system, outputs=system.outputs + (Output("H", "momentum"),))
@@ -190,8 +190,8 @@ def _x_rigid(t, r=0.15, l=0.3):
 
 @pytest.fixture(scope="module")
 def slider_crank_built():
-    from flexsym.sysgen import prepare_system
-    from flexsym.systems_library import slider_crank_system
+    from flexsym.toolchain.pipeline import prepare_system
+    from flexsym.spec.library import slider_crank_system
 
     system = slider_crank_system(builtin("m3"))
     extra = (Output("T", "T"), Output("V", "V"), Output("tau", "torque(crank_drive)"),
@@ -203,7 +203,7 @@ def test_s2_constrained_integrators_agree_and_hold_the_loop(slider_crank_built):
     """ali3p and genalpha3 on the flexible slider-crank (#3 rod): constraint violation at
     round-off (max |Phi| / length_scale 5e-15 measured), the two methods within 6.6e-9 m (x_s) and 1.6e-7 m (w_mid)
     at 0.1 ms, 4x closer at half the step (order 2)."""
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     diffs = []
     for dt in (1e-4, 5e-5):
@@ -224,7 +224,7 @@ def test_s2_rk4p_agrees_with_ali3p(slider_crank_built):
     falls 4x with ali3p's step (ali3p's order-2 error), and against ali3p extrapolated from 0.1
     and 0.05 ms (Richardson, order 2) it is 2.4e-7 m of w_mid (peak 3.9 mm) and 5.8e-9 m of x_s
     (measured); the violation stays below 1e-10 of the size at every row."""
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     r = run_built(slider_crank_built, t_end=0.3, dt=2e-4, integrator="rk4p")
     a = [run_built(slider_crank_built, t_end=0.3, dt=dt, integrator="ali3p") for dt in (1e-4, 5e-5)]
@@ -239,7 +239,7 @@ def test_s2_rk4p_agrees_with_ali3p(slider_crank_built):
 def test_s2_rigid_limit_is_the_closed_form(slider_crank_built):
     """EI -> infinity: x_s = r cos(phi) + sqrt(l^2 - r^2 sin^2 phi) (1.4e-4 m away at the real
     E, 1.2e-8 m at 100 E: the slider feels the rod's shortening, quadratic in its bending)."""
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     r = run_built(slider_crank_built, t_end=0.3, dt=1e-4, integrator="ali3p", params={"E": 2e13})
     assert r.ok
@@ -250,7 +250,7 @@ def test_s2_energy_balance_with_the_drivers_work(slider_crank_built):
     """T + V - (T + V)(0) = int tau theta' dt, tau = torque(crank_drive): the generalised force
     the guided crank needs (with the cut joint's multipliers). The mismatch is the step's and
     the trapezoidal quadrature's: measured 4.3e-5 of max(T + V) at 0.1 ms, 4x less at 0.05 ms."""
-    from flexsym.run import run_built
+    from flexsym.toolchain.run import run_built
 
     errs = []
     for dt in (1e-4, 5e-5):
@@ -267,8 +267,8 @@ def test_spring_damper_on_a_prismatic_joint():
     """A block on a prismatic joint to ground with a spring-damper (both forms: l0 = 0, and
     l0 > 0 from a ground point one length away) against the damped oscillator's closed form
     x = x0 e^(-z w t) (cos w_d t + z / sqrt(1 - z^2) sin w_d t); 7.6e-9 m measured (0.1 ms)."""
-    from flexsym.sysgen import run_system
-    from flexsym.system import Joint, Marker, RigidBody, SpringDamper, System
+    from flexsym.toolchain.pipeline import run_system
+    from flexsym.spec.system import Joint, Marker, RigidBody, SpringDamper, System
 
     m, k, c, x0 = 2.0, 50.0, 2.0, 0.1
     wn = math.sqrt(k / m)
@@ -289,10 +289,10 @@ def test_spring_damper_on_a_prismatic_joint():
 def test_s0_ef_system_equals_todays_ef():
     """The one-body system with an ef beam (4 elements) against today's ef_n4 on the spin-up:
     max |dv_tip| 1.0e-11 m measured (different assembly and rounding of the stiff axial dofs)."""
-    from flexsym.pipeline import prepare
-    from flexsym.run import run_built
-    from flexsym.spec import customize
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.pipeline import prepare
+    from flexsym.toolchain.run import run_built
+    from flexsym.spec.variant import customize
+    from flexsym.toolchain.pipeline import prepare_system
 
     ef = customize(builtin("ef"), elements=4)
     kw = dict(t_end=20.0, dt=1e-3)
@@ -308,9 +308,9 @@ def test_s3_ef_conserves_energy_and_agrees_with_m3(pendulum_built):
     w_mid peak within 5 % of #3's (measured 0.1 % with 4 elements; with 8 and 16 elements ef's
     peak settles 1.9 % above #3's. The vibration's phase drifts apart over 2 s, so only peaks
     are compared)."""
-    from flexsym.run import run_built
-    from flexsym.spec import customize
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.run import run_built
+    from flexsym.spec.variant import customize
+    from flexsym.toolchain.pipeline import prepare_system
 
     system = pendulum_system(customize(builtin("ef"), elements=4))
     system = replace(system, outputs=system.outputs + (Output("T", "T"), Output("V", "V")))

@@ -4,11 +4,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from flexsym import sysgen
-from flexsym.kernels import SympyToCasadi
-from flexsym.spec import builtin, customize
-from flexsym.systems_library import pendulum_system
-from flexsym.sysgen import run_system
+from flexsym.codegen import sysgen
+from flexsym.emit.kernels import SympyToCasadi
+from flexsym.spec.variant import builtin, customize
+from flexsym.spec.library import pendulum_system
+from flexsym.toolchain.pipeline import run_system
 
 
 def _ef_pendulum(elements: int):
@@ -101,10 +101,10 @@ def test_kinetic_terms_by_ad_equal_sympy_lagrange():
     output's largest entry (measured: about 1e-15)."""
     import sympy as sp
 
-    from flexsym.assemble import EF_T, ef_guided_force
-    from flexsym.efbody import generic_element
-    from flexsym.system import Output
-    from flexsym.systems_library import slider_crank_system
+    from flexsym.physics.assemble import EF_T, ef_guided_force
+    from flexsym.physics.efbody import generic_element
+    from flexsym.spec.system import Output
+    from flexsym.spec.library import slider_crank_system
     from dataclasses import replace
 
     system = slider_crank_system(customize(builtin("ef"), elements=2))
@@ -114,7 +114,7 @@ def test_kinetic_terms_by_ad_equal_sympy_lagrange():
     kernels = {k.name: k.function for k in sysgen.build_system_kernels(der)}
     # the reference: T of every element by sympy, with the frame's actual motion
     (part,), (kin,) = der.elastic, der.ef_kinetic
-    from flexsym.efbody import OM, VX, VY
+    from flexsym.physics.efbody import OM, VX, VY
     actual = {OM: kin.omega, VX: kin.V[0], VY: kin.V[1]}
     T_ef = sp.Add(*[generic_element()[0].xreplace(part._element_subs(e)) for e in range(part.n)])
     T_ef = sp.expand(T_ef.xreplace(part.psyms).xreplace(actual))
@@ -167,9 +167,9 @@ def test_root_moment_from_equilibrium_converges_with_the_motion():
     elements' curvature moment than 4 elements' curvature is (it is the same quantity)."""
     from dataclasses import replace
 
-    from flexsym.system import Output
-    from flexsym.system_bench import EF_EQUILIBRIUM
-    from flexsym.systems_library import hub_system
+    from flexsym.spec.system import Output
+    from flexsym.analysis.system_bench import EF_EQUILIBRIUM
+    from flexsym.spec.library import hub_system
 
     quantity, sign = EF_EQUILIBRIUM["hub"]["M_A"]
     runs = {}
@@ -204,9 +204,9 @@ def hub_runs():
     reference), m3 with M from equilibrium, prestress with M from the curvature (the scene's)."""
     from dataclasses import replace
 
-    from flexsym.system import Output
-    from flexsym.system_bench import EF_EQUILIBRIUM, ef_system
-    from flexsym.systems_library import hub_system
+    from flexsym.spec.system import Output
+    from flexsym.analysis.system_bench import EF_EQUILIBRIUM, ef_system
+    from flexsym.spec.library import hub_system
 
     opts = dict(t_end=20.0, dt=1e-3, interval=1e-2, integrator="genalpha")
     quantity, sign = EF_EQUILIBRIUM["hub"]["M_A"]
@@ -256,8 +256,8 @@ def slider_crank_runs():
     """S2 over 0.3 s, ali3p at 10 us, rows every 1 ms: ef on 4 elements and the scene with
     --model m3 (N_mid from equilibrium, as `flexsym run scenes/slider_crank.toml --model m3`)
     and m2 (N_mid from its axial modes)."""
-    from flexsym.scene import load_scene
-    from flexsym.system_bench import SCENES_DIR, ef_system
+    from flexsym.scenes.scene import load_scene
+    from flexsym.analysis.system_bench import SCENES_DIR, ef_system
 
     opts = dict(t_end=0.3, dt=1e-5, interval=1e-3, integrator="ali3p")
     path = SCENES_DIR / "slider_crank.toml"

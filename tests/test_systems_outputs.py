@@ -6,18 +6,18 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from flexsym.errors import SpecError
-from flexsym.spec import builtin
-from flexsym.system import Gravity, Joint, Marker, Output, RigidBody, System
-from flexsym.systems_library import slider_crank_system
+from flexsym.core.errors import SpecError
+from flexsym.spec.variant import builtin
+from flexsym.spec.system import Gravity, Joint, Marker, Output, RigidBody, System
+from flexsym.spec.library import slider_crank_system
 
 JOINTS = ("slider_pin", "slide", "crank_pin", "crank_joint")
 
 
 @pytest.fixture(scope="module")
 def slider_crank_run():
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
 
     # #3 rod, N and M from equilibrium (the scene's N_mid with --model m3)
     system = slider_crank_system(replace(builtin("m3"), axial_force="equilibrium",
@@ -88,9 +88,9 @@ def test_violation_follows_the_rod_length_as_length_scale():
     """The rod sets S2's size (length_param): the generated violation output divides by the
     parameter L, not by the number 0.3, and with L changed the runtime's column (and so its
     Newton tolerance and blow-up limit, fsr_length_scale) is relative to the same new L."""
-    from flexsym.assemble import derive_system, length_param, violation
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
+    from flexsym.physics.assemble import derive_system, length_param, violation
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
 
     system = slider_crank_system(builtin("m3"))
     der = derive_system(system)
@@ -106,8 +106,8 @@ def test_rigid_pendulum_pin_force_at_the_bottom_is_m_g_plus_centripetal():
     """A rigid bar on a pin (tree joint): at the bottom the pin pulls up with m (g + omega^2 r)
     (Newton, omega from the run) and has no horizontal component. (The flexible S3 bar rings
     from its undeformed release: its pin force carries the modes' inertia, O(1) at any E.)"""
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
 
     m, r_g, g = 2.0, 0.4, 9.81
     system = System("bar", bodies=(RigidBody("bar", m, 0.1, com=(r_g, 0.0),
@@ -139,10 +139,10 @@ def test_s0_equilibrium_n_and_m_equal_todays(variant):
     but takes 10 s to derive; its foreshortening is in the S2 checks.)"""
     import random
 
-    from flexsym.assemble import derive_system
-    from flexsym.derive import derive
-    from flexsym.energy import BEAM_PARAMS, alpha, w
-    from flexsym.systems_library import spin_up_system
+    from flexsym.physics.assemble import derive_system
+    from flexsym.codegen.derive import derive
+    from flexsym.physics.energy import BEAM_PARAMS, alpha, w
+    from flexsym.spec.library import spin_up_system
 
     stations = {"A": "root", "s0p75": "7.5"}  # the paper beam: L = 10 m
     spec = replace(builtin(variant), axial_force="equilibrium", moment="equilibrium",
@@ -168,9 +168,9 @@ def test_s3_equilibrium_with_gravity_meets_the_pin():
     """S3 (#1 beam, gravity): N and M at the pinned root from the equilibrium of the whole
     beam (inertia and gravity in the frame) meet the pin's reaction from the momentum balance
     and its zero moment."""
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
-    from flexsym.systems_library import pendulum_system
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
+    from flexsym.spec.library import pendulum_system
 
     system = pendulum_system(replace(builtin("m1"), axial_force="equilibrium",
                                      moment="equilibrium"))
@@ -191,12 +191,12 @@ def test_body_from_fe_data_in_a_system_converges_to_the_analytic_modes():
     invariants computed from the discretisation, as the one-beam path) against the analytic
     #1 over 0.5 s: w_mid at O(h^4) (measured 1.6e-6 -> 1.1e-7 m of a 1.2 mm peak), M_mid (the
     body's element recovery, linear curvature per element) at O(h^2) (2.7e-3 -> 7.0e-4 N m)."""
-    from flexsym.fedata import BeamBody
-    from flexsym.fedata import Section as FeSection
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
-    from flexsym.systems_library import PENDULUM_SECTION as P
-    from flexsym.systems_library import pendulum_system
+    from flexsym.spec.fedata import BeamBody
+    from flexsym.spec.fedata import Section as FeSection
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
+    from flexsym.spec.library import PENDULUM_SECTION as P
+    from flexsym.spec.library import pendulum_system
 
     def run(model):
         return run_built(prepare_system(pendulum_system(model)), t_end=0.5, dt=1e-4)
@@ -214,11 +214,11 @@ def test_body_from_fe_data_in_a_system_converges_to_the_analytic_modes():
 
 
 def test_bad_system_outputs_and_bodies_are_refused_with_one_line():
-    from flexsym.assemble import derive_system
-    from flexsym.fedata import BeamBody
-    from flexsym.fedata import Section as FeSection
-    from flexsym.systems_library import PENDULUM_SECTION as P
-    from flexsym.systems_library import pendulum_system
+    from flexsym.physics.assemble import derive_system
+    from flexsym.spec.fedata import BeamBody
+    from flexsym.spec.fedata import Section as FeSection
+    from flexsym.spec.library import PENDULUM_SECTION as P
+    from flexsym.spec.library import pendulum_system
 
     system = pendulum_system(builtin("m1"))
     with pytest.raises(SpecError, match=r"output 'reaction\(pin\)': needs \(joint, component\)"):
@@ -233,7 +233,7 @@ def test_scene_model_table_takes_the_recovery(tmp_path):
     one line naming the key."""
     from pathlib import Path
 
-    from flexsym.scene import load_scene
+    from flexsym.scenes.scene import load_scene
 
     text = (Path(__file__).resolve().parents[1] / "scenes" / "slider_crank.toml").read_text()
     assert 'model = "m2"' in text
@@ -254,8 +254,8 @@ def test_s2_with_axial_modes_runs_with_the_constraint_stiffness_in_the_tangent(i
     """S2 with a #1 rod (axial mode 2.6e4 rad/s, slider pin force of kN after 0.21 s) at
     0.05 ms: without d(Phi_q^T lambda)/dq in the Newton tangent the iterations contracted by
     only 0.4 each and the run stopped near 0.25 s; with it, it runs through, on the loop."""
-    from flexsym.run import run_built
-    from flexsym.sysgen import prepare_system
+    from flexsym.toolchain.run import run_built
+    from flexsym.toolchain.pipeline import prepare_system
 
     r = run_built(prepare_system(slider_crank_system(builtin("m1"))), t_end=0.3, dt=5e-5,
                   integrator=integrator, interval=1e-3)

@@ -15,14 +15,14 @@ from pathlib import Path
 
 import pytest
 
-from flexsym import api
-from flexsym.cli import build_parser, main
-from flexsym.errors import SpecError
-from flexsym.maneuver import check_theta
-from flexsym.options import OPTIONS, c_header, validate
-from flexsym.paths import PACKAGE_DIR, runtime_dir
-from flexsym.select import Candidate, choose
-from flexsym.spec import builtin, customize
+from flexsym.apps import api
+from flexsym.apps.cli import build_parser, main
+from flexsym.core.errors import SpecError
+from flexsym.spec.maneuver import check_theta
+from flexsym.spec.options import OPTIONS, c_header, validate
+from flexsym.core.paths import PACKAGE_DIR, runtime_dir
+from flexsym.analysis.model_select import Candidate, choose
+from flexsym.spec.variant import builtin, customize
 
 ROOT = PACKAGE_DIR.parent
 
@@ -55,7 +55,7 @@ def refused(capsys, workdir, argv, fragment, code=2):
 def test_limits_header_is_current():
     """runtime_c/include/flexsym/limits.h is written from the option table (one place)."""
     header = runtime_dir() / "include" / "flexsym" / "limits.h"
-    assert header.read_text() == c_header(), "run `python -m flexsym.options > runtime_c/include/flexsym/limits.h`"
+    assert header.read_text() == c_header(), "run `python -m flexsym.spec.options > runtime_c/include/flexsym/limits.h`"
 
 
 # ----- the command line ------------------------------------------------------------------------
@@ -132,8 +132,8 @@ def test_bad_command_line_is_refused(capsys, workdir, argv, fragment):
 
 def test_names_with_a_newline_never_pass():
     """`$` matches before a trailing newline: the name checks use fullmatch / \\Z."""
-    from flexsym.output_names import LABEL_RE
-    from flexsym.spec import NAME_RE
+    from flexsym.spec.output_names import LABEL_RE
+    from flexsym.spec.variant import NAME_RE
 
     assert NAME_RE.match("good") and not NAME_RE.match("good\n")
     assert LABEL_RE.fullmatch("hub") and not LABEL_RE.fullmatch("hub\n")
@@ -338,7 +338,7 @@ def test_killed_run_leaves_no_driver_and_no_file(tmp_path, sig):
     api.build("m3")  # built before timing anything
     out = tmp_path / "r.csv"
     out.write_text("earlier\n")
-    proc = subprocess.Popen([sys.executable, "-m", "flexsym.cli", "run", "m3", "--t-end", "1000", "--dt", "1e-5",
+    proc = subprocess.Popen([sys.executable, "-m", "flexsym.apps.cli", "run", "m3", "--t-end", "1000", "--dt", "1e-5",
                              "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     child = None
     for _ in range(600):  # the driver starts after Python's imports and checks
@@ -411,8 +411,8 @@ def test_readme_commands_parse():
     its run options by the table, or refused as the README says (nothing is run)."""
     import shlex
 
-    from flexsym.cli import RUN_OPTIONS, _params, resolve
-    from flexsym.options import CLI, given_options
+    from flexsym.apps.cli import RUN_OPTIONS, _params, resolve
+    from flexsym.spec.options import CLI, given_options
 
     cmds = readme_commands()
     assert len(cmds) >= 12 and any(refused for _, refused in cmds)
@@ -433,9 +433,9 @@ def test_readme_commands_parse():
 
 
 def test_readme_option_table_is_the_table():
-    from flexsym.options import markdown_table
+    from flexsym.spec.options import markdown_table
 
-    assert markdown_table() in (ROOT / "README.md").read_text(), "run `python -m flexsym.options --markdown`"
+    assert markdown_table() in (ROOT / "README.md").read_text(), "run `python -m flexsym.spec.options --markdown`"
 
 
 def test_every_table_option_is_a_run_flag_and_documented():
@@ -515,7 +515,7 @@ def test_fuzz_scene_mutations_are_loaded_or_refused_in_one_line(tmp_path):
     with one line naming the scene file; never a traceback."""
     import random
 
-    from flexsym.scene import load_scene
+    from flexsym.scenes.scene import load_scene
 
     rng = random.Random(90)
     base = (ROOT / "scenes" / "custom_manoeuvre.toml").read_text().replace("t_end = 10.0", "t_end = 2.0")

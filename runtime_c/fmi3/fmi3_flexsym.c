@@ -3,7 +3,7 @@
  * One instance is one run of the C runtime advanced by fsr_stepper (runtime.h): fmi3DoStep
  * integrates with the exported integrator and its fixed step dt up to the next communication
  * point, which must lie on that step grid; the outputs are the row flexsym run would write
- * there. flexsym_fmu_config.h, written by `flexsym export-fmu` (symbolic/fmu.py), holds the
+ * there. flexsym_fmu_config.h, written by `flexsym export-fmu` (flexsym/sim/fmu.py), holds the
  * instantiation token, the run options, the start values and the value references.
  * Unsupported functions log one line and return fmi3Error, as do invalid calls and values.
  */

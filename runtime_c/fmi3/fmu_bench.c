@@ -1,4 +1,4 @@
-/* Time an FMU's doStep loop as an importer runs it (flexsym bench-fmu, symbolic/fmu.py):
+/* Time an FMU's doStep loop as an importer runs it (flexsym bench-fmu, flexsym/sim/fmu.py):
  *
  *   fmu_bench BINARY.so TOKEN T_END H REPEAT VR...
  *

@@ -1,0 +1,159 @@
+"""Python API mirroring the command line: load a scene or pick a variant, build, run, inspect.
+
+    from flexsym.apps import api
+    scene = api.load_scene("scenes/paper.toml")
+    result = api.run(scene)                 # RunResult: result["v_tip"], result.t, result.columns
+    result = api.simulate("m3", ws=4.0, t_end=10.0)
+    print(api.inspect("m1", sections="energy"))
+    hub = api.load_scene("scenes/hub.toml")  # a system scene ([[body]] entries): SystemScene
+    result = api.run(hub)                   # columns theta_h, omega_h, v_tip, M_A
+    pendulum = api.system({...})            # the same data as a scene, as a dict: a checked System
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from flexsym.core.errors import SpecError
+from flexsym.toolchain.pipeline import compiled, generated_folder, prepare
+from flexsym.spec.options import API, validate
+from flexsym.toolchain.run import RunResult, check_output_path, run_built
+from flexsym.scenes.scene import Scene, load_scene
+from flexsym.spec.variant import builtin
+
+__all__ = ["load_scene", "system", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
+           "inprocess", "sweep"]
+
+
+def variant(name_or_spec, **overrides):
+    """A spec: a built-in name/alias (m0..m3, prestress, ef) or a spec, with optional overrides
+    as on the command line (strain=, axial="static,sin1", bending=, outputs=, elements=, ...)."""
+    from flexsym.spec.variant import customize
+
+    spec = builtin(name_or_spec) if isinstance(name_or_spec, str) else name_or_spec
+    return customize(spec, **overrides) if overrides else spec.validate()
+
+
+def _spec_of(target):
+    if isinstance(target, Scene):
+        return target.spec
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        return load_scene(target).spec
+    return variant(target)
+
+
+def generate(target) -> Path:
+    """The folder with current generated code (generated now if needed)."""
+    return generated_folder(_spec_of(target))
+
+
+def build(target):
+    return prepare(_spec_of(target))
+
+
+def kernels(target):
+    """The compiled kernels, callable on numpy arrays (CompiledModel)."""
+    return compiled(_spec_of(target))
+
+
+def system(data, name: str = "system", t_end: float | None = None):
+    """A System from the data of a system scene as a dict ({"body": [...], "joint": [...],
+    "driver": [...], "output": {"columns": {...}}, ...}), or a System built in Python (e.g. by
+    flexsym.spec.library): checked exactly as a scene file is (one line per problem)."""
+    from flexsym.spec.system import System
+    from flexsym.scenes.system_scene import check_system, system_from_dict
+
+    if isinstance(data, System):
+        return check_system(data, 20.0 if t_end is None else t_end)
+    return system_from_dict(data, name, t_end)
+
+
+def run(scene, out=None) -> RunResult:
+    """Run a scene (a Scene, a SystemScene or a path to a .toml file); results as numpy arrays."""
+    if not isinstance(scene, Scene) and not hasattr(scene, "system"):
+        scene = load_scene(scene)
+    out = out if out is not None else scene.output_file
+    if out is not None:
+        out = check_output_path(out, "out")
+    if hasattr(scene, "system"):  # a mechanism: flexsym/codegen/sysgen.py generates and builds it
+        from flexsym.toolchain.pipeline import prepare_system
+
+        return run_built(prepare_system(scene.system), scene.options, out=out)
+    return run_built(prepare(scene.spec), scene.options, out=out)
+
+
+def simulate(target="m3", *, out=None, **options) -> RunResult:
+    """Run a variant on the spin-up (or its own manoeuvre). Options as `flexsym run` and the
+    table in flexsym.spec.options (t_end, dt, integrator, ws, ts, params={...}, tol, step, ...):
+    checked before anything is generated or built; defaults from the table."""
+    spec = _spec_of(target)
+    o = validate(options, API, spec)
+    if out is not None:
+        out = check_output_path(out, "out")
+    return run_built(prepare(spec), o, out=out)
+
+
+def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,ops", latex=False) -> str:
+    from flexsym.analysis.inspect_model import SECTIONS, Report
+
+    chosen = sections.split(",") if isinstance(sections, str) else list(sections)
+    for s in chosen:
+        if s not in SECTIONS:
+            raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
+    return Report(_spec_of(target), latex=latex).render(chosen)
+
+
+def inprocess(target):
+    """The built model's library loaded in this process (InProcessModel): model.batch(runs, ...)
+    runs many parameter sets per call and returns arrays (see flexsym.sim.inprocess)."""
+    from flexsym.sim.inprocess import load, load_system
+
+    scene = _system_scene(target)
+    if scene is not None:  # a mechanism: its p and drive parameters vary (see flexsym.sim.inprocess)
+        return load_system(scene.system)
+    return load(_spec_of(target))
+
+
+def _system_scene(target):
+    """The SystemScene target is or names, else None."""
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        target = load_scene(target)
+    return target if hasattr(target, "system") else None
+
+
+def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), resume=False,
+          workers=None, dask=None, progress=None, on_chunk=None, **run_options) -> dict:
+    """`flexsym sweep` from Python: vary is a list of "NAME=START:STOP:COUNT" / "NAME=a,b,c" /
+    "NAME=LO:HI" strings, or a dict NAME -> list of values or such a string. Runs a scene with its
+    own settings, or a variant on the spin-up with the run options of simulate() (ws, ts,
+    params={...}, t_end, dt, integrator, tol, step, interval, ...; the option table). dask: a
+    scheduler address or a distributed.Client. Writes the table to out and returns it as
+    column -> numpy array (see flexsym.sim.sweep)."""
+    from flexsym.sim.sweep import check_partial, make_plan, prepare_plan, read_table, run_sweep, settings_of
+
+    if isinstance(vary, dict):
+        vary = [f"{k}={v}" if isinstance(v, str) else f"{k}={','.join(repr(float(x)) for x in v)}"
+                for k, v in vary.items()]
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        target = load_scene(target)
+    if isinstance(target, Scene) or hasattr(target, "system"):
+        scene = target
+        if run_options:
+            raise SpecError(f"{scene.path}: run options do not combine with a scene: set them in the scene")
+        if hasattr(scene, "system"):  # a mechanism: names from its built model
+            from flexsym.sim.sweep import system_target
+
+            spec = system_target(scene.system)
+        else:
+            spec = scene.spec
+        o, keep_interval = scene.options, True
+    else:
+        spec = _spec_of(target)
+        o = validate(run_options, API, spec)
+        keep_interval = run_options.get("interval") is not None or run_options.get("out_every") is not None
+    plan = make_plan(spec, settings_of(o, keep_interval), o.params, list(vary), samples=samples, seed=seed,
+                     sampling=sampling, at=at)
+    out = check_output_path(out, "out")
+    check_partial(out, resume)
+    prepare_plan(plan)
+    run_sweep(plan, out, resume=resume, workers=workers, dask=dask, progress=progress, on_chunk=on_chunk)
+    return read_table(out)

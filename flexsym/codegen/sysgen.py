@@ -1,0 +1,304 @@
+"""A System -> kernels (casadi) -> a generated folder that fills flexsym/system.h's struct.
+
+Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = parameters):
+  mass(q, d, p) -> M        force(q, qd, d, p) -> f          M q'' = f
+  residual_jac(q, qd, qdd, d, p) -> dr/dq, dr/dq' of r = M q'' - f
+  ef_elastic(e, pe) -> V, g, H   one ANCF element's elastic energy (ef_elastic_grad: V, g):
+                                 system.c adds it to force, residual_jac and energy per element
+  outputs(q, qd, qdd, lambda, d, p) -> y     energy(q, qd, d, p) -> [T, V, h]     drive(t, mp) -> d
+An ef body's kinetic energy is not in the sympy derivation: ef_kinetic_energy instantiates the
+generic element's T per element in casadi and build_system_kernels adds its Lagrange terms (AD)
+to mass, force, residual_jac, energy and the outputs that read T.
+Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
+The fingerprint covers the system's spec, the variant generator's hash (the physics modules
+and templates) and this module, assemble.py, efbody.py, system.py and templates/system/.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import casadi as ca
+import sympy as sp
+
+from flexsym.physics.assemble import EF_T, SystemDerivation, derive_system, ef_guided_force, length_param
+from flexsym.emit.cemit import c_double, emit
+from flexsym.physics.efbody import _E, _ED, OM, VX, VY, EfPart, generic_element
+from flexsym.physics.energy import A, E, I, L, rho
+from flexsym.physics.fe import le
+from flexsym.codegen.generate import MANIFEST, _environment, write_folder
+from flexsym.physics.lagrange import equations_of_motion_sx
+from flexsym.emit.kernels import SympyToCasadi, group_by_parameters, make_kernels, matrix_sx
+from flexsym.spec.maneuver import t as t_sym
+from flexsym.core.paths import cache_dir, file_lock, module_file, templates_dir
+from flexsym.spec.system import System, length_scale, system_to_dict
+from flexsym.core.versions import generator_hash, tool_versions
+
+C_PREFIX = "fsm_"
+_OWN = ("physics.assemble", "physics.efbody", "spec.system", "codegen.sysgen")
+
+
+def fingerprint(system: System) -> str:
+    h = hashlib.sha256(generator_hash().encode())
+    for f in [module_file(m) for m in _OWN] + sorted((templates_dir() / "system").glob("*.j2")):
+        h.update(f.name.encode() + b"\0" + f.read_bytes().replace(b"\r\n", b"\n"))
+    payload = {"system": system_to_dict(system), "generator": h.hexdigest(),
+               "versions": tool_versions()}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
+
+def build_system_kernels(der: SystemDerivation) -> list:
+    n, nd = len(der.q), len(der.drive_symbols)
+    x = {"q": ca.SX.sym("q", n), "qd": ca.SX.sym("qd", n), "qdd": ca.SX.sym("qdd", n),
+         "d": ca.SX.sym("d", nd), "p": ca.SX.sym("p", len(der.params)), "t": ca.SX.sym("t"),
+         "mp": ca.SX.sym("mp", len(der.drive_params)), "lam": ca.SX.sym("lam", len(der.lam))}
+    symbols, priority = {}, {}
+    for i, (_, sym, _) in enumerate(der.params):
+        symbols[sym], priority[sym] = x["p"][i], 0
+    for i, sym in enumerate(der.drive_symbols):
+        symbols[sym], priority[sym] = x["d"][i], 1
+    for i, sym in enumerate(der.lam):
+        symbols[sym], priority[sym] = x["lam"][i], 2
+    for i in range(n):
+        for key, syms in (("q", der.q), ("qd", der.qd), ("qdd", der.qdd)):
+            symbols[syms[i]], priority[syms[i]] = x[key][i], 2
+    tr = SympyToCasadi(symbols, priority)
+    psyms = [sym for _, sym, _ in der.params]
+    q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
+    # d depends on time only through the guided theta_k: d' = [1, then theta_k', theta_k'', 0
+    # per guided joint] (what is differentiated along the motion does not read theta_k'')
+    ddot = [ca.SX(1.0)]
+    for k in range(len(der.guided)):
+        ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
+    ddot = ca.vertcat(*ddot)
+    M = matrix_sx(tr, der.M, psyms)
+    f = matrix_sx(tr, der.f, psyms)
+    T_, V_, h_ = der.energies()
+    # ef bodies' elastic energy is not in these kernels: system.c adds it per element with the
+    # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
+    en = matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
+    if der.ef_kinetic:
+        # Lagrange on the ef bodies' kinetic energy by AD (lagrange.equations_of_motion_sx)
+        T_ef = ef_kinetic_energy(der, tr, x)
+        guided = [(d[1 + 3 * k], d[2 + 3 * k], d[3 + 3 * k]) for k in range(len(der.guided))]
+        M_ef, f_ef = equations_of_motion_sx(T_ef, 0, q, qd, guided)
+        M += M_ef
+        f += f_ef
+        T0_ef = ca.substitute(T_ef, qd, ca.SX.zeros(qd.shape))
+        en += ca.vertcat(T_ef, 0, ca.mtimes(qd.T, ca.mtimes(M_ef, qd)) / 2 - T0_ef)
+        tr.symbols[EF_T] = T_ef
+        for k, g in enumerate(der.guided):  # d/dt dT_ef/dtheta' - dT_ef/dtheta (torque outputs)
+            p_th = ca.jacobian(T_ef, d[2 + 3 * k])
+            tr.symbols[ef_guided_force(g.joint)] = (
+                ca.mtimes(ca.jacobian(p_th, q), qd) + ca.mtimes(ca.jacobian(p_th, qd), qdd)
+                + ca.mtimes(ca.jacobian(p_th, d), ddot) - ca.jacobian(T_ef, d[1 + 3 * k]))
+    # outputs and ef elastic energies hold square roots and atan2: translated as they are
+    y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
+    dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
+    dtr = SympyToCasadi(dsyms, {})
+    drive = [x["t"]]
+    for g in der.guided:
+        drive += [dtr(g.theta), dtr(sp.diff(g.theta, t_sym)), dtr(sp.diff(g.theta, t_sym, 2))]
+    r = ca.mtimes(M, x["qdd"]) - f
+    constraint_kernels = []
+    if der.constraints:
+        # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d'
+        phi = matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
+        phi_q = ca.jacobian(phi, q)
+        phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
+        phi_dot = ca.mtimes(phi_q, qd) + phi_t
+        gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
+        constraint_kernels = [
+            ("constraints", "Phi of the cut joints", [("q", q), ("d", d), ("p", p)], [("phi", phi)]),
+            ("constraint_jac", "Phi_q", [("q", q), ("d", d), ("p", p)], [("phi_q", phi_q)]),
+            ("constraint_rate", "Phi_t (Phi_q q' + Phi_t = 0)", [("q", q), ("d", d), ("p", p)],
+             [("phi_t", phi_t)]),
+            ("constraint_acc", "gamma (Phi_q q'' = gamma), casadi AD",
+             [("q", q), ("qd", qd), ("d", d), ("p", p)], [("gamma", gamma)]),
+            ("constraint_hess", "d(Phi_q^T e)/dq at fixed e (Newton tangent)",
+             [("q", q), ("e", x["lam"]), ("d", d), ("p", p)],
+             [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
+        ]
+    return make_kernels(constraint_kernels + _ef_element_kernel(der) + [
+        ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
+        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
+         [("f", f)]),
+        ("residual_jac", "Jacobians of r = M q'' - f",
+         [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)],
+         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
+        ("outputs", "outputs " + ", ".join(der.outputs),
+         [("q", q), ("qd", qd), ("qdd", qdd), ("lambda", x["lam"]), ("d", d), ("p", p)],
+         [("y", y)]),
+        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
+         [("q", q), ("qd", qd), ("d", d), ("p", p)], [("e", en)]),
+        ("drive", "d = [t, theta_k, theta_k', theta_k''] of the guided joints",
+         [("t", x["t"]), ("mp", x["mp"])], [("d", ca.vertcat(*drive))]),
+    ])
+
+
+def _ef_element_kernel(der: SystemDerivation) -> list:
+    """One ANCF element's elastic energy V(e; le, E, A, I), its gradient and Hessian (casadi AD
+    of efbody's Gauss-point energy, as fe.py's one-beam elements): generated once, called per
+    element by system.c."""
+    if not der.elastic:
+        return []
+    e, pe = ca.SX.sym("e", 8), ca.SX.sym("pe", 4)
+    symbols = {s: e[i] for i, s in enumerate(_E)} | {le: pe[0], E: pe[1], A: pe[2], I: pe[3]}
+    priority = {s: 2 for s in _E} | {le: 0, E: 0, A: 0, I: 0}
+    V = SympyToCasadi(symbols, priority)(generic_element()[3])
+    H, g = ca.hessian(V, e)
+    return [("ef_elastic", "one ANCF element: elastic energy, its gradient and Hessian",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)]),
+            ("ef_elastic_grad", "one ANCF element: elastic energy and its gradient (no Hessian)",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
+
+
+def ef_kinetic_energy(der: SystemDerivation, tr: SympyToCasadi, x: dict) -> ca.SX:
+    """The ef bodies' kinetic energy: efbody's generic element T^e(e, e'; omega, V; le, rho, A),
+    one casadi function instantiated per element with its nodal values and rates (the entries
+    of ef_elements) and the frame's actual omega and V."""
+    e, ed, fr, pe = ca.SX.sym("e", 8), ca.SX.sym("ed", 8), ca.SX.sym("fr", 3), ca.SX.sym("pe", 3)
+    symbols = ({s: e[i] for i, s in enumerate(_E)} | {s: ed[i] for i, s in enumerate(_ED)}
+               | {OM: fr[0], VX: fr[1], VY: fr[2], le: pe[0], rho: pe[1], A: pe[2]})
+    priority = {s: 2 for s in list(_E) + list(_ED)} | {OM: 1, VX: 1, VY: 1, le: 0, rho: 0, A: 0}
+    T_e = SympyToCasadi(symbols, priority)(
+        group_by_parameters(generic_element()[0], [le, rho, A]))
+    element = ca.Function("ef_kinetic", [e, ed, fr, pe], [T_e])
+    frames = {k.body: k for k in der.ef_kinetic}
+    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
+    q, qd, p = x["q"], x["qd"], x["p"]
+    T = ca.SX(0.0)
+    for body in ef_elements(der):
+        k = frames[body["name"]]
+        L_, A_ = p[body["params"][0]], p[body["params"][2]]
+        rho_ = p[pindex[der.flex[body["name"]].psyms[rho]]]
+        motion = ca.vertcat(tr(k.omega), tr(k.V[0]), tr(k.V[1]))
+        part = der.flex[body["name"]]
+        f = part.fractions
+        for e, el in enumerate(body["elements"]):
+            # a body from finite-element data: the element's length and rho A relative to the root's
+            section = (ca.vertcat(L_ / body["n"], rho_, A_) if part.body is None else
+                       ca.vertcat(L_ * float(f[e + 1] - f[e]), rho_ * float(part.ratios[e][0]), A_))
+            ev = ca.vertcat(*[(q[i] if i >= 0 else 0) + float(a) * L_ + float(b) for i, a, b in el])
+            edv = ca.vertcat(*[qd[i] if i >= 0 else ca.SX(0.0) for i, _, _ in el])
+            T += element(ev, edv, motion, section)
+    return T
+
+
+def ef_elements(der: SystemDerivation) -> list[dict]:
+    """Per ef body, what system.c needs to assemble its elements: the parameter indices of
+    [L, E, A, I], the element count, and per element and entry (x1 y1 x1' y1' x2 ...) the
+    coordinate index (-1: none) and the value a*L + b added to it (fixed root, node x = kL/n,
+    or the body's node); a body from finite-element data also gets, per element, its length
+    as a fraction of L and its E A and E I relative to the root section ("sections")."""
+    qindex = {s: i for i, s in enumerate(der.q)}
+    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
+    out = []
+    for part in der.flex.values():
+        if not isinstance(part, EfPart):
+            continue
+        n = part.n
+        node = [[(-1, 0.0, 0.0), (-1, 0.0, 0.0), (qindex[part.q["dx0"]], 0.0, 1.0), (-1, 0.0, 0.0)]]
+        for k in range(1, n + 1):
+            node.append([(qindex[part.q[f"ux{k}"]], float(part.fractions[k]), 0.0), (qindex[part.q[f"uy{k}"]], 0.0, 0.0),
+                         (qindex[part.q[f"dx{k}"]], 0.0, 1.0), (qindex[part.q[f"dy{k}"]], 0.0, 0.0)])
+        params = [pindex[part.psyms[s]] for s in (L, E, A, I)]
+        f = part.fractions
+        sections = [] if part.body is None else [
+            (c_double(float(f[k + 1] - f[k])), c_double(float(ea)), c_double(float(ei)))
+            for k, (_, ea, ei) in enumerate(part.ratios)]
+        out.append({"name": part.beam.name, "n": n, "params": params, "sections": sections,
+                    "elements": [[(i, c_double(a), c_double(b)) for i, a, b in node[k] + node[k + 1]]
+                                 for k in range(n)]})
+    return out
+
+
+def _unbounded(system: System, c) -> bool:
+    """A coordinate the runtime's blow-up limit (blowup x the length scale, in m) does not
+    bound: a revolute joint's angle (it may turn without end), an ANCF node's slope (no unit)."""
+    if c.group == "joint":
+        return system.joint(c.joint).kind == "revolute"
+    return c.group == "node" and c.name.rsplit("_", 1)[-1].startswith("d")
+
+
+def generate_system_files(system: System) -> dict[str, str]:
+    der = derive_system(system)
+    fp = fingerprint(system)
+    kernels = build_system_kernels(der)
+    emitted = [emit(k, C_PREFIX) for k in kernels]
+    versions = tool_versions()
+    mass = next(k.function for k in kernels if k.name == "mass")
+    qs, ds, ps = mass.sx_in()
+    mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds))
+    scale = length_scale(system)
+    initial = [c_double(system.joint(c.joint).initial) if c.group == "joint" else "0.0"
+               for c in der.coords]
+    ctx = {
+        "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
+        "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
+        "summary": f"{len(system.bodies)} bodies, {len(der.q)} coordinates, "
+                   f"{len(der.guided)} guided joints, {len(der.constraints)} constraint equations.",
+        "constraints": [n for n, _ in der.constraints],
+        "banner": "system/banner.j2", "kernels": emitted,
+        "guided": [g.joint for g in der.guided], "coords": [c.name for c in der.coords],
+        "outputs": list(der.outputs), "nd": len(der.drive_symbols),
+        "params": [{"name": n, "c_default": c_double(v)} for n, _, v in der.params],
+        "drive_params": [{"name": p.name, "c_default": c_double(p.default)}
+                         for p in der.drive_params],
+        "length_scale": c_double(scale), "length_param": length_param(der),
+        "unbounded": [int(_unbounded(system, c)) for c in der.coords],
+        "mass_constant": mass_constant, "initial": initial,
+        "outputs_use_acceleration": der.outputs_use_acceleration,
+        "outputs_use_drive": der.outputs_use_drive,
+        "ef_bodies": ef_elements(der),
+    }
+    env = _environment()
+    files = {
+        f"fsm_{system.name}.h": env.get_template("system/system.h.j2").render(ctx),
+        "kernels.c": env.get_template("kernels.c.j2").render(ctx),
+        "system.c": env.get_template("system/system.c.j2").render(ctx),
+        "CMakeLists.txt": env.get_template("system/CMakeLists.txt.j2").render(ctx),
+    }
+    manifest = {
+        "kind": "system", "generator": ctx["generator"], "versions": versions, "fingerprint": fp,
+        "spec": {"name": system.name} | system_to_dict(system),
+        "tree": {"order": list(der.tree.order), "tree_joints": dict(der.tree.parent_joint),
+                 "cut_joints": list(der.tree.cut)},
+        "coordinates": [{"name": c.name, "group": c.group, "body": c.body} for c in der.coords],
+        "drive": ["t"] + [f"{g.joint}{s}" for g in der.guided for s in ("", "'", "''")],
+        "drive_params": [{"name": p.name, "default": p.default, "unit": p.unit}
+                         for p in der.drive_params],
+        "params": [{"name": n, "default": v} for n, _, v in der.params],
+        "constraints": [{"name": n, "phi": str(e)} for n, e in der.constraints],
+        "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
+                         for b, term, wrt, _, _ in der.terms],
+        "outputs": dict(zip(der.outputs, (o.quantity for o in system.outputs))),
+        "length_scale": scale, "mass_constant": mass_constant,
+        "left_out": der.dropped,
+        "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
+                    for k in emitted},
+        "files": {n: hashlib.sha256(tx.encode()).hexdigest() for n, tx in sorted(files.items())},
+    }
+    files[MANIFEST] = json.dumps(manifest, indent=2) + "\n"
+    return files
+
+
+def describe(system: System) -> str:
+    """What `inspect` shows of a system's derivation: tree, coordinates, constraint rows, which
+    energy term acts on which coordinates, and the kernels' operation counts."""
+    files = generate_system_files(system)
+    m = json.loads(files[MANIFEST])
+    lines = [f"system '{system.name}': {len(system.bodies)} bodies; tree "
+             + ", ".join(f"{b} <- {j}" for b, j in m["tree"]["tree_joints"].items())
+             + (f"; cut joints: {', '.join(m['tree']['cut_joints'])}" if m["tree"]["cut_joints"] else ""),
+             "coordinates: " + ", ".join(f"{c['name']} ({c['group']})" for c in m["coordinates"]),
+             "drive d: " + ", ".join(m["drive"])]
+    for c in m["constraints"]:
+        lines.append(f"constraint {c['name']}: {c['phi']} = 0")
+    for t_ in m["energy_terms"]:
+        where = f"body {t_['body']}: " if t_["body"] else ""
+        lines.append(f"{where}{t_['term']} acts on {', '.join(t_['differentiated_wrt'])}")
+    for name, k in m["kernels"].items():
+        lines.append(f"kernel {k['c_name']}: {k['total_ops']} operations")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,37 @@
+"""Tool versions and the generator fingerprint recorded in every manifest."""
+from __future__ import annotations
+
+import hashlib
+from functools import lru_cache
+
+import casadi
+import jinja2
+import sympy
+
+from flexsym import __version__
+from flexsym.core.paths import module_file, templates_dir
+
+# Modules whose code decides what is generated: a change in any of them changes the
+# fingerprint of every variant, so checked-in generated code is detected as stale.
+GENERATOR_MODULES = ("spec.modes", "physics.integrals", "physics.energy", "spec.strain_models",
+                     "spec.maneuver", "spec.output_names", "spec.parameters", "spec.system",
+                     "spec.library", "physics.assemble", "physics.efbody", "physics.outputs",
+                     "spec.variant", "physics.lagrange", "physics.modal", "codegen.derive",
+                     "emit.kernels", "emit.cemit", "codegen.generate", "physics.fe", "spec.fedata",
+                     "physics.exact", "spec.beam_element")
+
+
+def tool_versions() -> dict[str, str]:
+    return {"flexsym": __version__, "sympy": sympy.__version__, "casadi": casadi.__version__,
+            "jinja2": jinja2.__version__}
+
+
+@lru_cache(maxsize=None)
+def generator_hash() -> str:
+    h = hashlib.sha256()
+    files = [module_file(m) for m in GENERATOR_MODULES]
+    files += sorted(templates_dir().glob("*.j2"))
+    for f in files:
+        h.update(f.name.encode() + b"\0")
+        h.update(f.read_bytes().replace(b"\r\n", b"\n"))
+    return h.hexdigest()

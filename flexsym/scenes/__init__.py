@@ -1,0 +1,2 @@
+"""Layer 2, scenes: scene files (TOML) and finite-element folders read into spec objects,
+each problem refused in one line that names the file and key."""

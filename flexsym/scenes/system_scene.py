@@ -1,0 +1,654 @@
+"""System scenes: planar mechanisms described in TOML (or the same data as a Python dict).
+
+A scene is a *system scene* when it has `[[body]]` entries (an array of tables) or any of
+[system], [[joint]], [[driver]], [[load]], [gravity]; every other scene is today's one-beam
+scene (flexsym/scenes/scene.py), unchanged.
+
+    [system]    name (default: the file's stem), description
+    [[body]]    name, kind = "rigid": mass, inertia (about the com), com = [x, y],
+                markers = { name = [x, y] }                             (body frame, m)
+                name, kind = "beam": length, density, youngs_modulus, area, inertia,
+                model = "m3" | { variant = "ef", elements = 8 } | { strain, axial, bending },
+                markers = { name = x }   (x along the beam, m; root and tip always exist);
+                or, for a beam from finite-element data, instead of length ... inertia:
+                segments + point_masses, or folder (relative to the scene file), with
+                elements and ef_elements: the one-beam scene's [body] keys, read by the same
+                reader (fedata.scene_body, feimport.scene_folder)
+    [[joint]]   name, kind = revolute | prismatic | clamp, parent = "body.marker" | "ground"
+                (then point = [x, y]), child = "body.marker", axis = [ax, ay] (prismatic, in
+                the parent's frame), offset (rad, child frame angle relative to the parent's),
+                initial (the coordinate at t = 0)
+    [[driver]]  name, kind = "guided", joint, and maneuver = "spin-up" (omega, duration) |
+                "constant" (omega) or theta = "expression of t";
+                name, kind = "motor", joint, torque (revolute) | force (prismatic) =
+                "expression of t, J and J_rate for every joint J with a coordinate"
+    [gravity]   g = [gx, gy]  (m/s^2)
+    [[load]]    kind = "force": marker, fx, fy, frame = ground | body;
+                kind = "torque": body, torque = "expression"; kind = "spring": a, b
+                (body.marker each), k, c, l0
+    [solver]    run options (flexsym/spec/options.py: integrator, dt, t_end, ...)
+    [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
+                grammar: angle(J), rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
+                M(B, x), reaction(J), torque(D), T, V, momentum, violation)
+
+Checks, each one line naming the file and the item, before anything is derived or written:
+the TOML's types and keys here; names, references, masses, the spanning tree, drivers,
+loads and output names in System.validate (flexsym/spec/system.py); then check_system: every
+expression through the bounded parser of maneuver.py with only its allowed names, manoeuvre
+parameters, each requested beam output carried by some mode of the body's model, and the
+initial assembly (every cut joint closes at t = 0 within ASSEMBLY_TOL of the mechanism's size).
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import sympy as sp
+
+from flexsym.core.errors import SpecError
+from flexsym.spec.maneuver import check_theta, maneuver_of, parse_expression, t
+from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
+from flexsym.spec.system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
+                     RigidBody, Section, SpringDamper, System, Torque, beam_station, parse_output)
+
+SYSTEM_TABLES = ("system", "body", "joint", "driver", "gravity", "load", "solver", "output")
+_ARRAYS = ("body", "joint", "driver", "load")
+_RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene and o.maneuvers is None}
+UNIFORM_KEYS = ("length", "density", "youngs_modulus", "area", "inertia")
+FE_KEYS = ("segments", "point_masses", "elements", "ef_elements", "folder")  # scene.py's [body]
+EF_ELEMENTS = 32  # ef elements of a body from finite-element data (scene.py's [body] default)
+KEYS = {
+    "system": {"name", "description"},
+    "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
+    "beam": {"name", "kind", "model", "markers", *UNIFORM_KEYS, *FE_KEYS},
+    "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial"},
+    "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
+    "motor": {"name", "kind", "joint", "torque", "force"},
+    "gravity": {"g"},
+    "force": {"kind", "name", "marker", "fx", "fy", "frame"},
+    "torque": {"kind", "name", "body", "torque"},
+    "spring": {"kind", "name", "a", "b", "k", "c", "l0"},
+    "solver": {k.split(".")[1] for k in _RUN_KEYS if k.startswith("solver.")},
+    "output": {"file", "columns"} | {k.split(".")[1] for k in _RUN_KEYS if k.startswith("output.")},
+}
+MANEUVERS = {"spin-up": ("spin_up", {"omega": "ws", "duration": "ts"}),
+             "constant": ("constant", {"omega": "ws"})}
+# A cut joint whose two markers are farther apart at t = 0 than this fraction of the
+# mechanism's size (or, for a clamp, whose frames differ by more than this angle in rad) cannot
+# be a guess the runtime's consistent-initial-condition Newton should repair: refused.
+ASSEMBLY_TOL = 1e-3
+
+
+@dataclass
+class SystemScene:
+    path: Path | None
+    system: System
+    options: RunOptions
+    output_file: Path | None
+    model: str | None = None  # the --model that replaced every beam's deformation model
+
+    @property
+    def columns(self) -> dict:
+        return {o.column: o.quantity for o in self.system.outputs}
+
+
+def is_system_scene(data: dict) -> bool:
+    return isinstance(data.get("body"), list) or any(k in data for k in _ARRAYS[1:] + ("system", "gravity"))
+
+
+class _Located(SpecError):
+    """Already names the source and the item: not to be wrapped again."""
+
+
+class _Items:
+    """Typed access to one entry of the data, with errors naming the source and the item."""
+
+    def __init__(self, prefix: str):
+        self.prefix = prefix
+
+    def fail(self, where: str, msg: str):
+        raise _Located(f"{self.prefix}{where}: {msg}")
+
+    def table(self, where: str, tab, keys: set) -> dict:
+        if not isinstance(tab, dict):
+            self.fail(where, f"must be a table, not {type(tab).__name__}")
+        unknown = sorted(set(tab) - keys)
+        if unknown:
+            self.fail(f"{where} {unknown[0]}", f"unknown key (known: {', '.join(sorted(keys))})")
+        return tab
+
+    def number(self, where, tab, key, *, positive=False, default=None):
+        val = tab.get(key, default)
+        if val is None:
+            self.fail(f"{where} {key}", "missing")
+        if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val):
+            self.fail(f"{where} {key}", f"must be a finite number (got {val!r})")
+        if positive and not val > 0:
+            self.fail(f"{where} {key}", f"must be > 0 (got {val!r})")
+        return float(val)
+
+    def string(self, where, tab, key, default=None) -> str:
+        val = tab.get(key, default)
+        if val is None:
+            self.fail(f"{where} {key}", "missing")
+        if not isinstance(val, str):
+            self.fail(f"{where} {key}", f"must be a string (got {val!r})")
+        return val
+
+    def pair(self, where, tab, key, default=None):
+        val = tab.get(key, default)
+        if val is None:
+            return None
+        if (not isinstance(val, (list, tuple)) or len(val) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                           for v in val)):
+            self.fail(f"{where} {key}", f"must be two finite numbers [x, y] (got {val!r})")
+        return (float(val[0]), float(val[1]))
+
+
+def _entries(r: _Items, data: dict, name: str) -> list:
+    val = data.get(name, [])
+    if not isinstance(val, list) or not all(isinstance(v, dict) for v in val):
+        r.fail(f"[[{name}]]", "must be an array of tables ([[{name}]] entries)")
+    return val
+
+
+def _label(kind: str, k: int, tab: dict) -> str:
+    name = tab.get("name")
+    return f"[[{kind}]] '{name}'" if isinstance(name, str) else f"[[{kind}]] #{k + 1}"
+
+
+def system_from_data(data: dict, prefix: str = "", name: str = "system", model: str | None = None,
+                     base: Path = Path(".")):
+    """(System, given run options, output file or None) from parsed scene data. prefix names
+    the source in every message ("scenes/hub.toml: "); model replaces every beam's model; base:
+    the directory a body's folder is relative to (the scene file's)."""
+    r = _Items(prefix)
+    unknown = sorted(set(data) - set(SYSTEM_TABLES))
+    if unknown:
+        r.fail(unknown[0], f"unknown table (a system scene has: {', '.join(SYSTEM_TABLES)})")
+    for key in ("system", "gravity", "solver", "output"):
+        if key in data:
+            r.table(f"[{key}]", data[key], KEYS[key])
+    if not isinstance(data.get("body"), list):
+        r.fail("[[body]]", "a system scene needs [[body]] entries")
+    system_tab = data.get("system", {})
+    name = r.string("[system]", system_tab, "name", default=name)
+    description = r.string("[system]", system_tab, "description", default="")
+    bodies = tuple(_body(r, k, tab, model, base) for k, tab in enumerate(_entries(r, data, "body")))
+    joints = tuple(_joint(r, k, tab) for k, tab in enumerate(_entries(r, data, "joint")))
+    drivers = tuple(_driver(r, k, tab) for k, tab in enumerate(_entries(r, data, "driver")))
+    kinds = {j.name: j.kind for j in joints}
+    for k, (d, tab) in enumerate(zip(drivers, _entries(r, data, "driver"))):
+        law = {"revolute": "torque", "prismatic": "force"}.get(kinds.get(d.joint))
+        if d.kind == "motor" and law is not None and law not in tab:
+            r.fail(f"{_label('driver', k, tab)}", f"a motor on the {kinds[d.joint]} joint "
+                   f"'{d.joint}' gives a {law} (write {law} = \"...\")")
+    loads = tuple(_load(r, k, tab) for k, tab in enumerate(_entries(r, data, "load")))
+    if "gravity" in data:
+        loads = (Gravity(r.pair("[gravity]", data["gravity"], "g", default=(0.0, -9.81))),) + loads
+    out = data.get("output", {})
+    columns = out.get("columns", {})
+    if not isinstance(columns, dict) or not all(isinstance(v, str) for v in columns.values()):
+        r.fail("[output] columns", "must be a table of column = \"quantity\" (e.g. theta_h = "
+               "\"angle(hub_joint)\")")
+    if not columns:
+        r.fail("[output] columns", "missing (name at least one output)")
+    outputs = tuple(Output(c, q) for c, q in columns.items())
+    output_file = r.string("[output]", out, "file", default="") or None
+    given = {opt: data.get(key.split(".")[0], {}).get(key.split(".")[1]) for key, opt in _RUN_KEYS.items()}
+    system = System(name, bodies, joints, drivers, loads, outputs, description=description)
+    return system, given, output_file
+
+
+def _markers(r, where, tab, beam: bool) -> tuple[Marker, ...]:
+    given = tab.get("markers", {})
+    if not isinstance(given, dict):
+        r.fail(f"{where} markers", "must be a table of name = " + ("x (m)" if beam else "[x, y] (m)"))
+    out = []
+    for name, pos in given.items():
+        if beam:
+            x = r.number(f"{where} markers", given, name)
+            out.append(Marker(name, x))
+        else:
+            out.append(Marker(name, *r.pair(f"{where} markers", given, name)))
+    return tuple(out)
+
+
+def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path):
+    where = _label("body", k, tab)
+    kind = tab.get("kind")
+    if kind not in ("rigid", "beam"):
+        r.fail(f"{where} kind", f"must be \"rigid\" or \"beam\" (got {kind!r})")
+    r.table(where, tab, KEYS[kind])
+    name = r.string(where, tab, "name")
+    if kind == "rigid":
+        return RigidBody(name, r.number(where, tab, "mass"), r.number(where, tab, "inertia"),
+                         r.pair(where, tab, "com", default=(0.0, 0.0)), _markers(r, where, tab, False))
+    spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
+                  "--model" if model is not None else None)
+    markers = _markers(r, where, tab, True)
+    if "segments" not in tab and "folder" not in tab:
+        extra = [key for key in FE_KEYS if key in tab]
+        if extra:
+            r.fail(f"{where} {extra[0]}", "applies to a beam from finite-element data only (give "
+                   "segments or folder instead of length, density, youngs_modulus, area, inertia)")
+        section = Section(*(r.number(where, tab, key, positive=True)
+                            for key in ("density", "youngs_modulus", "area", "inertia")))
+        return FlexibleBeam(name, r.number(where, tab, "length", positive=True), section, spec, markers)
+    uniform = [key for key in UNIFORM_KEYS if key in tab]
+    if uniform:
+        r.fail(f"{where} {uniform[0]}", "give either length, density, youngs_modulus, area, "
+               "inertia (a uniform beam) or segments / folder (finite-element data), not both")
+    body = _fe_body(r, where, tab, base)
+    ref = body.reference
+    if spec.kind == "fe":  # ef: the body remeshed, as the one-beam scene's --model ef
+        given = tab.get("model") if model is None else None
+        n = given["elements"] if isinstance(given, dict) and "elements" in given else \
+            tab.get("ef_elements", EF_ELEMENTS)
+        mesh = body.remeshed(n)
+        spec = replace(spec, body=mesh, elements=mesh.elements)
+    else:
+        spec = replace(spec, body=body)
+    try:
+        spec.validate()
+    except SpecError as exc:
+        r.fail(f"{where} model", str(exc))
+    return FlexibleBeam(name, body.length, Section(ref.rho, ref.E, ref.A, ref.I), spec, markers)
+
+
+class _BodyData:
+    """A [[body]] entry seen as the one-beam scene's [body] table, so that its finite-element
+    data are read by the same reader (fedata.scene_body, feimport.scene_folder) with the same
+    checks; their messages name the entry instead of [body]."""
+
+    def __init__(self, r: _Items, where: str, tab: dict, base: Path):
+        self.r, self.where = r, where
+        self.data = {"body": {key: tab[key] for key in FE_KEYS if key in tab}}
+        self.path = base / "scene.toml"  # the reader takes folders relative to path.parent
+
+    def fail(self, where: str, msg: str):
+        self.r.fail(where.replace("[body]", self.where, 1), msg)
+
+    def string(self, table: str, key: str) -> str:
+        return self.r.string(f"{self.where}", self.data[table], key)
+
+
+def _fe_body(r: _Items, where: str, tab: dict, base: Path):
+    from flexsym.spec.fedata import scene_body
+    from flexsym.scenes.feimport import scene_folder
+
+    reader = _BodyData(r, where, tab, base)
+    if "folder" not in tab:
+        return scene_body(reader)
+    try:
+        return scene_folder(reader)
+    except _Located:
+        raise
+    except SpecError as exc:  # the folder's own files: the message names the file
+        r.fail(f"{where} folder", str(exc))
+
+
+def _model(r: _Items, where: str, given, flag: str | None):
+    """A deformation model: a variant name, or { variant, elements } or { strain, axial, bending },
+    either table with axial_force / moment = "constitutive" | "equilibrium"."""
+    from flexsym.spec.variant import VariantSpec, _refs, builtin, customize
+
+    where = flag or where
+    if given is None:
+        r.fail(where, "missing (a variant name such as \"m3\" or \"ef\", or a table)")
+    try:
+        if isinstance(given, str):
+            return builtin(given)
+        if not isinstance(given, dict):
+            r.fail(where, f"must be a variant name or a table (got {given!r})")
+        r.table(where, given, {"variant", "elements", "strain", "axial", "bending", "axial_force",
+                               "moment"})
+        recovery = {}
+        for key in ("axial_force", "moment"):
+            if key in given:
+                if given[key] not in ("constitutive", "equilibrium"):
+                    r.fail(f"{where} {key}", f"must be \"constitutive\" or \"equilibrium\" "
+                           f"(got {given[key]!r})")
+                recovery[key] = given[key]
+        given = {k: v for k, v in given.items() if k not in recovery}
+        if recovery:
+            base = _model(r, where, given if len(given) > 1 or "strain" in given
+                          else given.get("variant"), flag)
+            if base.kind != "modal":
+                r.fail(where, "axial_force / moment apply to modal variants only")
+            return replace(base, **recovery)
+        if "variant" in given:
+            base = builtin(r.string(where, given, "variant"))
+            if set(given) & {"strain", "axial", "bending"}:
+                r.fail(where, "give either variant or strain/axial/bending, not both")
+            if "elements" in given and base.kind != "fe":
+                r.fail(f"{where} elements", f"applies to variant = \"ef\" only, not to '{given['variant']}'")
+            return customize(base, elements=given["elements"]) if "elements" in given else base
+        if "elements" in given:
+            r.fail(f"{where} elements", "applies to variant = \"ef\" only")
+        strain = r.string(where, given, "strain")
+        axial, bending = given.get("axial", []), given.get("bending")
+        for key, val in (("axial", axial), ("bending", bending)):
+            if not isinstance(val, list) or not all(isinstance(v, str) for v in val):
+                r.fail(f"{where} {key}", f"must be a list of mode names (got {val!r})")
+        return VariantSpec("body", strain, _refs("axial", axial), _refs("bending", bending),
+                           outputs=("v_tip",)).validate()
+    except _Located:
+        raise
+    except SpecError as exc:
+        r.fail(where, str(exc))
+
+
+def _joint(r: _Items, k: int, tab: dict) -> Joint:
+    where = _label("joint", k, tab)
+    r.table(where, tab, KEYS["joint"])
+    kind = r.string(where, tab, "kind")
+    parent = r.string(where, tab, "parent")
+    point = r.pair(where, tab, "point")
+    if parent == GROUND and point is None:
+        r.fail(f"{where} point", "missing (a joint to ground needs the ground point [x, y])")
+    if parent != GROUND and point is not None:
+        r.fail(f"{where} point", "applies to a joint whose parent is \"ground\" only")
+    return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
+                 axis=r.pair(where, tab, "axis"), offset=r.number(where, tab, "offset", default=0.0),
+                 point=point or (0.0, 0.0), initial=r.number(where, tab, "initial", default=0.0))
+
+
+def _driver(r: _Items, k: int, tab: dict) -> Driver:
+    where = _label("driver", k, tab)
+    kind = tab.get("kind")
+    if kind not in ("guided", "motor"):
+        r.fail(f"{where} kind", f"must be \"guided\" or \"motor\" (got {kind!r})")
+    r.table(where, tab, KEYS[kind])
+    name, joint = r.string(where, tab, "name"), r.string(where, tab, "joint")
+    if kind == "motor":
+        laws = [key for key in ("torque", "force") if key in tab]
+        if len(laws) != 1:
+            r.fail(where, "a motor needs torque = \"...\" (revolute) or force = \"...\" (prismatic)")
+        return Driver(name, kind, joint, expression=r.string(where, tab, laws[0]))
+    if ("theta" in tab) == ("maneuver" in tab):
+        r.fail(where, "a guided driver needs maneuver = \"spin-up\" | \"constant\" or theta = \"...\"")
+    if "theta" in tab:
+        extra = sorted(set(tab) & {"omega", "duration"})
+        if extra:
+            r.fail(f"{where} {extra[0]}", "does not apply to theta = \"...\"")
+        return Driver(name, kind, joint, expression=r.string(where, tab, "theta"))
+    man = r.string(where, tab, "maneuver")
+    if man not in MANEUVERS:
+        r.fail(f"{where} maneuver", f"unknown manoeuvre '{man}' (known: {', '.join(MANEUVERS)})")
+    internal, keys = MANEUVERS[man]
+    extra = sorted(set(tab) & ({"omega", "duration"} - set(keys)))
+    if extra:
+        r.fail(f"{where} {extra[0]}", f"does not apply to maneuver '{man}'")
+    params = tuple((p, r.number(where, tab, key)) for key, p in keys.items())
+    if internal == "spin_up" and params[1][1] <= 0:
+        r.fail(f"{where} duration", f"must be > 0 (got {params[1][1]!r})")
+    return Driver(name, kind, joint, maneuver=internal, params=params)
+
+
+def _load(r: _Items, k: int, tab: dict):
+    where = _label("load", k, tab)
+    kind = tab.get("kind")
+    if kind not in ("force", "torque", "spring"):
+        r.fail(f"{where} kind", f"must be \"force\", \"torque\" or \"spring\" (got {kind!r})")
+    r.table(where, tab, KEYS[kind])
+    name = r.string(where, tab, "name", default="")
+    if kind == "force":
+        return PointForce(r.string(where, tab, "marker"), r.number(where, tab, "fx"),
+                          r.number(where, tab, "fy"), r.string(where, tab, "frame", default="ground"), name)
+    if kind == "torque":
+        return Torque(r.string(where, tab, "body"), r.string(where, tab, "torque"), name)
+    for end in ("a", "b"):
+        if r.string(where, tab, end) == GROUND:
+            r.fail(f"{where} {end}", "a spring ends on a body marker (put a marker on a body fixed "
+                   "to ground for a ground end)")
+    return SpringDamper(tab["a"], tab["b"], r.number(where, tab, "k"), r.number(where, tab, "c", default=0.0),
+                        r.number(where, tab, "l0", default=0.0), name)
+
+
+# ----- checks beyond the structure: expressions, outputs' carriers, the initial assembly --------
+def check_system(system: System, t_end: float = 20.0) -> System:
+    """System.validate, then the checks that need expressions, modes and geometry."""
+    system.validate()
+    tree = system.tree()
+    where = f"system '{system.name}'"
+    coords = {j.name: j for j in system.joints if j.has_coordinate and j.name not in tree.cut}
+    names = {"t": t}
+    for j in coords:
+        names[j] = sp.Symbol(j, real=True)
+        names[f"{j}_rate"] = sp.Symbol(f"{j}_rate", real=True)
+    for d in system.drivers:
+        label = f"{where}: driver '{d.name}'"
+        if d.kind == "motor":
+            _expression(d.expression, names, f"{label} {'torque' if coords[d.joint].kind == 'revolute' else 'force'}")
+        elif d.expression:
+            try:
+                check_theta(d.expression, t_end)
+            except SpecError as exc:
+                raise SpecError(f"{label}: {exc}") from None
+        else:
+            try:
+                man = maneuver_of(d.maneuver)
+            except SpecError as exc:
+                raise SpecError(f"{label}: {exc}") from None
+            known = {p.name for p in man.params}
+            for p, v in d.params:
+                if p not in known:
+                    raise SpecError(f"{label}: parameter '{p}' does not apply to manoeuvre "
+                                    f"'{d.maneuver}' (known: {', '.join(sorted(known)) or 'none'})")
+                if not v > 0 and p == "ts":
+                    raise SpecError(f"{label}: parameter ts = {v!r} must be > 0")
+    for load in system.loads:
+        if isinstance(load, Torque):
+            _expression(load.expression, names, f"{where}: load {load.name or 'torque'} torque")
+    for o in system.outputs:
+        _carried(system, o)
+    check_assembly(system)
+    return system
+
+
+def _expression(text: str, names: dict, label: str) -> sp.Expr:
+    if not isinstance(text, str):
+        raise SpecError(f"{label}: must be a string (got {text!r})")
+    return parse_expression(text, tuple(names.items()), label)
+
+
+def _carried(system: System, o: Output) -> None:
+    """A beam output that no mode of the body's model can make non-zero is refused."""
+    fn, args = parse_output(system, o.quantity)
+    if fn not in ("v", "u", "w", "N", "M"):
+        return
+    beam = system.body(args[0])
+    model = beam.model
+    where = f"system '{system.name}': output {o.column} = '{o.quantity}'"
+    x = beam_station(system, beam, args[1], where)
+    if fn == "w" and x in (0.0, beam.length):
+        raise SpecError(f"{where}: the distance from the chord is zero at the beam's ends by definition")
+    if model.kind != "modal":
+        return  # finite elements carry every field
+    s = sp.nsimplify(x / beam.length, rational=True) if 0 < x < beam.length else sp.Integer(int(x > 0))
+    from flexsym.spec.output_names import axial_force_available
+
+    if fn in ("v", "w", "M"):
+        order = 2 if fn == "M" else 0
+        if all(float(model.mode(m).value_at(order, s)) == 0 for m in model.bending):
+            what = "curvature" if fn == "M" else "deflection"
+            raise SpecError(f"{where}: no bending mode of model '{model.name}' has {what} at "
+                            f"x = {x:g} m, so the output would be identically zero")
+    elif fn == "N" and not axial_force_available(model):
+        raise SpecError(f"{where}: model '{model.name}' (strain {model.strain}) has no axial mode to "
+                        "carry N (choose a model with axial modes, e.g. m2)")
+    elif fn == "u" and not model.axial and model.strain != "foreshortening":
+        raise SpecError(f"{where}: model '{model.name}' has no axial mode and no foreshortening, so u "
+                        "would be identically zero")
+
+
+def _rot(phi):
+    c, s = math.cos(phi), math.sin(phi)
+    return lambda v: (c * v[0] - s * v[1], s * v[0] + c * v[1])
+
+
+def initial_poses(system: System) -> dict:
+    """Each body's frame (X, Y, angle) at t = 0 from its tree joint: undeformed beams, joint
+    coordinates at `initial` (a guided joint: theta(0))."""
+    theta0 = {}
+    for d in system.drivers:
+        if d.kind == "guided":
+            expr = maneuver_of(d.maneuver).theta.subs({sp.Symbol(k, positive=True): v for k, v in d.params}) \
+                if d.maneuver else check_theta(d.expression)
+            theta0[d.joint] = float(expr.subs(t, 0))
+    poses = {GROUND: (0.0, 0.0, 0.0)}
+    tree = system.tree()
+    for body in tree.order:
+        j = system.joint(tree.joint_of(body))
+        p = _world(system, poses, j.parent, j.point)
+        phi_p = poses[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0.0
+        q = theta0.get(j.name, j.initial)
+        phi = phi_p + j.offset + (q if j.kind == "revolute" else 0.0)
+        if j.kind == "prismatic":
+            n = math.hypot(*j.axis)
+            ax = _rot(phi_p)((j.axis[0] / n, j.axis[1] / n))
+            p = (p[0] + q * ax[0], p[1] + q * ax[1])
+        m = _rot(phi)(_local(system, j.child))
+        poses[body] = (p[0] - m[0], p[1] - m[1], phi)
+    return poses
+
+
+def _local(system, ref):
+    m = system.marker(ref)[1]
+    return (m.x, m.y)
+
+
+def _world(system, poses, ref, point=(0.0, 0.0)):
+    if ref == GROUND:
+        return point
+    X, Y, phi = poses[ref.partition(".")[0]]
+    m = _rot(phi)(_local(system, ref))
+    return (X + m[0], Y + m[1])
+
+
+def length_scale(system: System, poses: dict) -> float:
+    """The mechanism's size: the largest distance between two markers (or ground points) at
+    t = 0, at least the longest beam."""
+    pts = [_world(system, poses, f"{b.name}.{m.name}") for b in system.bodies for m in b.all_markers]
+    pts += [j.point for j in system.joints if j.parent == GROUND]
+    size = max((math.dist(a, b) for a in pts for b in pts), default=0.0)
+    return max([size] + [b.length for b in system.bodies if b.flexible]) or 1.0
+
+
+def check_assembly(system: System) -> dict:
+    """Refuse a cut joint that does not close at t = 0 (see ASSEMBLY_TOL); returns the poses."""
+    poses = initial_poses(system)
+    scale = length_scale(system, poses)
+    for name in system.tree().cut:
+        j = system.joint(name)
+        a = _world(system, poses, j.parent, j.point)
+        b = _world(system, poses, j.child)
+        phi_a = poses[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0.0
+        dphi = math.remainder(poses[j.child.partition(".")[0]][2] - phi_a - j.offset, 2 * math.pi)
+        gap = (b[0] - a[0], b[1] - a[1])
+        if j.kind == "prismatic":  # only the distance across the axis must vanish
+            n = _rot(phi_a)((j.axis[0] / math.hypot(*j.axis), j.axis[1] / math.hypot(*j.axis)))
+            miss = abs(gap[0] * n[1] - gap[1] * n[0])
+        else:
+            miss = math.hypot(*gap)
+        where = f"system '{system.name}': joint '{name}' (cut joint, closes a loop)"
+        if miss > ASSEMBLY_TOL * scale:
+            raise SpecError(f"{where}: cannot close at t = 0: its markers '{j.parent}' at "
+                            f"({a[0]:.6g}, {a[1]:.6g}) and '{j.child}' at ({b[0]:.6g}, {b[1]:.6g}) are "
+                            f"{miss:.4g} m apart (tolerance {ASSEMBLY_TOL:g} x the mechanism's size "
+                            f"{scale:.4g} m); fix the geometry or the joints' initial values")
+        if j.kind != "revolute" and abs(dphi) > ASSEMBLY_TOL:
+            raise SpecError(f"{where}: cannot close at t = 0: the frames' angles differ by {dphi:.4g} rad "
+                            f"(tolerance {ASSEMBLY_TOL:g} rad)")
+    return poses
+
+
+# ----- the scene ------------------------------------------------------------------------------
+def load_system_scene(path: Path, data: dict, name: str, model: str | None = None) -> SystemScene:
+    """A system scene, checked completely (path names the file in every message); name: the
+    system's name when the scene gives none (from the file name, as for one-beam scenes)."""
+    prefix = f"{path}: "
+    if model is not None and (not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model)):
+        raise SpecError(f"{prefix}--model: '{model}' is not a variant name")
+    system, given, output_file = system_from_data(data, prefix, name, model, Path(path).parent)
+    if model is not None:
+        system = _model_outputs(system)
+    options = validate(given, Where("scene", path))
+    try:
+        check_system(system, options.t_end)
+    except SpecError as exc:
+        raise SpecError(f"{prefix}{exc}") from None
+    return SystemScene(path, system, options, Path(output_file) if output_file else None, model)
+
+
+def _model_outputs(system: System) -> System:
+    """--model with a modal variant that has no axial mode: N comes from the axial inertial
+    forces (as for one-beam scenes), so the scene's N outputs stay available."""
+    from flexsym.spec.output_names import axial_force_available
+
+    wants_n = {parse_output(system, o.quantity)[1][0] for o in system.outputs
+               if o.quantity.strip().startswith("N(")}
+    bodies = tuple(replace(b, model=replace(b.model, axial_force="equilibrium"))
+                   if b.flexible and b.name in wants_n and b.model.kind == "modal"
+                   and not axial_force_available(b.model) else b for b in system.bodies)
+    return replace(system, bodies=bodies)
+
+
+def system_from_dict(data: dict, name: str = "system", t_end: float | None = None,
+                     base: Path = Path(".")) -> System:
+    """The Python API: the same data as a scene (a dict of lists/tables), the same checks; a
+    body's folder is relative to base."""
+    system, given, _ = system_from_data(data, "system data: ", name, base=Path(base))
+    return check_system(system, t_end if t_end is not None else validate(given).t_end)
+
+
+def summary(system: System) -> str:
+    """What `flexsym inspect SCENE --section system` prints: bodies, joints (tree or cut),
+    coordinates, drivers, loads, outputs, the initial assembly."""
+    tree = system.tree()
+    poses = initial_poses(system)
+    guided = {d.joint for d in system.drivers if d.kind == "guided"}
+    lines = [f"system '{system.name}'" + (f": {system.description}" if system.description else ""), "",
+             "bodies (frame at t = 0: X, Y [m], angle [rad]):"]
+    for b in system.bodies:
+        X, Y, phi = poses[b.name]
+        marks = ", ".join(f"{m.name} ({m.x:g}, {m.y:g})" for m in b.all_markers)
+        if b.flexible:
+            s = b.section
+            what = (f"beam L = {b.length:g} m, rho {s.rho:g}, E {s.E:g}, A {s.A:g}, I {s.I:g}; "
+                    f"model {b.model.name}")
+            if getattr(b.model, "body", None) is not None:
+                what = what.replace(", rho", ", root section rho").replace(
+                    "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
+        else:
+            what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
+        lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")
+    lines += ["", "joints (tree: one per body, from ground; cut: constraint equations):"]
+    for j in system.joints:
+        role = "cut" if j.name in tree.cut else f"tree of {dict((v, k) for k, v in tree.parent_joint)[j.name]}"
+        parent = f"ground at ({j.point[0]:g}, {j.point[1]:g})" if j.parent == GROUND else j.parent
+        axis = f", axis ({j.axis[0]:g}, {j.axis[1]:g})" if j.axis else ""
+        lines.append(f"  {j.name}: {j.kind} {parent} -> {j.child}{axis} [{role}]")
+    eqs = {"revolute": "2 (position)", "prismatic": "2 (across the axis, angle)", "clamp": "3 (position, angle)"}
+    lines.append("constraint equations: " + (", ".join(f"{n}: {eqs[system.joint(n).kind]}" for n in tree.cut)
+                                            or "none (a tree)"))
+    coords = [(j.name, j.kind) for j in system.joints if j.has_coordinate and j.name not in tree.cut]
+    free = [f"{n} ({'angle' if k == 'revolute' else 'displacement'})" for n, k in coords if n not in guided]
+    lines += ["", "joint coordinates: " + (", ".join(free) or "none")
+              + (f"; guided (known functions of t): {', '.join(sorted(guided))}" if guided else ""),
+              "elastic coordinates: " + ", ".join(
+                  f"{b.name}: {len(b.model.coordinates)} ({b.model.name})"
+                  for b in system.bodies if b.flexible) if any(b.flexible for b in system.bodies)
+              else "elastic coordinates: none"]
+    lines += ["", "drivers:"] + [
+        f"  {d.name}: {d.kind} on {d.joint}: " + (d.expression or f"{d.maneuver} "
+                                                  + ", ".join(f"{k} = {v:g}" for k, v in d.params))
+        for d in system.drivers] if system.drivers else ["", "drivers: none"]
+    lines += ["", "loads: " + (", ".join(type(x).__name__ + (f" g = {x.g}" if isinstance(x, Gravity) else "")
+                                        for x in system.loads) or "none")]
+    lines += ["", "outputs:"] + [f"  {o.column} = {o.quantity}" for o in system.outputs]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,556 @@
+"""Planar mechanisms as data: bodies, markers, joints, drivers, loads, outputs (the spec layer).
+
+A System is frozen data, validated structurally here (names, references, positive masses, a
+spanning tree) before any derivation starts; nothing here knows the physics. The derivation
+(flexsym/physics/assemble.py) reads a validated System.
+
+Formulation (relative coordinates on a spanning tree): ground is the root; every body gets
+exactly one *tree joint* (its parent), found by a breadth-first search from ground over the
+joints in file order, always from a joint's declared parent to its child; every other joint is
+a *cut joint* and becomes constraint equations. A flexible beam's tree joint must hold its root
+marker (x = 0) as the joint's child: its floating frame is the root's tangent frame (the modes
+are clamped at the root), so joints elsewhere on a flexible body are never tree joints.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field, fields
+
+from flexsym.core.errors import SpecError
+from flexsym.spec.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
+
+GROUND = "ground"
+JOINT_KINDS = ("revolute", "prismatic", "clamp")
+DRIVER_KINDS = ("guided", "motor")
+OUTPUT_FUNCTIONS = {  # name -> what its first argument names
+    "angle": "joint", "rate": "joint", "reaction": "joint", "torque": "driver",
+    "x": "marker", "y": "marker",
+    "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam",
+}
+OUTPUT_SCALARS = ("T", "V", "momentum", "violation")
+REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
+_OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
+
+
+def _finite(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _name(what: str, name) -> None:
+    if not isinstance(name, str) or not NAME_RE.match(name) or name == GROUND:
+        raise SpecError(f"{what} name {name!r}: use lower-case letters, digits and _, starting "
+                        f"with a letter (and not '{GROUND}')")
+
+
+@dataclass(frozen=True)
+class Section:
+    """A uniform beam section and material (SI)."""
+
+    rho: float
+    E: float
+    A: float
+    I: float
+
+    def check(self, where: str) -> None:
+        for key in ("rho", "E", "A", "I"):
+            v = getattr(self, key)
+            if not _finite(v) or v <= 0:
+                raise SpecError(f"{where}: section {key} = {v!r} must be a finite number > 0")
+
+
+@dataclass(frozen=True)
+class Marker:
+    """A named point, in body-local coordinates (on a beam: x along the undeformed axis, y = 0)."""
+
+    name: str
+    x: float
+    y: float = 0.0
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """mass (kg), inertia about the centre of mass (kg m^2), com and markers in the body frame."""
+
+    name: str
+    mass: float
+    inertia: float
+    com: tuple[float, float] = (0.0, 0.0)
+    markers: tuple[Marker, ...] = ()
+    flexible = False
+
+    @property
+    def all_markers(self) -> tuple[Marker, ...]:
+        return self.markers
+
+    def check(self) -> None:
+        where = f"body '{self.name}'"
+        if not _finite(self.mass) or self.mass <= 0:
+            raise SpecError(f"{where}: mass {self.mass!r} must be a finite number > 0")
+        if not _finite(self.inertia) or self.inertia <= 0:
+            raise SpecError(f"{where}: inertia {self.inertia!r} must be a finite number > 0")
+        if len(self.com) != 2 or not all(_finite(c) for c in self.com):
+            raise SpecError(f"{where}: com {self.com!r} must be two finite numbers")
+        _check_markers(where, self.markers)
+
+
+@dataclass(frozen=True)
+class FlexibleBeam:
+    """A straight beam along its frame's x axis, clamped at x = 0 in its floating frame: uniform
+    (section), or with the sections and point masses of its model's finite-element data
+    (model.body, a fedata.BeamBody; then length and section are the body's length and root
+    section, the run-time parameters that scale it).
+
+    model: the deformation model, a spec.VariantSpec (mode set + strain model) or a fe.FESpec
+    ('ef' elements); only its deformation fields are used (its manoeuvre and outputs are not).
+    Markers 'root' (x = 0) and 'tip' (x = length) always exist."""
+
+    name: str
+    length: float
+    section: Section
+    model: object
+    markers: tuple[Marker, ...] = ()
+    flexible = True
+
+    @property
+    def all_markers(self) -> tuple[Marker, ...]:
+        given = {m.name for m in self.markers}
+        implied = tuple(m for m in (Marker("root", 0.0), Marker("tip", float(self.length)))
+                        if m.name not in given)
+        return implied + self.markers
+
+    def check(self) -> None:
+        where = f"body '{self.name}'"
+        if not _finite(self.length) or self.length <= 0:
+            raise SpecError(f"{where}: length {self.length!r} must be a finite number > 0")
+        if not isinstance(self.section, Section):
+            raise SpecError(f"{where}: section must be a Section(rho, E, A, I)")
+        self.section.check(where)
+        if getattr(self.model, "kind", None) not in ("modal", "fe"):
+            raise SpecError(f"{where}: model must be a modal variant or 'ef' (got {self.model!r})")
+        _check_markers(where, self.markers)
+        for m in self.markers:
+            if m.y != 0:
+                raise SpecError(f"{where}: marker '{m.name}' has y = {m.y}; markers on a beam lie "
+                                "on its axis (y = 0)")
+            if not 0 <= m.x <= self.length:
+                raise SpecError(f"{where}: marker '{m.name}' at x = {m.x} is outside the beam "
+                                f"(0 <= x <= {self.length})")
+            if m.name in ("root", "tip") and m.x != {"root": 0.0, "tip": self.length}[m.name]:
+                raise SpecError(f"{where}: marker '{m.name}' is reserved (root is x = 0, tip is "
+                                "x = length)")
+
+
+def _check_markers(where, markers):
+    seen = set()
+    for m in markers:
+        if not isinstance(m, Marker):
+            raise SpecError(f"{where}: markers must be Marker(name, x, y)")
+        _name(f"{where}: marker", m.name)
+        if m.name in seen:
+            raise SpecError(f"{where}: duplicate marker '{m.name}'")
+        seen.add(m.name)
+        if not (_finite(m.x) and _finite(m.y)):
+            raise SpecError(f"{where}: marker '{m.name}' position must be finite numbers")
+
+
+@dataclass(frozen=True)
+class Joint:
+    """parent, child: 'body.marker', or 'ground' (then `point` is the ground point).
+
+    revolute: coordinate = relative angle, child frame angle = parent's + offset + q;
+    prismatic: coordinate = displacement along `axis` (fixed in the parent, a unit vector after
+    normalisation), child frame angle = parent's + offset; clamp: no coordinate, angle =
+    parent's + offset. `initial`: the coordinate at t = 0 (a guess when the joint closes a loop
+    elsewhere)."""
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    axis: tuple[float, float] | None = None
+    offset: float = 0.0
+    point: tuple[float, float] = (0.0, 0.0)
+    initial: float = 0.0
+
+    @property
+    def has_coordinate(self) -> bool:
+        return self.kind in ("revolute", "prismatic")
+
+
+@dataclass(frozen=True)
+class Driver:
+    """guided: the tree joint's coordinate is theta(t), a named manoeuvre (`maneuver`, with
+    `params` as (name, value) pairs) or `expression` of t; motor: a generalised force on it,
+    `expression` of t and of named joint coordinates and rates (J and J_rate)."""
+
+    name: str
+    kind: str
+    joint: str
+    expression: str = ""
+    maneuver: str = ""
+    params: tuple[tuple[str, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class Gravity:
+    g: tuple[float, float] = (0.0, -9.81)
+
+
+@dataclass(frozen=True)
+class PointForce:
+    marker: str  # "body.marker"
+    fx: float
+    fy: float
+    frame: str = "ground"  # or "body": components in the body's frame
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Torque:
+    body: str
+    expression: str
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class SpringDamper:
+    """A linear spring-damper between two points: force k (l - l0) + c l' along the line
+    (V = k (l - l0)^2 / 2; l0 = 0: V = k |r_b - r_a|^2 / 2, smooth at l = 0)."""
+
+    a: str  # "body.marker" or "ground" (at point_a)
+    b: str
+    k: float
+    c: float = 0.0
+    l0: float = 0.0
+    name: str = ""
+    point_a: tuple[float, float] = (0.0, 0.0)
+    point_b: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Output:
+    column: str
+    quantity: str
+
+
+@dataclass(frozen=True)
+class Tree:
+    """The spanning-tree decision: each body's tree joint (body -> joint name), bodies in
+    breadth-first order (parents before children), and the cut joints in file order."""
+
+    parent_joint: tuple[tuple[str, str], ...]
+    order: tuple[str, ...]
+    cut: tuple[str, ...]
+
+    def joint_of(self, body: str) -> str:
+        return dict(self.parent_joint)[body]
+
+
+@dataclass(frozen=True)
+class System:
+    name: str
+    bodies: tuple = ()
+    joints: tuple[Joint, ...] = ()
+    drivers: tuple[Driver, ...] = ()
+    loads: tuple = ()
+    outputs: tuple[Output, ...] = ()
+    params: tuple[tuple[str, float], ...] = ()
+    description: str = field(default="", compare=False)
+
+    # ----- lookups ----------------------------------------------------------------------
+    def body(self, name: str):
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise SpecError(f"system '{self.name}': unknown body '{name}'")
+
+    def joint(self, name: str) -> Joint:
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise SpecError(f"system '{self.name}': unknown joint '{name}'")
+
+    def marker(self, ref: str) -> tuple[str, Marker]:
+        """'body.marker' -> (body name, Marker)."""
+        body, _, mname = ref.partition(".")
+        b = self.body(body)
+        for m in b.all_markers:
+            if m.name == mname:
+                return body, m
+        known = ", ".join(m.name for m in b.all_markers) or "none"
+        raise SpecError(f"system '{self.name}': body '{body}' has no marker '{mname}' "
+                        f"(its markers: {known})")
+
+    def tree(self) -> Tree:
+        return spanning_tree(self)
+
+    # ----- structural validation ---------------------------------------------------------
+    def validate(self) -> "System":
+        _name("system", self.name)
+        where = f"system '{self.name}'"
+        if not self.bodies:
+            raise SpecError(f"{where}: no bodies")
+        names: dict[str, str] = {}
+        for what, items in (("body", self.bodies), ("joint", self.joints),
+                            ("driver", self.drivers)):
+            for item in items:
+                _name(f"{where}: {what}", item.name)
+                if item.name in names:
+                    raise SpecError(f"{where}: duplicate name '{item.name}' ({names[item.name]} "
+                                    f"and {what})")
+                names[item.name] = what
+        for b in self.bodies:
+            if not isinstance(b, (RigidBody, FlexibleBeam)):
+                raise SpecError(f"{where}: body {b!r} is not a RigidBody or FlexibleBeam")
+            b.check()
+        for j in self.joints:
+            self._check_joint(j)
+        connected = {r.partition(".")[0] for j in self.joints for r in (j.parent, j.child)}
+        for b in self.bodies:
+            if b.name not in connected:
+                raise SpecError(f"{where}: body '{b.name}' is connected to nothing (no joint "
+                                "names it)")
+        tree = spanning_tree(self)
+        guided = set()
+        for d in self.drivers:
+            self._check_driver(d, tree, guided)
+        for load in self.loads:
+            self._check_load(load)
+        columns = set()
+        for o in self.outputs:
+            if not isinstance(o, Output):
+                raise SpecError(f"{where}: outputs must be Output(column, quantity)")
+            if not isinstance(o.column, str) or not re.match(r"[A-Za-z][A-Za-z0-9_]{0,47}\Z",
+                                                              o.column) or o.column == "t":
+                raise SpecError(f"{where}: output column {o.column!r}: use letters, digits and _ "
+                                "(not 't')")
+            if o.column in columns:
+                raise SpecError(f"{where}: duplicate output column '{o.column}'")
+            columns.add(o.column)
+            parse_output(self, o.quantity)
+        for p in self.params:
+            if len(p) != 2 or not NAME_RE.match(str(p[0])) or not _finite(p[1]):
+                raise SpecError(f"{where}: parameter {p!r} must be (name, finite number)")
+        return self
+
+    def _check_joint(self, j: Joint) -> None:
+        where = f"system '{self.name}': joint '{j.name}'"
+        if j.kind not in JOINT_KINDS:
+            raise SpecError(f"{where}: kind '{j.kind}' is not one of {', '.join(JOINT_KINDS)}")
+        bodies = []
+        for side in ("parent", "child"):
+            ref = getattr(j, side)
+            if ref == GROUND:
+                if side == "child":
+                    raise SpecError(f"{where}: the child cannot be ground (make ground the parent)")
+                bodies.append(GROUND)
+                continue
+            if not isinstance(ref, str) or "." not in ref:
+                raise SpecError(f"{where}: {side} {ref!r} must be 'body.marker' or 'ground'")
+            body = ref.partition(".")[0]
+            if body not in {b.name for b in self.bodies}:
+                raise SpecError(f"{where}: {side} '{ref}' names an unknown body '{body}'")
+            try:
+                self.marker(ref)
+            except SpecError as exc:
+                raise SpecError(f"{where}: {side} '{ref}': {str(exc).split(': ', 1)[1]}") from None
+            bodies.append(body)
+        if bodies[0] == bodies[1]:
+            raise SpecError(f"{where}: joins body '{bodies[0]}' to itself")
+        if j.kind == "prismatic":
+            ax = j.axis
+            if ax is None or len(ax) != 2 or not all(_finite(a) for a in ax) or ax[0] == ax[1] == 0:
+                raise SpecError(f"{where}: a prismatic joint needs an axis (two finite numbers, "
+                                "not both 0) in the parent's frame")
+        elif j.axis is not None:
+            raise SpecError(f"{where}: axis applies to prismatic joints only")
+        for key in ("offset", "initial"):
+            if not _finite(getattr(j, key)):
+                raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
+        if len(j.point) != 2 or not all(_finite(c) for c in j.point):
+            raise SpecError(f"{where}: point {j.point!r} must be two finite numbers")
+
+    def _check_driver(self, d: Driver, tree: Tree, guided: set) -> None:
+        where = f"system '{self.name}': driver '{d.name}'"
+        if d.kind not in DRIVER_KINDS:
+            raise SpecError(f"{where}: kind '{d.kind}' is not one of {', '.join(DRIVER_KINDS)}")
+        if d.joint not in {j.name for j in self.joints}:
+            raise SpecError(f"{where}: joint '{d.joint}' does not exist")
+        j = self.joint(d.joint)
+        if not j.has_coordinate:
+            raise SpecError(f"{where}: joint '{d.joint}' is a {j.kind} (no coordinate to drive)")
+        if d.joint in tree.cut:
+            raise SpecError(f"{where}: joint '{d.joint}' is a cut joint (it closes a loop); drive "
+                            "a tree joint")
+        if d.joint in guided:
+            raise SpecError(f"{where}: joint '{d.joint}' already has a guided driver")
+        if d.kind == "guided":
+            if bool(d.expression) == bool(d.maneuver):
+                raise SpecError(f"{where}: a guided driver needs exactly one of maneuver or "
+                                "expression")
+            if any(x.joint == d.joint and x.kind == "motor" for x in self.drivers):
+                raise SpecError(f"{where}: joint '{d.joint}' is guided and also has a motor")
+            guided.add(d.joint)
+        else:
+            if not d.expression or d.maneuver:
+                raise SpecError(f"{where}: a motor driver needs an expression (and no maneuver)")
+        for p in d.params:
+            if len(p) != 2 or not isinstance(p[0], str) or not _finite(p[1]):
+                raise SpecError(f"{where}: parameter {p!r} must be (name, finite number)")
+
+    def _check_load(self, load) -> None:
+        where = f"system '{self.name}': load {getattr(load, 'name', '') or type(load).__name__}"
+        if isinstance(load, Gravity):
+            if len(load.g) != 2 or not all(_finite(c) for c in load.g):
+                raise SpecError(f"{where}: g {load.g!r} must be two finite numbers")
+        elif isinstance(load, PointForce):
+            self._ref(where, load.marker)
+            if not (_finite(load.fx) and _finite(load.fy)):
+                raise SpecError(f"{where}: fx, fy must be finite numbers")
+            if load.frame not in ("ground", "body"):
+                raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body'")
+        elif isinstance(load, Torque):
+            self.body(load.body)
+            if not isinstance(load.expression, str) or not load.expression.strip():
+                raise SpecError(f"{where}: empty torque expression")
+        elif isinstance(load, SpringDamper):
+            for ref in (load.a, load.b):
+                if ref != GROUND:
+                    self._ref(where, ref)
+            for key in ("k", "c", "l0"):
+                v = getattr(load, key)
+                if not _finite(v) or v < 0:
+                    raise SpecError(f"{where}: {key} {v!r} must be a finite number >= 0")
+        else:
+            raise SpecError(f"{where}: unknown load type {type(load).__name__}")
+
+    def _ref(self, where, ref):
+        if not isinstance(ref, str) or "." not in ref:
+            raise SpecError(f"{where}: {ref!r} must be 'body.marker'")
+        try:
+            return self.marker(ref)
+        except SpecError as exc:
+            raise SpecError(f"{where}: {str(exc).split(': ', 1)[1]}") from None
+
+
+def system_to_dict(system: System) -> dict:
+    """Canonical content of a system (what generated code depends on): every field, a flexible
+    body's model as its variant's to_dict()."""
+    def item(x):
+        out = {"type": type(x).__name__}
+        for f in fields(x):
+            v = getattr(x, f.name)
+            if f.name == "model":
+                v = v.to_dict()
+            elif isinstance(v, Section):
+                v = item(v)
+            elif isinstance(v, tuple):
+                v = [item(e) if hasattr(e, "__dataclass_fields__") else
+                     (list(e) if isinstance(e, tuple) else e) for e in v]
+            out[f.name] = v
+        return out
+    d = item(system)
+    d.pop("description", None)
+    return d
+
+
+def spanning_tree(system: System) -> Tree:
+    """Breadth-first search from ground over the joints in file order (see the module doc)."""
+    where = f"system '{system.name}'"
+    parent_of = {}
+    order = []
+    queue = [GROUND]
+    seen = {GROUND}
+    while queue:
+        here = queue.pop(0)
+        for j in system.joints:
+            pbody = j.parent.partition(".")[0] if j.parent != GROUND else GROUND
+            cbody = j.child.partition(".")[0]
+            if pbody != here or cbody in seen:
+                continue
+            child = system.body(cbody)
+            if child.flexible and system.marker(j.child)[1].x != 0:
+                continue  # a flexible body hangs from its root only
+            parent_of[cbody] = j.name
+            order.append(cbody)
+            seen.add(cbody)
+            queue.append(cbody)
+    for b in system.bodies:
+        if b.name not in seen:
+            if b.flexible:
+                raise SpecError(f"{where}: flexible body '{b.name}' is not reached from ground by "
+                                f"a joint whose child is '{b.name}.root' (its floating frame is "
+                                "the root's; attach it there, parent side towards ground)")
+            raise SpecError(f"{where}: body '{b.name}' is not connected to ground through joints "
+                            "(parent side towards ground)")
+    tree_joints = set(parent_of.values())
+    cut = tuple(j.name for j in system.joints if j.name not in tree_joints)
+    return Tree(tuple(parent_of.items()), tuple(order), cut)
+
+
+def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
+    """'fn(a, b)' or a scalar name -> (fn, args), checking that the names exist."""
+    where = f"system '{system.name}': output '{quantity}'"
+    m = _OUTPUT_RE.match(quantity) if isinstance(quantity, str) else None
+    if not m:
+        raise SpecError(f"{where}: not of the form name(args)")
+    fn, argtext = m.group(1), m.group(2)
+    if argtext is None:
+        if fn not in OUTPUT_SCALARS:
+            raise SpecError(f"{where}: unknown quantity (known: {', '.join(OUTPUT_SCALARS)}, "
+                            f"{', '.join(f + '(...)' for f in OUTPUT_FUNCTIONS)})")
+        return fn, ()
+    if fn not in OUTPUT_FUNCTIONS:
+        raise SpecError(f"{where}: unknown function '{fn}' (known: {', '.join(OUTPUT_FUNCTIONS)})")
+    args = tuple(a.strip() for a in argtext.split(","))
+    kind = OUTPUT_FUNCTIONS[fn]
+    if kind == "joint":
+        if fn == "reaction":
+            if (len(args) != 2 or args[0] not in {j.name for j in system.joints}
+                    or args[1] not in REACTION_COMPONENTS):
+                raise SpecError(f"{where}: needs (joint, component) with component one of "
+                                f"{', '.join(REACTION_COMPONENTS)}")
+        elif len(args) != 1 or args[0] not in {j.name for j in system.joints}:
+            raise SpecError(f"{where}: needs one joint name")
+        if fn in ("angle", "rate") and not system.joint(args[0]).has_coordinate:
+            raise SpecError(f"{where}: joint '{args[0]}' has no coordinate")
+    elif kind == "driver":
+        if len(args) != 1 or args[0] not in {d.name for d in system.drivers}:
+            raise SpecError(f"{where}: needs one driver name")
+    elif kind == "marker":
+        if len(args) != 1 or "." not in args[0]:
+            raise SpecError(f"{where}: needs one 'body.marker'")
+        system._ref(where, args[0])
+    else:
+        if len(args) != 2:
+            raise SpecError(f"{where}: needs (beam, x) with x a marker name or a position in m")
+        b = system.body(args[0]) if args[0] in {b.name for b in system.bodies} else None
+        if b is None or not b.flexible:
+            raise SpecError(f"{where}: '{args[0]}' is not a flexible body")
+        beam_station(system, b, args[1], where)
+    return fn, args
+
+
+def beam_station(system: System, beam: FlexibleBeam, text: str, where: str) -> float:
+    """A station on a beam: a marker name or a number (m), 0 <= x <= length."""
+    for m in beam.all_markers:
+        if m.name == text:
+            return float(m.x)
+    try:
+        x = float(text)
+    except ValueError:
+        raise SpecError(f"{where}: '{text}' is neither a marker of '{beam.name}' nor a number") from None
+    if not (math.isfinite(x) and 0 <= x <= beam.length):
+        raise SpecError(f"{where}: x = {text} is outside 0..{beam.length}")
+    return x
+
+
+def length_scale(system: System) -> float:
+    """The mechanism's size: the largest beam length, rigid marker distance from its body's
+    origin, or ground joint point distance from the origin (tolerances, blow-up and the
+    violation output use it)."""
+    sizes = [b.length for b in system.bodies if b.flexible]
+    sizes += [abs(complex(m.x, m.y)) for b in system.bodies if not b.flexible for m in b.markers]
+    sizes += [abs(complex(*j.point)) for j in system.joints if j.parent == "ground"]
+    return max([x for x in sizes if x > 0] or [1.0])

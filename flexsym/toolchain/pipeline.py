@@ -1,0 +1,100 @@
+"""Resolve a variant or a system to a current generated folder and a build, regenerating only
+when needed."""
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from pathlib import Path
+
+from flexsym.toolchain.build import Built, build
+from flexsym.codegen.generate import MANIFEST, check_folder, fingerprint, generate, write_folder
+from flexsym.codegen.sysgen import fingerprint as system_fingerprint
+from flexsym.codegen.sysgen import generate_system_files
+from flexsym.core.paths import cache_dir, file_lock, generated_dir
+from flexsym.spec.system import System
+from flexsym.spec.variant import BUILTIN, VariantSpec
+from flexsym.toolchain.run import check_options, run_built
+
+
+def is_builtin(spec: VariantSpec) -> bool:
+    return any(spec == b for b in BUILTIN)
+
+
+def checked_in_folder(spec: VariantSpec) -> Path:
+    return generated_dir() / spec.name
+
+
+def cache_folder(spec: VariantSpec) -> Path:
+    return cache_dir() / "variants" / f"{spec.name}-{fingerprint(spec)[:12]}"
+
+
+def generated_folder(spec: VariantSpec, log=None) -> Path:
+    """A folder with current generated code for spec: the checked-in one when it is current,
+    else one in the cache (generated now if needed). Checked-in files are never rewritten
+    here; `flexsym generate` does that."""
+    log = log or (lambda msg: print(msg, file=sys.stderr))
+    if is_builtin(spec):
+        folder = checked_in_folder(spec)
+        why = check_folder(spec, folder)
+        if why is None:
+            return folder
+        log(f"flexsym: checked-in code not used: {why}")
+    folder = cache_folder(spec)
+    if check_folder(spec, folder) is not None:
+        with file_lock(folder.parent / f".{folder.name}.lock"):
+            if check_folder(spec, folder) is not None:  # not done meanwhile by another process
+                log(f"flexsym: generating variant '{spec.name}' into {folder}")
+                generate(spec, folder)
+    return folder
+
+
+def prepare(spec: VariantSpec, log=None) -> Built:
+    return build(generated_folder(spec, log))
+
+
+def compiled(spec: VariantSpec, log=None):
+    """The built variant's kernels, callable from Python (see native.py)."""
+    from flexsym.toolchain.native import CompiledModel
+
+    folder = generated_folder(spec, log)
+    return CompiledModel(build(folder), folder)
+
+
+def system_folder(system: System) -> Path:
+    return cache_dir() / "systems" / f"{system.name}-{system_fingerprint(system)[:12]}"
+
+
+def _current(folder: Path, fp: str) -> bool:
+    try:
+        manifest = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    if manifest.get("fingerprint") != fp:
+        return False
+    for name, digest in manifest.get("files", {}).items():
+        try:
+            if hashlib.sha256((folder / name).read_bytes()).hexdigest() != digest:
+                return False
+        except OSError:
+            return False
+    return True
+
+
+def prepare_system(system: System) -> Built:
+    """Generate (when not current) and build a system; returns the build (run with run_built)."""
+    system.validate()
+    folder = system_folder(system)
+    fp = system_fingerprint(system)
+    if not _current(folder, fp):
+        with file_lock(folder.parent / f".{folder.name}.lock"):
+            if not _current(folder, fp):
+                write_folder(generate_system_files(system), folder)
+    return build(folder)
+
+
+def run_system(system: System, out: Path | None = None, **options):
+    """Generate, build and run a system: run.run_built's options (t_end, dt, integrator,
+    params, ...), checked against the option table before any work."""
+    opts = check_options(**options)
+    return run_built(prepare_system(system), opts, out=out)
