@@ -146,6 +146,7 @@ class _Loops:
 
     def __init__(self, system: System, scale: float):
         tree = system.tree()
+        self.order = [j.name for j in system.joints]
         self.joints = [system.joint(tree.joint_of(b)) for b in tree.order]
         self.joints = [j for j in self.joints if j.has_coordinate]
         self.unit = np.array([scale if j.kind == "prismatic" else 1.0 for j in self.joints])
@@ -263,8 +264,9 @@ def _random(loops: _Loops, k: int) -> np.ndarray:
 
 
 def _names(loops: _Loops, mask) -> str:
-    names = [j.name for j, m in zip(loops.joints, mask) if m]
-    return ", ".join(names) if names else "none"
+    """The joints of the masked coordinates, in the file's order."""
+    names = {j.name for j, m in zip(loops.joints, mask) if m}
+    return ", ".join(n for n in loops.order if n in names) or "none"
 
 
 def _cannot_close(system, loops, x, fixed, scale):
