@@ -178,7 +178,21 @@ def test_velocity_analysis_gives_the_rigid_joint_rates(tmp_path):
     rates = {j.name: j.rate for j in scene.system.joints}
     assert rates["coupler_pin"] == pytest.approx(10.0 * (b1 - b0) / (2 * h), rel=1e-8)
     assert rates["rocker_joint"] == pytest.approx(10.0 * (g1 - g0) / (2 * h), rel=1e-8)
-    assert "joint rocker_joint rate set" in scene.assembly.line()
+    assert "joint rocker_joint rate set to" in scene.assembly.line()
+    # the run starts with these rates and a coupler at rest in its frame: T(0) is the rigid
+    # four-bar's (crank and rocker about their pivots, the coupler as a rigid bar; an elastic
+    # rate would add to it) and V(0) = 0
+    (tmp_path / "c.toml").write_text(text.replace("t_end = 0.3", "t_end = 0.01").replace(
+        "interval = 0.001", "interval = 0.001\nenergy = true"))
+    assert main(["run", str(tmp_path / "c.toml"), "--out", str(tmp_path / "c.csv")]) == 0
+    first = np.genfromtxt(tmp_path / "c.csv", delimiter=",", names=True)[0]
+    beta, gamma = closing_angles(0.0)
+    rate = 10.0 + rates["coupler_pin"]  # the coupler's absolute angle rate
+    mass = 7850.0 * 5.026548245743669e-05 * COUPLER
+    vg = (-rate * COUPLER / 2 * math.sin(beta), 10.0 * CRANK + rate * COUPLER / 2 * math.cos(beta))
+    T = (0.5 * (1.0e-4 + 0.1 * 0.05**2) * 10.0**2 + 0.5 * (1.5e-3 + 0.2 * 0.15**2) * rates["rocker_joint"]**2
+         + 0.5 * mass * (vg[0]**2 + vg[1]**2) + 0.5 * mass * COUPLER**2 / 12 * rate**2)
+    assert first["T"] == pytest.approx(T, rel=1e-12) and first["V"] == 0.0
     # a rate given for the rocker fixes it: the loop then cannot take the crank's 10 rad/s
     (tmp_path / "c.toml").write_text(text.replace("initial = 1.9552 ", "initial = { value = 1.9552, rate = 0.0 } "))
     with pytest.raises(SpecError, match="rates at t = 0 cannot satisfy the loops: crank_joint, rocker_joint are given"):

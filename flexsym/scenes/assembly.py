@@ -58,7 +58,7 @@ class Assembly:
         if not (self.moved or self.rates):
             return None
         parts = [f"joint {n} moved {b - a:+.3g} {u} to {b:.10g}" for n, u, a, b in self.moved]
-        parts += [f"joint {n} rate set {b - a:+.3g} {u}/s to {b:.10g}" for n, u, a, b in self.rates]
+        parts += [f"joint {n} rate set to {b:.10g} {u}/s (from {a:g})" for n, u, a, b in self.rates]
         tol = newton_tol * self.scale
         strain = ("below the runtime's tolerance {:.2g} m: elastic coordinates 0 at t = 0, no "
                   "initial strain energy" if self.residual <= tol else "ABOVE the runtime's "
