@@ -197,3 +197,21 @@ def test_velocity_analysis_gives_the_rigid_joint_rates(tmp_path):
     (tmp_path / "c.toml").write_text(text.replace("initial = 1.9552 ", "initial = { value = 1.9552, rate = 0.0 } "))
     with pytest.raises(SpecError, match="rates at t = 0 cannot satisfy the loops: crank_joint, rocker_joint are given"):
         load_scene(tmp_path / "c.toml")
+
+
+def test_a_loop_without_joint_coordinates():
+    """A beam clamped to ground with its tip pinned to ground: nothing to move. Closed, it is a
+    statically indeterminate structure (not singular: its Jacobian has no column anywhere);
+    0.1 mm off, it would start pre-stressed: refused."""
+    from flexsym.scenes.system_scene import system_from_dict
+
+    data = {"body": [{"name": "b", "kind": "beam", "length": 1.0, "density": 7800.0, "youngs_modulus": 2e11,
+                      "area": 1e-4, "inertia": 1e-9, "model": "m2"}],
+            "joint": [{"name": "c", "kind": "clamp", "parent": "ground", "point": [0.0, 0.0], "child": "b.root"},
+                      {"name": "p", "kind": "revolute", "parent": "ground", "point": [1.0, 0.0], "child": "b.tip"}],
+            "output": {"columns": {"N": "N(b, root)"}}}
+    assert system_from_dict(data, "cc").joints[1].point == (1.0, 0.0)
+    data["joint"][1]["point"] = [1.0001, 0.0]
+    with pytest.raises(SpecError, match="joint 'p' .*cannot close at t = 0: 'ground' and 'b.tip' stay "
+                                        "0.0001 m apart at best, with no joint coordinate to move"):
+        system_from_dict(data, "cc")

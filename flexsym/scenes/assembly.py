@@ -157,12 +157,15 @@ class _Loops:
         self.lengths = [length for _, _, length in rows]
         phi = sp.Matrix([e / scale if length else e for _, e, length in rows])
         self._phi = sp.lambdify([x], phi, "numpy")
-        self._jac = sp.lambdify([x], phi.jacobian(x), "numpy")
+        self._jac = sp.lambdify([x], phi.jacobian(x), "numpy") if x else None
 
     def phi(self, x):
         return np.asarray(self._phi(x), dtype=float).reshape(-1)
 
     def jac(self, x):
+        """(rows x coordinates); no coordinates (a loop through clamps only): rows x 0."""
+        if self._jac is None:
+            return np.zeros((len(self.names), 0))
         return np.asarray(self._jac(x), dtype=float).reshape(len(self.names), len(x))
 
 
@@ -275,11 +278,12 @@ def _cannot_close(system, loops, x, fixed, scale):
     name = loops.names[worst]
     j = system.joint(name)
     what = f"{abs(r[worst]) * scale:.4g} m" if loops.lengths[worst] else f"{abs(r[worst]):.4g} rad"
+    how = (f"moving the free joint coordinates ({_names(loops, ~fixed)}; fixed: {_names(loops, fixed)})"
+           if loops.joints else "with no joint coordinate to move")
     raise SpecError(f"system '{system.name}': joint '{name}' (cut joint, closes a loop): cannot close "
-                    f"at t = 0: '{j.parent}' and '{j.child}' stay {what} apart at best, moving the "
-                    f"free joint coordinates ({_names(loops, ~fixed)}; fixed: "
-                    f"{_names(loops, fixed)}) with undeformed bodies; fix the geometry, the "
-                    "fixed values, or give initial guesses nearer the closed position")
+                    f"at t = 0: '{j.parent}' and '{j.child}' stay {what} apart at best, {how} with "
+                    "undeformed bodies; fix the geometry, the fixed values, or give initial guesses "
+                    "nearer the closed position")
 
 
 def _singular(system, loops, jac, free, rank):
