@@ -14,7 +14,7 @@ from flexsym.apps.cli import main
 from flexsym.core.errors import SpecError
 from flexsym.scenes.scene import load_scene
 from flexsym.spec.variant import builtin
-from flexsym.scenes.system_scene import ASSEMBLY_TOL, check_assembly, system_from_dict
+from flexsym.scenes.system_scene import check_assembly, initial_poses, system_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -52,23 +52,29 @@ def test_scene_columns_rows_and_model_override():
 
 
 def test_initial_assembly_and_tolerance():
-    """The slider-crank closes at t = 0 (rod from (0.15, 0) to (0.45, 0)); a slider 1 mm off
-    (0.33 % of the 0.45 m mechanism) is beyond ASSEMBLY_TOL and refused, 0.1 mm is accepted."""
+    """The slider-crank closes at t = 0 (rod from (0.15, 0) to (0.45, 0)): nothing moves. A
+    slider guess 1 mm or 5 cm off is moved back to 0.45 (the assembly on the joint coordinates,
+    flexsym/scenes/assembly.py); the same value fixed cannot close and is refused."""
     scene = load_scene(SCENES / "slider_crank.toml")
-    poses = check_assembly(scene.system)
+    system, report = check_assembly(scene.system)
+    assert system == scene.system and report.line() is None
+    poses = initial_poses(system)
     assert poses["rod"] == pytest.approx((0.15, 0.0, 0.0)) and poses["slider"] == pytest.approx((0.45, 0, 0))
     from dataclasses import replace
 
-    for shift, ok in ((1e-4, True), (1e-3, False)):
-        joints = tuple(replace(j, initial=0.45 + shift) if j.name == "slide" else j
-                       for j in scene.system.joints)
-        system = replace(scene.system, joints=joints)
-        if ok:
-            check_assembly(system)
-        else:
-            with pytest.raises(SpecError, match="slider_pin.*cannot close at t = 0"):
-                check_assembly(system)
-    assert ASSEMBLY_TOL == 1e-3
+    for shift in (1e-3, -0.05):
+        for fixed in (False, True):
+            joints = tuple(replace(j, initial=0.45 + shift, fixed=fixed) if j.name == "slide" else j
+                           for j in scene.system.joints)
+            moved = replace(scene.system, joints=joints)
+            if fixed:
+                with pytest.raises(SpecError, match="slider_pin.*cannot close at t = 0"):
+                    check_assembly(moved)
+                continue
+            system, report = check_assembly(moved)
+            assert system.joint("slide").initial == pytest.approx(0.45, abs=1e-15)
+            assert system.joint("crank_pin").initial == 0.0  # the minimum-norm correction
+            assert f"joint slide moved {-shift:+.3g} m" in report.line()
 
 
 def test_python_api_dict_uses_the_same_checks():
@@ -76,7 +82,7 @@ def test_python_api_dict_uses_the_same_checks():
 
     data = tomllib.loads(BASE)
     assert system_from_dict(data, "slider_crank") == load_scene(SCENES / "slider_crank.toml").system
-    data["joint"][2]["initial"] = 0.3
+    data["joint"][2]["initial"] = {"value": 0.3, "fixed": True}
     with pytest.raises(SpecError, match="joint 'slider_pin'.*cannot close"):
         system_from_dict(data, "slider_crank")
 
@@ -97,7 +103,7 @@ MALFORMED = [
      "body 'wheel' is connected to nothing"),
     ("driver_unknown_joint", 'joint = "crank_joint"', 'joint = "crank_axle"', "driver 'crank_drive': joint 'crank_axle' does not exist"),
     ("driver_on_cut_joint", 'joint = "crank_joint"', 'joint = "slider_pin"', "driver 'crank_drive': joint 'slider_pin' is a cut joint"),
-    ("loop_cannot_close", "initial = 0.45", "initial = 0.40", "joint 'slider_pin' (cut joint, closes a loop): cannot close at t = 0"),
+    ("loop_cannot_close", "initial = 0.45", "initial = { value = 0.40, fixed = true }", "joint 'slider_pin' (cut joint, closes a loop): cannot close at t = 0"),
     ("zero_mass", "mass = 0.1 ", "mass = 0.0 ", "body 'crank': mass 0.0 must be a finite number > 0"),
     ("negative_inertia", "inertia = 1.0e-6 ", "inertia = -1.0e-6 ", "body 'slider': inertia -1e-06"),
     ("negative_section", "area = 2.8274333882308137e-5", "area = -1.0", "[[body]] 'rod' area: must be > 0"),
@@ -245,8 +251,8 @@ def test_api_system_checks_python_systems_like_scenes():
 
 def test_run_flags_and_other_commands_refuse_system_scenes(tmp_path, capsys):
     scene = str(SCENES / "pendulum.toml")
-    assert main(["run", scene, "--dt", "1e-3"]) == 2
-    assert "pendulum.toml: --dt given with a scene file: set [solver] dt in the scene" in capsys.readouterr().err
+    assert main(["run", scene, "--dt=-1e-3"]) == 2
+    assert "pendulum.toml: --dt: must be > 0 (got -0.001)" in capsys.readouterr().err
     assert main(["build", scene]) == 2
     assert "a system scene ([[body]] entries)" in capsys.readouterr().err
     (tmp_path / "s.toml").write_text('[system]\nname = "x"\n')

@@ -239,11 +239,17 @@ def test_bad_scene_is_refused(capsys, workdir, old, new, fragment):
     assert line.count("s.toml") == 1, "the file is named once"
 
 
-def test_run_options_with_a_scene_name_the_scene_key(capsys, workdir):
+def test_run_options_with_a_scene_name_the_flag_and_the_scene_key(capsys, workdir):
+    """Command-line run options replace a scene's (tests/test_assembly.py runs them); a bad one
+    is refused before any work, named as given, the scene's own values as the scene's keys."""
     (workdir / "s.toml").write_text(SCENE)
-    refused(capsys, workdir, ["run", "s.toml", "--dt", "0.01"],
-            "s.toml: --dt given with a scene file: set [solver] dt in the scene")
-    refused(capsys, workdir, ["run", "s.toml", "--repeat", "3"], "it does not combine with a scene file")
+    refused(capsys, workdir, ["run", "s.toml", "--dt", "-0.01"], "s.toml: --dt: must be > 0 (got -0.01)")
+    refused(capsys, workdir, ["run", "s.toml", "--dt", "2"],
+            "s.toml: --dt: 2 s is larger than [solver] t_end = 1 s")
+    refused(capsys, workdir, ["run", "s.toml", "--newmark-beta", "0.3"],
+            "s.toml: --newmark-beta: applies to newmark, not to integrator genalpha")
+    refused(capsys, workdir, ["run", "s.toml", "--param", "L=3"],
+            "s.toml: --param given with a scene file: it does not combine with a scene file")
 
 
 API_BAD = [

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import compiled, generated_folder, prepare
-from flexsym.spec.options import API, validate
+from flexsym.spec.options import API, RUNTIME_DEFAULTS, validate
 from flexsym.toolchain.run import RunResult, check_output_path, run_built
 from flexsym.scenes.scene import Scene, load_scene
 from flexsym.spec.variant import builtin
@@ -58,12 +58,13 @@ def kernels(target):
 def system(data, name: str = "system", t_end: float | None = None):
     """A System from the data of a system scene as a dict ({"body": [...], "joint": [...],
     "driver": [...], "output": {"columns": {...}}, ...}), or a System built in Python (e.g. by
-    flexsym.spec.library): checked exactly as a scene file is (one line per problem)."""
+    flexsym.spec.library): checked exactly as a scene file is (one line per problem), and
+    assembled at t = 0 (flexsym/scenes/assembly.py: the joints' initial values closing the loops)."""
     from flexsym.spec.system import System
-    from flexsym.scenes.system_scene import check_system, system_from_dict
+    from flexsym.scenes.system_scene import checked_system, system_from_dict
 
     if isinstance(data, System):
-        return check_system(data, 20.0 if t_end is None else t_end)
+        return checked_system(data, 20.0 if t_end is None else t_end)[0]
     return system_from_dict(data, name, t_end)
 
 
@@ -77,7 +78,9 @@ def run(scene, out=None) -> RunResult:
     if hasattr(scene, "system"):  # a mechanism: flexsym/codegen/sysgen.py generates and builds it
         from flexsym.toolchain.pipeline import prepare_system
 
-        return run_built(prepare_system(scene.system), scene.options, out=out)
+        moved = scene.assembly.line(scene.options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
+        return run_built(prepare_system(scene.system), scene.options, out=out,
+                         header=[moved] if moved else [])
     return run_built(prepare(scene.spec), scene.options, out=out)
 
 

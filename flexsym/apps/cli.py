@@ -10,7 +10,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from flexsym.core.errors import FlexsymError, SpecError
-from flexsym.spec.options import BY_NAME, CLI, OPTIONS, Where, add_arguments, given_options, validate
+from flexsym.spec.options import (BY_NAME, CLI, OPTIONS, RUNTIME_DEFAULTS, Where, add_arguments,
+                                  given_options, validate, with_overrides)
 
 
 def _variant_args(p: argparse.ArgumentParser) -> None:
@@ -127,9 +128,16 @@ def _params(items) -> dict:
     return params
 
 
-def _run_options(args, spec, scene):
-    """Validated run options, from a scene file or from the command line (one table)."""
+def _run_options(args, spec, scene, overrides: bool = False):
+    """Validated run options, from a scene file or from the command line (one table); with
+    overrides (flexsym run), the command line's options replace the scene's."""
     given = given_options(args, RUN_OPTIONS)
+    if scene is not None and overrides and not args.param:
+        if spec is None and {"ws", "ts"} & set(given):  # a system's manoeuvres are its drivers'
+            name = sorted({"ws", "ts"} & set(given))[0]
+            raise SpecError(f"{scene.path}: --{name} given with a system scene: set the driver's "
+                            f"{'omega' if name == 'ws' else 'duration'} in the scene")
+        return with_overrides(scene.given, given, scene.path, spec) if given else scene.options
     if scene is not None:
         if given or args.param:
             name = next(iter(given), "param")
@@ -171,13 +179,13 @@ def cmd_run(args) -> int:
     spec, scene = resolve(args, systems=True)
     if spec is None:
         return _run_system(args, scene)
-    options = _run_options(args, spec, scene)
+    options = _run_options(args, spec, scene, overrides=True)
     out, plot_path = _outputs_checked(args, spec, scene)
     if options.energy and out is None:
         raise SpecError("--energy: the energy columns (T, V, h) go to the CSV file, and there is none: "
                         "give --out")
     built = prepare(spec)
-    res = run_built(built, options, out=out)
+    res = run_built(built, options, out=out, header=_options_header(args, scene, options))
     verdict = assess(spec, res, options.params)
     s = Summary(spec, res)
     ts = options.params.get("ts", options.t_end)
@@ -205,11 +213,23 @@ def cmd_run(args) -> int:
     return 0 if verdict.valid else 4
 
 
+def _options_header(args, scene, options) -> list[str]:
+    """The CSV header's record of the effective options when the command line replaced some of
+    a scene's."""
+    given = given_options(args, RUN_OPTIONS)
+    if scene is None or not given:
+        return []
+    flags = ", ".join(BY_NAME[n].flag for n in given)
+    return [f"run options: {options.describe()} (from the command line: {flags})"]
+
+
 def _run_system(args, scene) -> int:
-    """flexsym run SYSTEM_SCENE: options from the scene, --out/--plot checked before any work."""
+    """flexsym run SYSTEM_SCENE: options from the scene (some replaced by the command line's),
+    --out/--plot checked before any work; what the assembly at t = 0 moved on stderr and in
+    the CSV header."""
     from flexsym.toolchain.run import check_output_path
 
-    _run_options(args, None, scene)  # refuses run flags given with a scene file
+    options = _run_options(args, None, scene, overrides=True)
     out = None
     if args.out is not None:
         out = check_output_path(args.out, "--out")
@@ -228,10 +248,15 @@ def _run_system(args, scene) -> int:
         built = prepare_system(system)
     except SpecError as exc:  # what the derivation does not support yet, named with the file
         raise SpecError(f"{scene.path}: {exc}") from None
-    res = run_built(built, scene.options, out=out)
+    header = _options_header(args, scene, options)
+    moved = scene.assembly.line(options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
+    if moved:
+        print(f"flexsym: {scene.path}: {moved}", file=sys.stderr)
+        header.insert(0, moved)
+    res = run_built(built, options, out=out, header=header)
     status = "ok" if res.ok else f"stopped: {res.message}"
-    print(f"{system.name}: {scene.options.integrator}, dt = {scene.options.dt:g} s, t_end = "
-          f"{scene.options.t_end:g} s: {status}")
+    print(f"{system.name}: {options.integrator}, dt = {options.dt:g} s, t_end = "
+          f"{options.t_end:g} s: {status}")
     if res.written != "none":
         print(f"results{' (truncated)' if res.written == 'truncated' else ''}: {out}")
     if plot is not None and len(res.t) > 1:

@@ -55,6 +55,7 @@ class Scene:
     output_file: Path | None
     columns: dict = field(default_factory=dict)  # scene quantity -> result column
     full_spec: object = None  # the same model without the scene's reductions (for comparison)
+    given: dict = field(default_factory=dict)  # run options as the scene gives them (None: not)
 
     # the run options most callers read
     params = property(lambda self: self.options.params)
@@ -190,8 +191,9 @@ def load_scene(path, model: str | None = None):
         r.fail("[output] quantities", "is empty (leave the key out for v_tip only)")
     points, outputs, columns = _outputs(r, quantities or ["v_tip"], beam["L"])
     spec, full = _spec(r, maneuver, outputs, points, body)
-    options = validate(given | {"params": beam}, Where("scene", path), spec)
-    return Scene(path, spec, options, Path(output_file) if output_file else None, columns, full)
+    given = given | {"params": beam}
+    options = validate(given, Where("scene", path), spec)
+    return Scene(path, spec, options, Path(output_file) if output_file else None, columns, full, given)
 
 
 def _maneuver(r: _Reader) -> str:

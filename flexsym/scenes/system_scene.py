@@ -17,7 +17,8 @@ scene (flexsym/scenes/scene.py), unchanged.
     [[joint]]   name, kind = revolute | prismatic | clamp, parent = "body.marker" | "ground"
                 (then point = [x, y]), child = "body.marker", axis = [ax, ay] (prismatic, in
                 the parent's frame), offset (rad, child frame angle relative to the parent's),
-                initial (the coordinate at t = 0)
+                initial = x (a guess of the coordinate at t = 0) or { value = x, fixed = true,
+                rate = v } (fixed: never moved by the assembly; rate: the rate at t = 0)
     [[driver]]  name, kind = "guided", joint, and maneuver = "spin-up" (omega, duration) |
                 "constant" (omega) or theta = "expression of t";
                 name, kind = "motor", joint, torque (revolute) | force (prismatic) =
@@ -36,22 +37,26 @@ the TOML's types and keys here; names, references, masses, the spanning tree, dr
 loads and output names in System.validate (flexsym/spec/system.py); then check_system: every
 expression through the bounded parser of maneuver.py with only its allowed names, manoeuvre
 parameters, each requested beam output carried by some mode of the body's model, and the
-initial assembly (every cut joint closes at t = 0 within ASSEMBLY_TOL of the mechanism's size).
+assembly at t = 0 (flexsym/scenes/assembly.py: the free joint coordinates and rates are solved
+so that every cut joint closes with undeformed bodies; a loop that cannot close, or is singular
+there, is refused).
 """
 from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import sympy as sp
 
 from flexsym.core.errors import SpecError
+from flexsym.scenes.assembly import Assembly, assemble, poses, theta0
 from flexsym.spec.maneuver import check_theta, maneuver_of, parse_expression, t
 from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
 from flexsym.spec.system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
-                     RigidBody, Section, SpringDamper, System, Torque, beam_station, parse_output)
+                     RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
+                     parse_output)
 
 SYSTEM_TABLES = ("system", "body", "joint", "driver", "gravity", "load", "solver", "output")
 _ARRAYS = ("body", "joint", "driver", "load")
@@ -75,11 +80,6 @@ KEYS = {
 }
 MANEUVERS = {"spin-up": ("spin_up", {"omega": "ws", "duration": "ts"}),
              "constant": ("constant", {"omega": "ws"})}
-# A cut joint whose two markers are farther apart at t = 0 than this fraction of the
-# mechanism's size (or, for a clamp, whose frames differ by more than this angle in rad) cannot
-# be a guess the runtime's consistent-initial-condition Newton should repair: refused.
-ASSEMBLY_TOL = 1e-3
-
 
 @dataclass
 class SystemScene:
@@ -88,6 +88,8 @@ class SystemScene:
     options: RunOptions
     output_file: Path | None
     model: str | None = None  # the --model that replaced every beam's deformation model
+    assembly: Assembly = Assembly()  # what the assembly at t = 0 moved (system: assembled)
+    given: dict = field(default_factory=dict)  # run options as the scene gives them (None: not)
 
     @property
     def columns(self) -> dict:
@@ -352,9 +354,26 @@ def _joint(r: _Items, k: int, tab: dict) -> Joint:
         r.fail(f"{where} point", "missing (a joint to ground needs the ground point [x, y])")
     if parent != GROUND and point is not None:
         r.fail(f"{where} point", "applies to a joint whose parent is \"ground\" only")
+    initial, fixed, rate = _initial(r, where, tab)
     return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
                  axis=r.pair(where, tab, "axis"), offset=r.number(where, tab, "offset", default=0.0),
-                 point=point or (0.0, 0.0), initial=r.number(where, tab, "initial", default=0.0))
+                 point=point or (0.0, 0.0), initial=initial, fixed=fixed, rate=rate)
+
+
+def _initial(r: _Items, where: str, tab: dict) -> tuple[float, bool, float | None]:
+    """initial = 0.5 (a guess) or { value = 0.5, fixed = true, rate = 2.0 } (see assembly.py)."""
+    given = tab.get("initial", 0.0)
+    if not isinstance(given, dict):
+        return r.number(where, tab, "initial", default=0.0), False, None
+    at = f"{where} initial"
+    r.table(at, given, {"value", "fixed", "rate"})
+    fixed = given.get("fixed", False)
+    if not isinstance(fixed, bool):
+        r.fail(f"{at} fixed", f"must be true or false (got {fixed!r})")
+    if fixed and "value" not in given:
+        r.fail(f"{at} fixed", "fixes the value: give value = ...")
+    rate = r.number(at, given, "rate") if "rate" in given else None
+    return r.number(at, given, "value", default=0.0), fixed, rate
 
 
 def _driver(r: _Items, k: int, tab: dict) -> Driver:
@@ -411,7 +430,8 @@ def _load(r: _Items, k: int, tab: dict):
 
 # ----- checks beyond the structure: expressions, outputs' carriers, the initial assembly --------
 def check_system(system: System, t_end: float = 20.0) -> System:
-    """System.validate, then the checks that need expressions, modes and geometry."""
+    """System.validate, then the checks that need expressions and modes (checked_system adds
+    the assembly at t = 0)."""
     system.validate()
     tree = system.tree()
     where = f"system '{system.name}'"
@@ -446,8 +466,12 @@ def check_system(system: System, t_end: float = 20.0) -> System:
             _expression(load.expression, names, f"{where}: load {load.name or 'torque'} torque")
     for o in system.outputs:
         _carried(system, o)
-    check_assembly(system)
     return system
+
+
+def checked_system(system: System, t_end: float = 20.0) -> tuple[System, Assembly]:
+    """check_system, then the assembly at t = 0: (the assembled system, what moved)."""
+    return check_assembly(check_system(system, t_end))
 
 
 def _expression(text: str, names: dict, label: str) -> sp.Expr:
@@ -486,85 +510,22 @@ def _carried(system: System, o: Output) -> None:
                         "would be identically zero")
 
 
-def _rot(phi):
-    c, s = math.cos(phi), math.sin(phi)
-    return lambda v: (c * v[0] - s * v[1], s * v[0] + c * v[1])
-
-
 def initial_poses(system: System) -> dict:
     """Each body's frame (X, Y, angle) at t = 0 from its tree joint: undeformed beams, joint
     coordinates at `initial` (a guided joint: theta(0))."""
-    theta0 = {}
-    for d in system.drivers:
-        if d.kind == "guided":
-            expr = maneuver_of(d.maneuver).theta.subs({sp.Symbol(k, positive=True): v for k, v in d.params}) \
-                if d.maneuver else check_theta(d.expression)
-            theta0[d.joint] = float(expr.subs(t, 0))
-    poses = {GROUND: (0.0, 0.0, 0.0)}
-    tree = system.tree()
-    for body in tree.order:
-        j = system.joint(tree.joint_of(body))
-        p = _world(system, poses, j.parent, j.point)
-        phi_p = poses[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0.0
-        q = theta0.get(j.name, j.initial)
-        phi = phi_p + j.offset + (q if j.kind == "revolute" else 0.0)
-        if j.kind == "prismatic":
-            n = math.hypot(*j.axis)
-            ax = _rot(phi_p)((j.axis[0] / n, j.axis[1] / n))
-            p = (p[0] + q * ax[0], p[1] + q * ax[1])
-        m = _rot(phi)(_local(system, j.child))
-        poses[body] = (p[0] - m[0], p[1] - m[1], phi)
-    return poses
+    q = {j.name: j.initial for j in system.joints} | {k: v[0] for k, v in theta0(system).items()}
+    return {b: tuple(float(c) for c in pose) for b, pose in poses(system, q).items()}
 
 
-def _local(system, ref):
-    m = system.marker(ref)[1]
-    return (m.x, m.y)
-
-
-def _world(system, poses, ref, point=(0.0, 0.0)):
-    if ref == GROUND:
-        return point
-    X, Y, phi = poses[ref.partition(".")[0]]
-    m = _rot(phi)(_local(system, ref))
-    return (X + m[0], Y + m[1])
-
-
-def length_scale(system: System, poses: dict) -> float:
-    """The mechanism's size: the largest distance between two markers (or ground points) at
-    t = 0, at least the longest beam."""
-    pts = [_world(system, poses, f"{b.name}.{m.name}") for b in system.bodies for m in b.all_markers]
-    pts += [j.point for j in system.joints if j.parent == GROUND]
-    size = max((math.dist(a, b) for a in pts for b in pts), default=0.0)
-    return max([size] + [b.length for b in system.bodies if b.flexible]) or 1.0
-
-
-def check_assembly(system: System) -> dict:
-    """Refuse a cut joint that does not close at t = 0 (see ASSEMBLY_TOL); returns the poses."""
-    poses = initial_poses(system)
-    scale = length_scale(system, poses)
-    for name in system.tree().cut:
-        j = system.joint(name)
-        a = _world(system, poses, j.parent, j.point)
-        b = _world(system, poses, j.child)
-        phi_a = poses[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0.0
-        dphi = math.remainder(poses[j.child.partition(".")[0]][2] - phi_a - j.offset, 2 * math.pi)
-        gap = (b[0] - a[0], b[1] - a[1])
-        if j.kind == "prismatic":  # only the distance across the axis must vanish
-            n = _rot(phi_a)((j.axis[0] / math.hypot(*j.axis), j.axis[1] / math.hypot(*j.axis)))
-            miss = abs(gap[0] * n[1] - gap[1] * n[0])
-        else:
-            miss = math.hypot(*gap)
-        where = f"system '{system.name}': joint '{name}' (cut joint, closes a loop)"
-        if miss > ASSEMBLY_TOL * scale:
-            raise SpecError(f"{where}: cannot close at t = 0: its markers '{j.parent}' at "
-                            f"({a[0]:.6g}, {a[1]:.6g}) and '{j.child}' at ({b[0]:.6g}, {b[1]:.6g}) are "
-                            f"{miss:.4g} m apart (tolerance {ASSEMBLY_TOL:g} x the mechanism's size "
-                            f"{scale:.4g} m); fix the geometry or the joints' initial values")
-        if j.kind != "revolute" and abs(dphi) > ASSEMBLY_TOL:
-            raise SpecError(f"{where}: cannot close at t = 0: the frames' angles differ by {dphi:.4g} rad "
-                            f"(tolerance {ASSEMBLY_TOL:g} rad)")
-    return poses
+def check_assembly(system: System) -> tuple[System, Assembly]:
+    """The system assembled at t = 0 (flexsym/scenes/assembly.py: the free joint coordinates
+    and rates moved to close every cut joint with undeformed bodies) and what moved; refuses a
+    loop that cannot close or is singular there."""
+    for j in system.joints:
+        if j.name in system.tree().cut and (j.fixed or j.rate is not None):
+            raise SpecError(f"system '{system.name}': joint '{j.name}' is a cut joint (it closes a "
+                            "loop, no coordinate): fixed and rate do not apply")
+    return assemble(system, length_scale(system))
 
 
 # ----- the scene ------------------------------------------------------------------------------
@@ -579,10 +540,11 @@ def load_system_scene(path: Path, data: dict, name: str, model: str | None = Non
         system = _model_outputs(system)
     options = validate(given, Where("scene", path))
     try:
-        check_system(system, options.t_end)
+        system, assembly = checked_system(system, options.t_end)
     except SpecError as exc:
         raise SpecError(f"{prefix}{exc}") from None
-    return SystemScene(path, system, options, Path(output_file) if output_file else None, model)
+    return SystemScene(path, system, options, Path(output_file) if output_file else None, model,
+                       assembly, given)
 
 
 def _model_outputs(system: System) -> System:
@@ -603,7 +565,7 @@ def system_from_dict(data: dict, name: str = "system", t_end: float | None = Non
     """The Python API: the same data as a scene (a dict of lists/tables), the same checks; a
     body's folder is relative to base."""
     system, given, _ = system_from_data(data, "system data: ", name, base=Path(base))
-    return check_system(system, t_end if t_end is not None else validate(given).t_end)
+    return checked_system(system, t_end if t_end is not None else validate(given).t_end)[0]
 
 
 def summary(system: System) -> str:

@@ -160,10 +160,11 @@ ROW_INTERVAL = 0.01  # default time between rows [s]
 class Where:
     kind: str = "api"  # "cli" | "scene" | "api"
     path: Path | None = None
+    flags: tuple[str, ...] = ()  # a scene's options given on the command line (named as flags)
 
     def label(self, opt: Option | str) -> str:
         opt = BY_NAME[opt] if isinstance(opt, str) else opt
-        if self.kind == "cli" and opt.flag:
+        if (self.kind == "cli" or opt.name in self.flags) and opt.flag:
             return opt.flag
         if self.kind == "scene" and opt.scene:
             table, key = opt.scene.split(".")
@@ -201,6 +202,16 @@ class RunOptions:
     repeat: int = 1
     steps: int = 0  # integration steps (fixed-step methods, radau5) or output-grid points
     rows: int = 0
+
+    def describe(self) -> str:
+        """The effective options in one line (the CSV header's record of a run)."""
+        parts = [f"integrator = {self.integrator}", f"t_end = {self.t_end!r}", f"dt = {self.dt!r}",
+                 f"interval = {self.out_every * self.dt:.12g}"]
+        parts += [f"{o.name} = {getattr(self, o.name)!r}" for o in OPTIONS
+                  if o.name not in ("integrator", "t_end", "dt", "interval", "repeat")
+                  and getattr(self, o.name, None) not in (None, False)]
+        parts += [f"{k} = {v!r}" for k, v in sorted(self.params.items())]
+        return ", ".join(parts)
 
     def driver_args(self) -> list[str]:
         """The C driver's command line for these options (its flags come from the table)."""
@@ -351,6 +362,13 @@ def add_arguments(parser, names, defaults: dict | None = None) -> None:
 
 def given_options(args, names) -> dict:
     return {n: getattr(args, n) for n in names if getattr(args, n, None) is not None}
+
+
+def with_overrides(scene_given: dict, overrides: dict, path: Path, spec=None) -> RunOptions:
+    """A scene's run options with some replaced from the command line (`flexsym run SCENE --dt
+    ...`), validated once, together: a value is named as its source spells it (`--dt`, or
+    `[solver] t_end` in the scene)."""
+    return validate(scene_given | overrides, Where("scene", path, tuple(overrides)), spec)
 
 
 # ----- the C runtime's limits and defaults -----------------------------------------------------

@@ -161,8 +161,9 @@ class Joint:
     revolute: coordinate = relative angle, child frame angle = parent's + offset + q;
     prismatic: coordinate = displacement along `axis` (fixed in the parent, a unit vector after
     normalisation), child frame angle = parent's + offset; clamp: no coordinate, angle =
-    parent's + offset. `initial`: the coordinate at t = 0 (a guess when the joint closes a loop
-    elsewhere)."""
+    parent's + offset. `initial`: the coordinate at t = 0, a guess that the assembly at t = 0
+    (flexsym/scenes/assembly.py) may move to close the loops, unless `fixed`; `rate`: its rate
+    at t = 0 when given (None: 0, or what the loops need)."""
 
     name: str
     kind: str
@@ -172,6 +173,8 @@ class Joint:
     offset: float = 0.0
     point: tuple[float, float] = (0.0, 0.0)
     initial: float = 0.0
+    fixed: bool = False
+    rate: float | None = None
 
     @property
     def has_coordinate(self) -> bool:
@@ -368,6 +371,10 @@ class System:
         for key in ("offset", "initial"):
             if not _finite(getattr(j, key)):
                 raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
+        if j.rate is not None and not _finite(j.rate):
+            raise SpecError(f"{where}: rate {j.rate!r} must be a finite number")
+        if (j.fixed or j.rate is not None) and not j.has_coordinate:
+            raise SpecError(f"{where}: a {j.kind} joint has no coordinate to fix or give a rate")
         if len(j.point) != 2 or not all(_finite(c) for c in j.point):
             raise SpecError(f"{where}: point {j.point!r} must be two finite numbers")
 
@@ -391,6 +398,9 @@ class System:
                                 "expression")
             if any(x.joint == d.joint and x.kind == "motor" for x in self.drivers):
                 raise SpecError(f"{where}: joint '{d.joint}' is guided and also has a motor")
+            if j.fixed or j.rate is not None:
+                raise SpecError(f"{where}: joint '{d.joint}' is guided: its coordinate and rate at "
+                                "t = 0 are the driver's theta(0), theta'(0) (no fixed, no rate)")
             guided.add(d.joint)
         else:
             if not d.expression or d.maneuver:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import tempfile
 from dataclasses import dataclass, field
@@ -34,6 +35,7 @@ class RunResult:
     csv: Path | None = None
     options: dict = field(default_factory=dict)
     written: str = "none"  # what happened to the output file: complete | truncated | none
+    header: tuple = ()  # the CSV's comment lines (what set up the run)
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
@@ -100,8 +102,19 @@ def _driver(cmd: list[str]) -> subprocess.CompletedProcess:
     return subprocess.run(cmd, capture_output=True, text=True, env=env)
 
 
+def _with_header(csv: Path, header) -> None:
+    """Comment lines ('# ...') after the CSV's column line: what set up the run (numpy's
+    loadtxt and genfromtxt skip them; pandas needs comment='#')."""
+    tmp = csv.with_name(csv.name + ".h")
+    with open(csv, encoding="utf-8") as src, open(tmp, "w", encoding="utf-8") as dst:
+        dst.write(src.readline())
+        dst.writelines(f"# {line}\n" for line in header)
+        shutil.copyfileobj(src, dst)
+    os.replace(tmp, csv)
+
+
 def run_built(built: Built, options: RunOptions | None = None, *, out: Path | None = None,
-              raise_on_failure: bool = False, **given) -> RunResult:
+              raise_on_failure: bool = False, header=(), **given) -> RunResult:
     """Integrate with the built driver. Options are a RunOptions from `options.validate`, or
     keywords checked here against the same table (t_end, dt, integrator, params, tol, step,
     out_every, repeat, newton, energy, ...; see flexsym.spec.options.OPTIONS).
@@ -109,7 +122,8 @@ def run_built(built: Built, options: RunOptions | None = None, *, out: Path | No
     (steps adapted to tol) and for radau5 given a step, it sets the output grid.
     out: the CSV is replaced only by a completed run or, when the run stopped after at least
     one step, by the rows computed until then (result.written says which); a run that stops
-    before its first step leaves it untouched."""
+    before its first step leaves it untouched. header: lines written as comments ('# ...')
+    after the CSV's column line (result.header)."""
     o = options if options is not None else validate(given, API)
     if options is not None and given:
         raise TypeError(f"run_built: give either options or keywords, not both ({', '.join(given)})")
@@ -132,12 +146,14 @@ def run_built(built: Built, options: RunOptions | None = None, *, out: Path | No
         data = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2)
         written = "none"
         if out is not None and (summary["status"] == "ok" or summary["steps"] > 0):
+            if header:
+                _with_header(csv, header)
             os.replace(csv, out)  # same directory: atomic
             written = "complete" if summary["status"] == "ok" else "truncated"
     result = RunResult(built.name, summary["status"], summary["message"], summary, columns, data,
                        out if written != "none" else None,
                        {"t_end": o.t_end, "dt": o.dt, "integrator": o.integrator, "params": o.params,
-                        "tol": o.tol, "newton": o.newton, "step": o.step}, written)
+                        "tol": o.tol, "newton": o.newton, "step": o.step}, written, tuple(header))
     if raise_on_failure and not result.ok:
         raise SimulationError(f"{built.name}: {result.message}", result)
     return result

@@ -1,0 +1,299 @@
+"""Assembly at t = 0: position and velocity analysis on the joint coordinates, as multibody
+codes do it, before anything is generated or run.
+
+Every flexible body is undeformed (its elastic coordinates and their rates are 0); the cut
+joints' constraints Phi(q, t) = 0 are solved for the *free* joint coordinates only: those of
+the tree joints that are not guided and not `fixed`, starting from their `initial` values
+(guesses; 0 when not given). A guided joint's coordinate and rate are its driver's theta(0),
+theta'(0); a fixed coordinate never moves; a given `rate` never changes.
+
+Positions: Gauss-Newton with minimum-norm steps (numpy's least squares) on Phi scaled by the
+mechanism's size, coordinates scaled likewise (a prismatic one by the size), each step halved
+until |Phi| decreases. When it stalls from the guesses (a start with the bodies in line is
+singular: the loop cannot be closed by first-order moves), it is retried with every free
+coordinate turned by +NUDGE (rad, or NUDGE x the size for a prismatic joint), then by -NUDGE.
+Refused: a loop that stays open (max |Phi| above CLOSE_TOL x the size), and a closed loop whose
+Jacobian w.r.t. the free coordinates has lower rank there than at a generic configuration (a
+dead point, or dependent joints). Velocities: the minimum-norm change of the free rates with
+Phi_q q' + Phi_t = 0.
+
+Why: the runtime's consistent start (runtime_c/src/constrained.c cs_consistent_start) is a
+Newton on *all* coordinates; given a loop that does not close, it closes it with the elastic
+coordinates too, that is by deforming the bodies, and releases that strain at t = 0. Closed
+here to rounding, the loop leaves it nothing to correct (its tolerance is newton_tol x the
+length scale, 1e-12 by default), so a run starts with zero strain energy.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+import sympy as sp
+
+from flexsym.core.errors import SpecError
+from flexsym.spec.maneuver import maneuver_of, parse_theta, t
+from flexsym.spec.system import GROUND, System
+
+CLOSE_TOL = 1e-12  # a loop is closed when max |Phi| <= this x the size (the runtime's default)
+RANK_TOL = 1e-8    # singular values below this x the largest one count as zero
+NUDGE = 0.5        # rad (or x the size): the restart of a coordinate from a stalled start
+MAX_ITER = 60
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """What the assembly did: per joint (name, unit, before, after) of the coordinates and of the
+    rates that changed, the loop residual after it (m), and the size it is relative to."""
+
+    moved: tuple = ()
+    rates: tuple = ()
+    residual: float = 0.0
+    scale: float = 1.0
+    loops: bool = False
+
+    def line(self, newton_tol: float = CLOSE_TOL) -> str | None:
+        """One line for stderr and the CSV header (None when nothing was moved); newton_tol: the
+        run's, whose multiple of the size is what the runtime's consistent start leaves alone."""
+        if not (self.moved or self.rates):
+            return None
+        parts = [f"joint {n} moved {b - a:+.3g} {u} to {b:.10g}" for n, u, a, b in self.moved]
+        parts += [f"joint {n} rate set to {b:.10g} {u}/s (from {a:g})" for n, u, a, b in self.rates]
+        tol = newton_tol * self.scale
+        strain = ("below the runtime's tolerance {:.2g} m: elastic coordinates 0 at t = 0, no "
+                  "initial strain energy" if self.residual <= tol else "ABOVE the runtime's "
+                  "tolerance {:.2g} m (--newton-tol): its consistent start corrects it with every "
+                  "coordinate, deforming the bodies, or refuses").format(tol)
+        return f"assembly: {', '.join(parts)} (loop residual {self.residual:.2g} m, {strain})"
+
+
+def theta0(system: System) -> dict:
+    """(theta(0), theta'(0)) of each guided joint."""
+    out = {}
+    for d in system.drivers:
+        if d.kind != "guided":
+            continue
+        if d.maneuver:
+            expr = maneuver_of(d.maneuver).theta.subs(
+                {sp.Symbol(k, positive=True): v for k, v in d.params})
+        else:
+            expr = parse_theta(d.expression)
+        out[d.joint] = (float(expr.subs(t, 0)), float(sp.diff(expr, t).subs(t, 0)))
+    return out
+
+
+def _rot(phi, v):
+    c, s = sp.cos(phi), sp.sin(phi)
+    return (c * v[0] - s * v[1], s * v[0] + c * v[1])
+
+
+def poses(system: System, q: dict) -> dict:
+    """Each body's frame (X, Y, angle) with the tree joints' coordinates q[joint] (numbers or
+    sympy expressions) and undeformed beams."""
+    out = {GROUND: (0, 0, 0)}
+    tree = system.tree()
+    for body in tree.order:
+        j = system.joint(tree.joint_of(body))
+        p = _world(system, out, j.parent, j.point)
+        phi_p = out[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0
+        c = q.get(j.name, 0)
+        phi = phi_p + j.offset + (c if j.kind == "revolute" else 0)
+        if j.kind == "prismatic":
+            n = math.hypot(*j.axis)
+            ax = _rot(phi_p, (j.axis[0] / n, j.axis[1] / n))
+            p = (p[0] + c * ax[0], p[1] + c * ax[1])
+        m = _rot(phi, _local(system, j.child))
+        out[body] = (p[0] - m[0], p[1] - m[1], phi)
+    return out
+
+
+def _local(system, ref):
+    m = system.marker(ref)[1]
+    return (m.x, m.y)
+
+
+def _world(system, frames, ref, point=(0.0, 0.0)):
+    if ref == GROUND:
+        return point
+    X, Y, phi = frames[ref.partition(".")[0]]
+    m = _rot(phi, _local(system, ref))
+    return (X + m[0], Y + m[1])
+
+
+def cut_rows(system: System, frames: dict) -> list[tuple[str, object, bool]]:
+    """(cut joint, Phi row, is a length) as assemble.cut_joint_rows with undeformed bodies:
+    a pin's two points coincide; a clamp's angles too; a prismatic joint's child point lies on
+    the parent's axis line and the angles agree."""
+    rows = []
+    for name in system.tree().cut:
+        j = system.joint(name)
+        a, b = _world(system, frames, j.parent, j.point), _world(system, frames, j.child)
+        phi_a = frames[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0
+        dphi = frames[j.child.partition(".")[0]][2] - phi_a - j.offset
+        if j.kind == "prismatic":
+            n = _rot(phi_a, (-j.axis[1] / math.hypot(*j.axis), j.axis[0] / math.hypot(*j.axis)))
+            rows += [(name, (b[0] - a[0]) * n[0] + (b[1] - a[1]) * n[1], True), (name, dphi, False)]
+        else:
+            rows += [(name, b[0] - a[0], True), (name, b[1] - a[1], True)]
+            if j.kind == "clamp":
+                rows.append((name, dphi, False))
+    return rows
+
+
+class _Loops:
+    """Phi and Phi_q of the cut joints as numeric functions of all tree joint coordinates,
+    dimensionless: lengths / size, a prismatic coordinate x size."""
+
+    def __init__(self, system: System, scale: float):
+        tree = system.tree()
+        self.order = [j.name for j in system.joints]
+        self.joints = [system.joint(tree.joint_of(b)) for b in tree.order]
+        self.joints = [j for j in self.joints if j.has_coordinate]
+        self.unit = np.array([scale if j.kind == "prismatic" else 1.0 for j in self.joints])
+        x = sp.symbols(f"x0:{len(self.joints)}", real=True)
+        q = {j.name: xi * u for j, xi, u in zip(self.joints, x, self.unit)}
+        rows = cut_rows(system, poses(system, q))
+        self.names = [n for n, _, _ in rows]
+        self.lengths = [length for _, _, length in rows]
+        phi = sp.Matrix([e / scale if length else e for _, e, length in rows])
+        self._phi = sp.lambdify([x], phi, "numpy")
+        self._jac = sp.lambdify([x], phi.jacobian(x), "numpy") if x else None
+
+    def phi(self, x):
+        return np.asarray(self._phi(x), dtype=float).reshape(-1)
+
+    def jac(self, x):
+        """(rows x coordinates); no coordinates (a loop through clamps only): rows x 0."""
+        if self._jac is None:
+            return np.zeros((len(self.names), 0))
+        return np.asarray(self._jac(x), dtype=float).reshape(len(self.names), len(x))
+
+
+def _newton(loops: _Loops, x0: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """Gauss-Newton on the free entries from x0, minimum-norm steps, halved until |Phi|
+    decreases; returns the best iterate."""
+    x = x0.copy()
+    r = loops.phi(x)
+    for _ in range(MAX_ITER):
+        if np.max(np.abs(r), initial=0.0) <= 1e-3 * CLOSE_TOL:
+            break
+        step = np.linalg.lstsq(loops.jac(x)[:, free], -r, rcond=None)[0]
+        for _ in range(30):
+            trial = x.copy()
+            trial[free] += step
+            rt = loops.phi(trial)
+            if np.linalg.norm(rt) < np.linalg.norm(r):
+                break
+            step = step / 2
+        else:
+            break  # no decrease along the step: stalled
+        x, r = trial, rt
+    return x
+
+
+def _rank(a: np.ndarray) -> int:
+    if a.size == 0:
+        return 0
+    s = np.linalg.svd(a, compute_uv=False)
+    return int(np.sum(s > RANK_TOL * s[0])) if s[0] > 0 else 0
+
+
+def assemble(system: System, scale: float) -> tuple[System, Assembly]:
+    """The system with its free joint coordinates and rates at t = 0 solved (see the module
+    doc), and what moved; scale: the mechanism's size (m). SpecError when a loop cannot close
+    or is singular at t = 0."""
+    if not system.tree().cut:
+        return system, Assembly(scale=scale)
+    loops = _Loops(system, scale)
+    guided = theta0(system)
+    where = f"system '{system.name}'"
+    fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
+    free = ~fixed
+    x0 = np.array([guided[j.name][0] if j.name in guided else j.initial
+                   for j in loops.joints]) / loops.unit
+    x, res = x0, np.max(np.abs(loops.phi(x0)), initial=0.0)
+    if res > CLOSE_TOL:
+        for nudge in (0.0, NUDGE, -NUDGE):
+            start = x0.copy()
+            start[free] += nudge
+            x = _newton(loops, start, free)
+            res = np.max(np.abs(loops.phi(x)), initial=0.0)
+            if res <= CLOSE_TOL:
+                break
+        else:
+            _cannot_close(system, loops, x, fixed, scale)
+    jac = loops.jac(x)
+    rank = _rank(jac[:, free])
+    generic = max(_rank(loops.jac(_random(loops, k))[:, free]) for k in range(4))
+    if rank < generic:
+        _singular(system, loops, jac, free, rank)
+
+    # velocities: Phi_q q' = 0 in all tree joint coordinates (Phi_t = Phi_theta theta'(0))
+    given = np.array([guided[j.name][1] if j.name in guided else (j.rate or 0.0)
+                      for j in loops.joints]) / loops.unit
+    rate_free = np.array([j.name not in guided and j.rate is None for j in loops.joints], dtype=bool)
+    v = given.copy()
+    rhs = -jac @ given
+    if np.max(np.abs(rhs), initial=0.0) > 0:
+        v[rate_free] += np.linalg.lstsq(jac[:, rate_free], rhs, rcond=None)[0]
+        left = np.max(np.abs(jac @ v))
+        if left > 1e-9 * np.max(np.abs(jac @ given)):
+            raise SpecError(f"{where}: the joints' rates at t = 0 cannot satisfy the loops: "
+                            f"{_names(loops, ~rate_free)} are given (drivers' theta'(0), rate = ...)"
+                            " and the free rates cannot close the loops' velocities "
+                            f"(residual {left:.3g}); give fewer rates")
+
+    moved, rates, joints = [], [], dict((j.name, j) for j in system.joints)
+    for j, u, a, b, va, vb, own in zip(loops.joints, loops.unit, x0, x, given, v, rate_free):
+        unit = "m" if j.kind == "prismatic" else "rad"
+        new = {}
+        if b != a:
+            new["initial"] = float(b * u)
+            moved.append((j.name, unit, float(a * u), float(b * u)))
+        if own and vb != 0.0:
+            new["rate"] = float(vb * u)
+            rates.append((j.name, unit, float(va * u), float(vb * u)))
+        if new:
+            joints[j.name] = replace(j, **new)
+    order = [j.name for j in system.joints]
+    moved.sort(key=lambda m: order.index(m[0]))
+    rates.sort(key=lambda m: order.index(m[0]))
+    report = Assembly(tuple(moved), tuple(rates), float(res * scale), scale, True)
+    return replace(system, joints=tuple(joints[j.name] for j in system.joints)), report
+
+
+def _random(loops: _Loops, k: int) -> np.ndarray:
+    return np.random.default_rng(k).uniform(-math.pi, math.pi, len(loops.joints))
+
+
+def _names(loops: _Loops, mask) -> str:
+    """The joints of the masked coordinates, in the file's order."""
+    names = {j.name for j, m in zip(loops.joints, mask) if m}
+    return ", ".join(n for n in loops.order if n in names) or "none"
+
+
+def _cannot_close(system, loops, x, fixed, scale):
+    r = loops.phi(x)
+    worst = int(np.argmax(np.abs(r)))
+    name = loops.names[worst]
+    j = system.joint(name)
+    what = f"{abs(r[worst]) * scale:.4g} m" if loops.lengths[worst] else f"{abs(r[worst]):.4g} rad"
+    how = (f"moving the free joint coordinates ({_names(loops, ~fixed)}; fixed: {_names(loops, fixed)})"
+           if loops.joints else "with no joint coordinate to move")
+    raise SpecError(f"system '{system.name}': joint '{name}' (cut joint, closes a loop): cannot close "
+                    f"at t = 0: '{j.parent}' and '{j.child}' stay {what} apart at best, {how} with "
+                    "undeformed bodies; fix the geometry, the fixed values, or give initial guesses "
+                    "nearer the closed position")
+
+
+def _singular(system, loops, jac, free, rank):
+    u, s, _ = np.linalg.svd(jac[:, free])
+    null = u[:, rank:]  # rows' combinations the free coordinates cannot move
+    cut = sorted({loops.names[i] for i in range(len(loops.names))
+                  if np.max(np.abs(null[i]), initial=0.0) > 1e-6})
+    raise SpecError(f"system '{system.name}': joint{'s' if len(cut) > 1 else ''} "
+                    f"{', '.join(repr(c) for c in cut)} (cut joint, closes a loop): singular at "
+                    f"t = 0: the loop's constraint Jacobian w.r.t. the free joint coordinates "
+                    f"({_names(loops, free)}) has rank {rank} < {len(loops.names)} rows there (a "
+                    "dead point, bodies in line, or dependent joints); start the mechanism away "
+                    "from it")
