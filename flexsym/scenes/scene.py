@@ -27,6 +27,8 @@ from pathlib import Path
 import sympy as sp
 
 from flexsym.core.errors import SpecError
+from flexsym.core.files import read_limited
+from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE
 from flexsym.spec.maneuver import EXPRESSION_PREFIX, parse_theta
 from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
 
@@ -102,6 +104,9 @@ class _Reader:
             self.fail(f"[{tab}] {key}", f"must be a number, not {type(val).__name__} ({val!r})")
         if not math.isfinite(val):
             self.fail(f"[{tab}] {key}", f"must be finite (got {val!r})")
+        if abs(val) > MAX_MAGNITUDE:
+            self.fail(f"[{tab}] {key}", f"{val!r} is beyond the limit |x| <= {MAX_MAGNITUDE:g} (SI units; "
+                      "larger values overflow the generated code's arithmetic)")
         if positive and not val > 0:
             self.fail(f"[{tab}] {key}", f"must be > 0 (got {val!r})")
         return float(val)
@@ -132,7 +137,7 @@ def load_scene(path, model: str | None = None):
     scene's [model] (flexsym run --model), or every flexible body's model in a system."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(read_limited(path, MAX_FILE_BYTES, "scene file").decode("utf-8"))
     except FileNotFoundError:
         raise SpecError(f"{path}: no such scene file") from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -18,6 +18,7 @@ import re
 from dataclasses import dataclass, field, fields
 
 from flexsym.core.errors import SpecError
+from flexsym.spec.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, is_real
 from flexsym.spec.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
@@ -34,7 +35,32 @@ _OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
 
 
 def _finite(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    return is_real(v) and math.isfinite(v)
+
+
+def _numbers(item, label: str):
+    """(label, value) of every number in a system's item (a dataclass), nested tuples and
+    sections included; strings, None and a beam's deformation model (checked by its own
+    validate) are not numbers."""
+    for f in fields(item):
+        if f.name == "model":
+            continue
+        yield from _leaves(getattr(item, f.name), f"{label} {f.name}")
+
+
+def _leaves(v, label):
+    if v is None or isinstance(v, str):
+        return
+    if hasattr(v, "__dataclass_fields__"):
+        yield from _numbers(v, label)
+    elif isinstance(v, (tuple, list)):
+        if len(v) == 2 and isinstance(v[0], str):  # a (name, value) pair
+            yield from _leaves(v[1], f"{label} {v[0]}")
+        else:
+            for k, x in enumerate(v):
+                yield from _leaves(x, f"{label}[{k}]")
+    else:
+        yield label, v
 
 
 def _name(what: str, name) -> None:
@@ -282,6 +308,18 @@ class System:
         raise SpecError(f"system '{self.name}': body '{body}' has no marker '{mname}' "
                         f"(its markers: {known})")
 
+    def reserved_columns(self) -> dict:
+        """Names the results already use besides the outputs -> what they are: t, violation,
+        T, V, h (energy), every joint (its coordinate) and every elastic coordinate."""
+        taken = {"t": "the time", "violation": "the constraint violation", "T": "the kinetic energy",
+                 "V": "the potential energy", "h": "the energy's step error"}
+        taken |= {j.name: f"joint '{j.name}'" for j in self.joints if isinstance(j, Joint)}
+        for b in self.bodies:
+            if getattr(b, "flexible", False):
+                taken |= {f"{b.name}_{c}": f"an elastic coordinate of '{b.name}'"
+                          for c in getattr(b.model, "coordinates", ())}
+        return taken
+
     def tree(self) -> Tree:
         return spanning_tree(self)
 
@@ -291,6 +329,11 @@ class System:
         where = f"system '{self.name}'"
         if not self.bodies:
             raise SpecError(f"{where}: no bodies")
+        for what, items, limit in (("bodies", self.bodies, MAX_BODIES), ("joints", self.joints, MAX_JOINTS)):
+            if len(items) > limit:
+                raise SpecError(f"{where}: {len(items)} {what}, more than the limit of {limit} (the "
+                                "derivation's cost grows quickly with the number of bodies)")
+        self._check_magnitudes()
         names: dict[str, str] = {}
         for what, items in (("body", self.bodies), ("joint", self.joints),
                             ("driver", self.drivers)):
@@ -318,6 +361,7 @@ class System:
         for load in self.loads:
             self._check_load(load)
         columns = set()
+        taken = self.reserved_columns()
         for o in self.outputs:
             if not isinstance(o, Output):
                 raise SpecError(f"{where}: outputs must be Output(column, quantity)")
@@ -327,12 +371,32 @@ class System:
                                 "(not 't')")
             if o.column in columns:
                 raise SpecError(f"{where}: duplicate output column '{o.column}'")
+            same = isinstance(o.quantity, str) and o.column == o.quantity.strip()  # T = "T": itself
+            if o.column in taken and not same:
+                raise SpecError(f"{where}: output column '{o.column}' is already the name of "
+                                f"{taken[o.column]} in the results (choose another name)")
             columns.add(o.column)
             parse_output(self, o.quantity)
         for p in self.params:
             if len(p) != 2 or not NAME_RE.match(str(p[0])) or not _finite(p[1]):
                 raise SpecError(f"{where}: parameter {p!r} must be (name, finite number)")
         return self
+
+    def _check_magnitudes(self) -> None:
+        """Every number of the system: a real number (not bool, complex, str, None), finite and
+        |x| <= MAX_MAGNITUDE (flexsym/spec/limits.py), before anything else uses it."""
+        where = f"system '{self.name}'"
+        for kind, items in (("body", self.bodies), ("joint", self.joints), ("driver", self.drivers),
+                            ("load", self.loads)):
+            for k, item in enumerate(items):
+                if not hasattr(item, "__dataclass_fields__"):
+                    continue  # the type checks below name it
+                name = getattr(item, "name", "") or f"#{k + 1}"
+                for label, v in _numbers(item, f"{where}: {kind} '{name}'"):
+                    check_number(v, label)
+        for p in self.params:
+            if isinstance(p, tuple) and len(p) == 2:
+                check_number(p[1], f"{where}: parameter {p[0]!r}")
 
     def _check_joint(self, j: Joint) -> None:
         where = f"system '{self.name}': joint '{j.name}'"
@@ -363,11 +427,17 @@ class System:
             if ax is None or len(ax) != 2 or not all(_finite(a) for a in ax) or ax[0] == ax[1] == 0:
                 raise SpecError(f"{where}: a prismatic joint needs an axis (two finite numbers, "
                                 "not both 0) in the parent's frame")
+            if math.hypot(*ax) < MIN_AXIS:
+                raise SpecError(f"{where}: axis {list(ax)} is shorter than {MIN_AXIS:g} (it is a "
+                                "direction, normalised: write e.g. [1, 0])")
         elif j.axis is not None:
             raise SpecError(f"{where}: axis applies to prismatic joints only")
         for key in ("offset", "initial"):
             if not _finite(getattr(j, key)):
                 raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
+        if j.kind == "clamp" and j.initial != 0:
+            raise SpecError(f"{where}: initial applies to revolute and prismatic joints only (a "
+                            "clamp has no coordinate; use offset for its angle)")
         if len(j.point) != 2 or not all(_finite(c) for c in j.point):
             raise SpecError(f"{where}: point {j.point!r} must be two finite numbers")
 
