@@ -135,6 +135,9 @@ class _Reader:
 def load_scene(path, model: str | None = None):
     """A Scene, or a SystemScene for a mechanism. model: a variant name that replaces the
     scene's [model] (flexsym run --model), or every flexible body's model in a system."""
+    if not isinstance(path, (str, Path)):
+        raise SpecError(f"load_scene(): path must be the path of a .toml scene (got "
+                        f"{type(path).__name__} {path!r})")
     path = Path(path)
     try:
         data = tomllib.loads(read_limited(path, MAX_FILE_BYTES, "scene file").decode("utf-8"))

@@ -40,6 +40,6 @@ def check_number(v, what: str, *, finite_only: bool = False) -> float:
     if not math.isfinite(v):
         raise SpecError(f"{what} must be finite (got {v!r})")
     if not finite_only and abs(v) > MAX_MAGNITUDE:
-        raise SpecError(f"{what} = {v!r} is beyond the limit |x| <= {MAX_MAGNITUDE:g} (SI units; "
+        raise SpecError(f"{what} = {float(v):.6g} is beyond the limit |x| <= {MAX_MAGNITUDE:g} (SI units; "
                         "larger values overflow the generated code's arithmetic)")
     return float(v)
