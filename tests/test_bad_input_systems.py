@@ -66,6 +66,12 @@ SYSTEM_CASES = [
     ("joint_initial_1e200", BASE.replace("initial = 0.45", "initial = 1e200"), "joint 'slide' initial = 1e+200"),
     ("marker_1e50", BASE.replace("tip = [0.15, 0.0]", "tip = [1e50, 0.0]"), "body 'crank' markers[1] x = 1e+50"),
     ("omega_1e300", BASE.replace("omega = 150.0", "omega = 1e300"), "driver 'crank_drive' params[0] ws = 1e+300"),
+    # tiny positive quantities: their reciprocal powers would overflow
+    ("mass_1e-300", BASE.replace("mass = 0.1 ", "mass = 1e-300 "), "body 'crank': mass = 1e-300 must be >= 1e-20"),
+    ("inertia_1e-30", BASE.replace("inertia = 1.0e-6 ", "inertia = 1e-30 "), "body 'slider': inertia = 1e-30 must be"),
+    ("area_1e-25", BASE.replace("area = 2.8274333882308137e-5", "area = 1e-25"), "body 'rod': section A = 1e-25"),
+    ("beam_length_1e-300", BASE.replace("length = 0.3", "length = 1e-300").replace("mid = 0.15", "mid = 0.0"),
+     "body 'rod': length = 1e-300 must be >= 1e-20"),
     # long chains: refused by count before derivation
     ("chain_of_100", _chain(100), f"[[body]]: 100 entries, more than the limit of {MAX_BODIES}"),
     ("chain_of_5000", _chain(5000), f"[[body]]: 5000 entries, more than the limit of {MAX_BODIES}"),
@@ -134,6 +140,9 @@ BEAM_CASES = [
     ("length_1e200", PAPER, "length = 10.0 ", "length = 1e200 ", "[beam] length: 1e+200 is beyond the limit"),
     ("density_1e308", PAPER, "density = 3000.0 ", "density = 1e308 ", "[beam] density: 1e+308"),
     ("E_1e100", PAPER, "youngs_modulus = 7.0e10", "youngs_modulus = 1e100", "[beam] youngs_modulus"),
+    ("length_1e-300", PAPER, "length = 10.0 ", "length = 1e-300 ", "[beam] length: 1e-300 is below the limit 1e-20"),
+    ("inertia_1e-40", PAPER, "inertia = 2.0e-7 ", "inertia = 1e-40 ", "[beam] inertia: 1e-40 is below"),
+    ("segment_inertia_1e-300", STEPPED, "inertia = 5.0e-8", "inertia = 1e-300", "[body] segments[1] inertia"),
     ("segment_density_1e300", STEPPED, "density = 3000.0, youngs_modulus = 7.0e10, area = 2.0e-4",
      "density = 1e300, youngs_modulus = 7.0e10, area = 2.0e-4", "[body] segments[1] density"),
     ("point_mass_1e200", STEPPED, "mass = 0.5", "mass = 1e200", "[body] point_masses[0] mass"),

@@ -29,7 +29,7 @@ import numpy as np
 
 from flexsym.core.errors import SpecError
 from flexsym.core.files import read_limited
-from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE
+from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
 from flexsym.spec.fedata import BeamBody, PointMass, Section, check_mesh_keys
 
 FORMAT = "flexsym-beam-fe-1"
@@ -44,9 +44,9 @@ def _fail(path: Path, msg: str):
 
 def _number(path, where, v, positive=True):
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-            or (v <= 0 if positive else v < 0) or v > MAX_MAGNITUDE:
-        _fail(path, f"{where} must be a {'positive' if positive else 'non-negative'} number <= "
-              f"{MAX_MAGNITUDE:g} (got {v!r})")
+            or (v < MIN_POSITIVE if positive else v < 0) or v > MAX_MAGNITUDE:
+        _fail(path, f"{where} must be a {'positive' if positive else 'non-negative'} number, "
+              f"{MIN_POSITIVE if positive else 0:g} <= x <= {MAX_MAGNITUDE:g} (got {v!r})")
     return float(v)
 
 

@@ -28,7 +28,7 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.core.files import read_limited
-from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE
+from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
 from flexsym.spec.maneuver import EXPRESSION_PREFIX, parse_theta
 from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
 
@@ -109,6 +109,9 @@ class _Reader:
                       "larger values overflow the generated code's arithmetic)")
         if positive and not val > 0:
             self.fail(f"[{tab}] {key}", f"must be > 0 (got {val!r})")
+        if positive and val < MIN_POSITIVE:
+            self.fail(f"[{tab}] {key}", f"{val!r} is below the limit {MIN_POSITIVE:g} (a positive quantity; "
+                      "its reciprocal powers appear in the equations)")
         return float(val)
 
     def string(self, tab: str, key: str, required=True, default=None) -> str | None:

@@ -9,6 +9,9 @@ in the generated code.
 MAX_BODIES, MAX_JOINTS: the derivation's cost grows quickly with the chain (sympy expands the
 kinematics of every body along its path from ground); beyond these counts it would run for a
 very long time without a result.
+MIN_POSITIVE: a quantity that must be > 0 (mass, inertia, length, density, Young's modulus,
+area, second moment) must be at least this: the equations divide by them and by their powers
+(1 / L^4), so 1e-300 overflows where a thin wire (I ~ 5e-14 m^4) is still far inside.
 MIN_AXIS: a prismatic axis is a direction (normalised); a shorter one is a typo, and its
 squared length underflows.
 MAX_FILE_BYTES: a scene file, body.toml or a Matrix Market file larger than this is refused
@@ -24,6 +27,7 @@ from flexsym.core.errors import SpecError
 MAX_MAGNITUDE = 1e13
 MAX_BODIES = 24
 MAX_JOINTS = 48
+MIN_POSITIVE = 1e-20  # masses, inertias, lengths, section values: their reciprocals appear
 MIN_AXIS = 1e-6
 MAX_FILE_BYTES = 64 * 2**20
 
@@ -43,3 +47,12 @@ def check_number(v, what: str, *, finite_only: bool = False) -> float:
         raise SpecError(f"{what} = {float(v):.6g} is beyond the limit |x| <= {MAX_MAGNITUDE:g} (SI units; "
                         "larger values overflow the generated code's arithmetic)")
     return float(v)
+
+
+def check_positive(v, what: str) -> float:
+    """check_number, and MIN_POSITIVE <= v."""
+    v = check_number(v, what)
+    if not v >= MIN_POSITIVE:
+        raise SpecError(f"{what} = {v:.6g} must be >= {MIN_POSITIVE:g} (a positive quantity; its "
+                        "reciprocal powers appear in the equations)")
+    return v

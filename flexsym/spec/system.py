@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass, field, fields
 
 from flexsym.core.errors import SpecError
-from flexsym.spec.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, is_real
+from flexsym.spec.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
 from flexsym.spec.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
@@ -83,6 +83,7 @@ class Section:
             v = getattr(self, key)
             if not _finite(v) or v <= 0:
                 raise SpecError(f"{where}: section {key} = {v!r} must be a finite number > 0")
+            check_positive(v, f"{where}: section {key}")
 
 
 @dataclass(frozen=True)
@@ -115,6 +116,8 @@ class RigidBody:
             raise SpecError(f"{where}: mass {self.mass!r} must be a finite number > 0")
         if not _finite(self.inertia) or self.inertia <= 0:
             raise SpecError(f"{where}: inertia {self.inertia!r} must be a finite number > 0")
+        check_positive(self.mass, f"{where}: mass")
+        check_positive(self.inertia, f"{where}: inertia")
         if len(self.com) != 2 or not all(_finite(c) for c in self.com):
             raise SpecError(f"{where}: com {self.com!r} must be two finite numbers")
         _check_markers(where, self.markers)
@@ -149,6 +152,7 @@ class FlexibleBeam:
         where = f"body '{self.name}'"
         if not _finite(self.length) or self.length <= 0:
             raise SpecError(f"{where}: length {self.length!r} must be a finite number > 0")
+        check_positive(self.length, f"{where}: length")
         if not isinstance(self.section, Section):
             raise SpecError(f"{where}: section must be a Section(rho, E, A, I)")
         self.section.check(where)
