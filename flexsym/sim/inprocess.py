@@ -180,7 +180,7 @@ class InProcessModel:
         opts = {k: v for k, v in option_inputs(o).items() if k not in cols}
         all_names = list(opts) + names
         inputs = np.ascontiguousarray(np.hstack([np.tile(list(opts.values()), (n, 1)), table]))
-        at = _values("at", at, allow_empty=True)
+        at = _values("at", at, finite=True, allow_empty=True)
         ncs, nf = len(self.columns), len(SUMMARY_FIELDS) + len(at)
         values = np.zeros((n, ncs, nf))
         stats = np.zeros((n, len(STAT_FIELDS)))
@@ -242,13 +242,15 @@ class InProcessModel:
         return np.array(valid, dtype=bool), notes
 
 
-def _values(name: str, given, allow_empty: bool = False) -> np.ndarray:
-    """A parameter's values (one per run) as a contiguous float array: real, finite numbers
-    only (a bool, complex, string, None or nan is refused, not converted)."""
+def _values(name: str, given, finite: bool = False, allow_empty: bool = False) -> np.ndarray:
+    """A parameter's values (one per run) as a contiguous float array: real numbers only (a
+    bool, complex, string or None is refused, not converted to 1.0 or nan). nan and inf are
+    real: the runtime checks each run's values and fails that run alone (its message says
+    which value); finite=True refuses them here (for values shared by every run, such as at)."""
     items = np.atleast_1d(np.asarray(given, dtype=object)).ravel()
     for v in items:
-        if not is_real(v) or not np.isfinite(float(v)):
-            raise SpecError(f"batch(): {name}: {v!r} is not a finite real number")
+        if not is_real(v) or (finite and not np.isfinite(float(v))):
+            raise SpecError(f"batch(): {name}: {v!r} is not a {'finite ' if finite else ''}real number")
     if not len(items) and not allow_empty:
         raise SpecError(f"batch(): {name}: no values")
     return np.ascontiguousarray(items.astype(float))

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections import deque
 from dataclasses import dataclass, field, fields
 
 from flexsym.core.errors import SpecError
@@ -39,26 +40,28 @@ def _finite(v) -> bool:
 
 
 def _numbers(item, label: str):
-    """(label, value) of every number in a system's item (a dataclass), nested tuples and
-    sections included; strings, None and a beam's deformation model (checked by its own
-    validate) are not numbers."""
+    """(label, value) of every number slot in a system's item (a dataclass), nested tuples,
+    sections and (name, value) parameters included; its text fields (names, kinds,
+    references, expressions), None and a beam's deformation model (checked by its own validate) are
+    not number slots, anything else in a slot is (and must be a real number)."""
     for f in fields(item):
-        if f.name == "model":
+        v = getattr(item, f.name)
+        if f.name == "model" or v is None or isinstance(v, str):
+            continue  # None: no axis (the field checks refuse a None where a number is needed)
+        if f.name == "params" and isinstance(v, (tuple, list)):
+            for p in v:
+                if isinstance(p, (tuple, list)) and len(p) == 2:
+                    yield from _leaves(p[1], f"{label} {f.name} {p[0]}")
             continue
-        yield from _leaves(getattr(item, f.name), f"{label} {f.name}")
+        yield from _leaves(v, f"{label} {f.name}")
 
 
 def _leaves(v, label):
-    if v is None or isinstance(v, str):
-        return
     if hasattr(v, "__dataclass_fields__"):
         yield from _numbers(v, label)
     elif isinstance(v, (tuple, list)):
-        if len(v) == 2 and isinstance(v[0], str):  # a (name, value) pair
-            yield from _leaves(v[1], f"{label} {v[0]}")
-        else:
-            for k, x in enumerate(v):
-                yield from _leaves(x, f"{label}[{k}]")
+        for k, x in enumerate(v):
+            yield from _leaves(x, f"{label}[{k}]")
     else:
         yield label, v
 
@@ -534,14 +537,16 @@ def spanning_tree(system: System) -> Tree:
     where = f"system '{system.name}'"
     parent_of = {}
     order = []
-    queue = [GROUND]
+    queue = deque([GROUND])
     seen = {GROUND}
+    by_parent: dict[str, list] = {}  # joints by their parent body, in file order (linear)
+    for j in system.joints:
+        by_parent.setdefault(j.parent.partition(".")[0] if j.parent != GROUND else GROUND, []).append(j)
     while queue:
-        here = queue.pop(0)
-        for j in system.joints:
-            pbody = j.parent.partition(".")[0] if j.parent != GROUND else GROUND
+        here = queue.popleft()
+        for j in by_parent.get(here, ()):
             cbody = j.child.partition(".")[0]
-            if pbody != here or cbody in seen:
+            if cbody in seen:
                 continue
             child = system.body(cbody)
             if child.flexible and system.marker(j.child)[1].x != 0:
