@@ -346,7 +346,7 @@ def m1_inprocess(m1_kernels):
     ({"ws": [1 + 2j]}, "ws: (1+2j)"),
     ({"ws": ["4.0"]}, "ws: '4.0'"),
     ({"ws": [None]}, "ws: None"),
-    ({"E": [np.bool_(True)]}, "E: True"),
+    ({"E": [np.bool_(True)]}, "E: np.True_ is not a real number"),
     ({"q0_v_cp1": [b"1"]}, "q0_v_cp1: b'1'"),
 ], ids=["bool", "bool_second", "complex", "str", "none", "numpy_bool", "bytes"])
 def test_batch_refuses_non_real_values(m1_inprocess, runs, says):
@@ -364,7 +364,7 @@ def test_batch_refuses_non_real_at(m1_inprocess):
 
 def test_batch_non_finite_value_fails_its_run_only(m1_inprocess):
     """nan and inf are real numbers: the runtime refuses them per run, naming the parameter."""
-    b = m1_inprocess.batch({"ws": [1.0, math.nan], "E": [7e10, 7e10]}, integrator="rk4", dt=0.02, t_end=0.1)
+    b = m1_inprocess.batch({"ws": [1.0, math.nan]}, integrator="radau5", dt=0.01, t_end=0.1)
     assert b.status == ["ok", "failed"] and "ws must be finite" in b.messages[1]
 
 
