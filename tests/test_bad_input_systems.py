@@ -15,7 +15,7 @@ import pytest
 from flexsym.apps import api
 from flexsym.apps.cli import main
 from flexsym.core.errors import SpecError
-from flexsym.spec.limits import MAX_BODIES, MAX_FILE_BYTES
+from flexsym.spec.limits import MAX_BODIES, MAX_FILE_BYTES, MAX_JOINTS
 from flexsym.spec.system import Joint, Marker, Output, RigidBody, System
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -73,6 +73,10 @@ SYSTEM_CASES = [
     ("beam_length_1e-300", BASE.replace("length = 0.3", "length = 1e-300").replace("mid = 0.15", "mid = 0.0"),
      "body 'rod': length = 1e-300 must be >= 1e-20"),
     # long chains: refused by count before derivation
+    ("chain_just_over", _chain(MAX_BODIES + 1), f"[[body]]: {MAX_BODIES + 1} entries, more than the limit"),
+    ("joints_over_limit", BASE + "".join(f'\n[[joint]]\nname = "extra{k}"\nkind = "revolute"\nparent = "crank.tip"\n'
+                                         f'child = "slider.pin"\n' for k in range(MAX_JOINTS - 3)),
+     f"[[joint]]: {MAX_JOINTS + 1} entries, more than the limit of {MAX_JOINTS}"),
     ("chain_of_100", _chain(100), f"[[body]]: 100 entries, more than the limit of {MAX_BODIES}"),
     ("chain_of_5000", _chain(5000), f"[[body]]: 5000 entries, more than the limit of {MAX_BODIES}"),
     # prismatic axis shorter than the tolerance

@@ -6,9 +6,10 @@ quantity of a mechanism comes near it (the stiffest material, diamond, has E ~ 1
 the derivation multiplies up to ~20 of them (mass x length^2 x rate^2 ...): with |x| <= 1e13
 such products stay far below the largest double (1.8e308), where 1e200 or 1e308 overflow to inf
 in the generated code.
-MAX_BODIES, MAX_JOINTS: the derivation's cost grows quickly with the chain (sympy expands the
-kinematics of every body along its path from ground); beyond these counts it would run for a
-very long time without a result.
+MAX_BODIES, MAX_JOINTS: the derivation's cost grows steeply with a chain's length (sympy
+expands the kinematics of every body along its path from ground): a chain of rigid links under
+gravity took 2 s with 4 links, 30 s with 8 and 160 s with 12 on a loaded 2-core machine (about
+n^4); beyond these counts it would run for a very long time without a result.
 MIN_POSITIVE: a quantity that must be > 0 (mass, inertia, length, density, Young's modulus,
 area, second moment) must be at least this: the equations divide by them and by their powers
 (1 / L^4), so 1e-300 overflows where a thin wire (I ~ 5e-14 m^4) is still far inside.
@@ -25,8 +26,8 @@ import numbers
 from flexsym.core.errors import SpecError
 
 MAX_MAGNITUDE = 1e13
-MAX_BODIES = 24
-MAX_JOINTS = 48
+MAX_BODIES = 12
+MAX_JOINTS = 24
 MIN_POSITIVE = 1e-20  # masses, inertias, lengths, section values: their reciprocals appear
 MIN_AXIS = 1e-6
 MAX_FILE_BYTES = 64 * 2**20
