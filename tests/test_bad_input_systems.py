@@ -316,12 +316,14 @@ def m1_kernels():
     ("mass", lambda n, p: (["a"] * n,), "fsm_mass: q must hold real numbers"),
     ("mass", lambda n, p: (np.zeros(n), np.ones(p - 1)), "fsm_mass: p has"),
     ("force", lambda n, p: (np.zeros(n), np.zeros(1), 1.0), "fsm_force: qd has 1 values"),
-    ("force", lambda n, p: (np.zeros(n), np.zeros(n), math.inf), "fsm_force: w has a value that is not finite"),
+    ("force", lambda n, p: (np.zeros(n), np.zeros(n), math.inf), "drive: w has a value that is not finite"),
     ("force", lambda n, p: (np.zeros(n), np.zeros(n), 1.0, 0.0, [1.0]), "fsm_force: p has 1 values"),
     ("energy", lambda n, p: (np.zeros(n), None, 1.0), "fsm_energy: qd must hold real numbers"),
     ("maneuver", lambda n, p: (0.0, [1.0]), "fsm_maneuver: mp has 1 values"),
+    ("outputs", lambda n, p: (np.zeros(n), None, None, True), "drive: w must hold real numbers (got dtype bool"),
+    ("force", lambda n, p: (np.zeros(n), np.zeros(n), [1.0, 2.0]), "drive: w has 2 values, expected 1"),
 ], ids=["q_short", "q_long", "q_nan", "q_complex", "q_bool", "q_str", "p_short", "qd_short", "w_inf",
-        "force_p_short", "qd_none", "mp_short"])
+        "force_p_short", "qd_none", "mp_short", "w_bool", "w_array"])
 def test_kernel_arrays_are_checked_before_c_reads_them(m1_kernels, method, args, says):
     n, p = m1_kernels.nq, len(m1_kernels.param_defaults)
     with pytest.raises(SpecError) as info:

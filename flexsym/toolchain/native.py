@@ -31,8 +31,13 @@ class CompiledModel:
         self.param_defaults = np.array([p["default"] for p in self.manifest["params"]])
         self.maneuver_defaults = np.array([p["default"] for p in self.manifest["maneuver"]["params"]])
 
-    def _invoke(self, c_name: str, inputs, out_shapes, sizes) -> list[np.ndarray]:
-        """inputs: (name, value) pairs, each checked against its size before C reads it."""
+    def _invoke(self, c_name: str, inputs, out_shapes, sizes=None) -> list[np.ndarray]:
+        """inputs: (name, value) pairs; each is checked against its size (sizes, or the model
+        interface's by name) before C reads it."""
+        if sizes is None:
+            known = {"q": self.nq, "qd": self.nq, "qdd": self.nq, "[w, alpha]": 2,
+                     "p": len(self.param_defaults), "t": 1, "mp": len(self.maneuver_defaults)}
+            sizes = [known[name] for name, _ in inputs]
         keep = [_array(name, x, n, c_name) for (name, x), n in zip(inputs, sizes)]
         outs = [np.zeros(shape) for shape in out_shapes]
         fn = getattr(self.lib, c_name)
@@ -49,44 +54,40 @@ class CompiledModel:
         return self._invoke(info["c_name"], list(zip(info["inputs"], inputs)),
                             [tuple(s) for s in info["outputs"].values()], list(info["inputs"].values()))
 
-    def _state(self, c_name, out_shapes, **given):
-        """Calls a model-interface function; given: q, qd, qdd (nq values each), w and alpha
-        (one each), p (the parameters), in the C function's order."""
-        sizes = {"q": self.nq, "qd": self.nq, "qdd": self.nq, "wa": 2, "p": len(self.param_defaults)}
-        if "w" in given:
-            _array("w", given.pop("w"), 1, c_name), _array("alpha", given.pop("alpha"), 1, c_name)
-        inputs = [(k, v) for k, v in given.items()]
-        return self._invoke(c_name, inputs, out_shapes, [sizes[k] for k, _ in inputs])
-
     def mass(self, q, p=None):
-        return self._state("fsm_mass", [(self.nq, self.nq)], q=q, p=self._p(p))[0]
+        return self._invoke("fsm_mass", [("q", q), ("p", self._p(p))], [(self.nq, self.nq)])[0]
 
     def force(self, q, qd, w, alpha=0.0, p=None):
-        return self._state("fsm_force", [(self.nq, 1)], q=q, qd=qd, w=w, alpha=alpha, wa=[w, alpha],
-                           p=self._p(p))[0]
+        return self._invoke("fsm_force", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
+                            [(self.nq, 1)])[0]
 
     def residual_jac(self, q, qd, qdd, w, alpha=0.0, p=None):
         n = self.nq
-        return self._state("fsm_residual_jac", [(n, n), (n, n)], q=q, qd=qd, qdd=qdd, w=w, alpha=alpha,
-                           wa=[w, alpha], p=self._p(p))
+        return self._invoke("fsm_residual_jac", [("q", q), ("qd", qd), ("qdd", qdd), ("[w, alpha]", _wa(w, alpha)),
+                                                 ("p", self._p(p))], [(n, n), (n, n)])
 
     def outputs(self, q, qd=None, qdd=None, w=0.0, alpha=0.0, p=None) -> dict:
         z = np.zeros(self.nq)
-        y = self._state("fsm_outputs", [(self.ny, 1)], q=q, qd=z if qd is None else qd,
-                        qdd=z if qdd is None else qdd, w=w, alpha=alpha, wa=[w, alpha], p=self._p(p))[0]
+        y = self._invoke("fsm_outputs", [("q", q), ("qd", z if qd is None else qd), ("qdd", z if qdd is None else qdd),
+                                         ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))], [(self.ny, 1)])[0]
         return dict(zip(self.manifest["outputs"], np.atleast_1d(y)))
 
     def energy(self, q, qd, w, alpha=0.0, p=None):
-        return self._state("fsm_energy", [(3, 1)], q=q, qd=qd, w=w, alpha=alpha, wa=[w, alpha],
-                           p=self._p(p))[0]
+        return self._invoke("fsm_energy", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
+                            [(3, 1)])[0]
 
     def maneuver(self, t, mp=None):
-        mp = self.maneuver_defaults if mp is None else mp
-        return self._invoke("fsm_maneuver", [("t", t), ("mp", mp)], [(3, 1)],
-                            [1, len(self.maneuver_defaults)])[0]
+        return self._invoke("fsm_maneuver", [("t", t), ("mp", self.maneuver_defaults if mp is None else mp)],
+                            [(3, 1)])[0]
 
     def _p(self, p):
         return self.param_defaults if p is None else p
+
+
+def _wa(w, alpha) -> np.ndarray:
+    """The drive [w, alpha]: two real numbers (each checked alone: [True, 0.0] would otherwise
+    become [1.0, 0.0])."""
+    return np.concatenate([_array(name, v, 1, "drive") for name, v in (("w", w), ("alpha", alpha))])
 
 
 def _array(name: str, x, size: int, fn: str) -> np.ndarray:
@@ -94,7 +95,7 @@ def _array(name: str, x, size: int, fn: str) -> np.ndarray:
     size values whatever it is given: a short array would be read past its end)."""
     try:
         a = np.asarray(x)
-    except Exception as exc:  # ragged lists and the like
+    except ValueError as exc:  # ragged lists
         raise SpecError(f"{fn}: {name} is not an array of numbers ({exc})") from None
     if a.dtype.kind not in "iuf":
         raise SpecError(f"{fn}: {name} must hold real numbers (got dtype {a.dtype}: "
