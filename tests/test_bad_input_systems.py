@@ -16,7 +16,7 @@ from flexsym.apps import api
 from flexsym.apps.cli import main
 from flexsym.core.errors import SpecError
 from flexsym.spec.limits import MAX_BODIES, MAX_FILE_BYTES, MAX_JOINTS
-from flexsym.spec.system import Joint, Marker, Output, RigidBody, System
+from flexsym.spec.system import Driver, Gravity, Joint, Marker, Output, RigidBody, System
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -255,6 +255,12 @@ def _pendulum(**joint):
     return System("pend", (link,), (j,), outputs=(Output("a", "x(link.tip)"),))
 
 
+def _pendulum_with(**fields):
+    from dataclasses import replace
+
+    return replace(_pendulum(), **fields)
+
+
 def test_api_system_refuses_huge_numbers_bools_and_chains(empty_cache):
     with pytest.raises(SpecError, match=r"body 'link' mass = 1e\+308 is beyond"):
         api.system(System("pend", (RigidBody("link", 1e308, 0.1, markers=(Marker("pin", 0.0),)),),
@@ -267,6 +273,14 @@ def test_api_system_refuses_huge_numbers_bools_and_chains(empty_cache):
         api.system(_pendulum(point=(0.0, "1")))
     with pytest.raises(SpecError, match=r"joint 'pin' offset must be finite \(got nan"):
         api.system(_pendulum(offset=float("nan")))
+    with pytest.raises(SpecError, match=r"load '#1' g must be a real number \(got NoneType"):
+        api.system(_pendulum_with(loads=(Gravity(None),)))
+    with pytest.raises(SpecError, match="body entries must be RigidBody or FlexibleBeam"):
+        api.system(System("p", ("link",), (), outputs=()))
+    with pytest.raises(SpecError, match="load entries must be Gravity or PointForce"):
+        api.system(_pendulum_with(loads=({"g": [0.0, -9.81]},)))
+    with pytest.raises(SpecError, match=r"driver 'm' torque = '1/pin_rate' is infinite or undefined"):
+        api.system(_pendulum_with(drivers=(Driver("m", "motor", "pin", expression="1/pin_rate"),)))
     with pytest.raises(SpecError, match="initial applies to revolute and prismatic joints only"):
         api.system(_pendulum(kind="clamp", initial=0.3))
     n = MAX_BODIES + 1

@@ -465,7 +465,11 @@ def _at_rest(expr, coords: dict, names: dict, t_end: float, text: str, label: st
     or an overflow in t (e.g. 1/(t - 1), exp(100 t)) is refused here, naming the driver,
     rather than stopping the run."""
     at_rest = {names[j]: coords[j].initial for j in coords} | {names[f"{j}_rate"]: 0.0 for j in coords}
-    check_time_function(expr.xreplace(at_rest), t_end, text, label)
+    expr = expr.xreplace(at_rest)
+    if expr.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
+        raise SpecError(f"{label} = '{text}' is infinite or undefined with every joint at its initial "
+                        "value and at rest (a division by zero?)")
+    check_time_function(expr, t_end, text, label)
 
 
 def _expression(text: str, names: dict, label: str) -> sp.Expr:

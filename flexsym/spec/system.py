@@ -42,12 +42,12 @@ def _finite(v) -> bool:
 def _numbers(item, label: str):
     """(label, value) of every number slot in a system's item (a dataclass), nested tuples,
     sections and (name, value) parameters included; its text fields (names, kinds,
-    references, expressions), None and a beam's deformation model (checked by its own validate) are
+    references, expressions), a missing axis and a beam's deformation model (checked by its own validate) are
     not number slots, anything else in a slot is (and must be a real number)."""
     for f in fields(item):
         v = getattr(item, f.name)
-        if f.name == "model" or v is None or isinstance(v, str):
-            continue  # None: no axis (the field checks refuse a None where a number is needed)
+        if f.name == "model" or isinstance(v, str) or (v is None and f.name == "axis"):
+            continue  # no axis: a revolute or clamp joint (_check_joint decides)
         if f.name == "params" and isinstance(v, (tuple, list)):
             for p in v:
                 if isinstance(p, (tuple, list)) and len(p) == 2:
@@ -336,6 +336,12 @@ class System:
         where = f"system '{self.name}'"
         if not self.bodies:
             raise SpecError(f"{where}: no bodies")
+        for what, items, types in (("body", self.bodies, (RigidBody, FlexibleBeam)), ("joint", self.joints, (Joint,)),
+                                   ("driver", self.drivers, (Driver,)), ("output", self.outputs, (Output,)),
+                                   ("load", self.loads, (Gravity, PointForce, Torque, SpringDamper))):
+            if not isinstance(items, (tuple, list)) or not all(isinstance(x, types) for x in items):
+                kinds = " or ".join(t.__name__ for t in types)
+                raise SpecError(f"{where}: {what} entries must be {kinds} (got {items!r:.80})")
         for what, items, limit in (("bodies", self.bodies, MAX_BODIES), ("joints", self.joints, MAX_JOINTS)):
             if len(items) > limit:
                 raise SpecError(f"{where}: {len(items)} {what}, more than the limit of {limit} (the "
