@@ -15,6 +15,7 @@ from pathlib import Path
 
 from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import compiled, generated_folder, prepare
+from flexsym.spec.limits import is_real
 from flexsym.spec.options import API, RUNTIME_DEFAULTS, validate
 from flexsym.toolchain.run import RunResult, check_output_path, run_built
 from flexsym.scenes.scene import Scene, load_scene
@@ -29,16 +30,28 @@ def variant(name_or_spec, **overrides):
     as on the command line (strain=, axial="static,sin1", bending=, outputs=, elements=, ...)."""
     from flexsym.spec.variant import customize
 
+    if not isinstance(name_or_spec, str) and not hasattr(name_or_spec, "validate"):
+        raise SpecError(f"variant(): name_or_spec must be a variant name such as 'm3' or a spec "
+                        f"(got {type(name_or_spec).__name__} {name_or_spec!r})")
     spec = builtin(name_or_spec) if isinstance(name_or_spec, str) else name_or_spec
     return customize(spec, **overrides) if overrides else spec.validate()
 
 
 def _spec_of(target):
+    _check_target(target)
     if isinstance(target, Scene):
         return target.spec
     if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
         return load_scene(target).spec
     return variant(target)
+
+
+def _check_target(target, what: str = "target") -> None:
+    """One clear line for a target of the wrong type (instead of Python's own error later)."""
+    if not (isinstance(target, (str, Path, Scene)) or hasattr(target, "system")
+            or hasattr(target, "validate")):
+        raise SpecError(f"{what} must be a variant name (e.g. 'm3'), a spec, a scene or the path "
+                        f"of a .toml scene (got {type(target).__name__} {target!r})")
 
 
 def generate(target) -> Path:
@@ -63,6 +76,13 @@ def system(data, name: str = "system", t_end: float | None = None):
     from flexsym.spec.system import System
     from flexsym.scenes.system_scene import checked_system, system_from_dict
 
+    if not isinstance(data, (dict, System)):
+        raise SpecError(f"system(): data must be a dict (a system scene's tables) or a System "
+                        f"(got {type(data).__name__} {data!r})")
+    if not isinstance(name, str):
+        raise SpecError(f"system(): name must be a string (got {name!r})")
+    if t_end is not None and not (is_real(t_end) and t_end > 0 and t_end < float("inf")):
+        raise SpecError(f"system(): t_end must be a finite number > 0 (got {t_end!r})")
     if isinstance(data, System):
         return checked_system(data, 20.0 if t_end is None else t_end)[0]
     return system_from_dict(data, name, t_end)
@@ -70,7 +90,11 @@ def system(data, name: str = "system", t_end: float | None = None):
 
 def run(scene, out=None) -> RunResult:
     """Run a scene (a Scene, a SystemScene or a path to a .toml file); results as numpy arrays."""
+    _check_target(scene, "scene")
     if not isinstance(scene, Scene) and not hasattr(scene, "system"):
+        if not isinstance(scene, (str, Path)):
+            raise SpecError(f"scene must be a scene or the path of a .toml scene (got "
+                            f"{type(scene).__name__} {scene!r})")
         scene = load_scene(scene)
     out = out if out is not None else scene.output_file
     if out is not None:
@@ -98,9 +122,12 @@ def simulate(target="m3", *, out=None, **options) -> RunResult:
 def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,ops", latex=False) -> str:
     from flexsym.analysis.inspect_model import SECTIONS, Report
 
+    if not isinstance(sections, (str, list, tuple)):
+        raise SpecError(f"inspect(): sections must be a string such as 'modes,energy' or a list "
+                        f"(got {type(sections).__name__} {sections!r})")
     chosen = sections.split(",") if isinstance(sections, str) else list(sections)
     for s in chosen:
-        if s not in SECTIONS:
+        if not isinstance(s, str) or s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
     return Report(_spec_of(target), latex=latex).render(chosen)
 
@@ -118,6 +145,7 @@ def inprocess(target):
 
 def _system_scene(target):
     """The SystemScene target is or names, else None."""
+    _check_target(target)
     if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
         target = load_scene(target)
     return target if hasattr(target, "system") else None

@@ -20,6 +20,7 @@ fedata.element_matrices, consistent mass). Every problem is one line naming the 
 """
 from __future__ import annotations
 
+import io
 import math
 import tomllib
 from pathlib import Path
@@ -27,10 +28,13 @@ from pathlib import Path
 import numpy as np
 
 from flexsym.core.errors import SpecError
+from flexsym.core.files import read_limited
+from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
 from flexsym.spec.fedata import BeamBody, PointMass, Section, check_mesh_keys
 
 FORMAT = "flexsym-beam-fe-1"
 DOF_NAMES = ("u", "v", "theta")
+MAX_ELEMENTS = 2000  # as a scene's elements (fedata.check_mesh_keys)
 MATCH_TOL = 1e-8  # relative (Frobenius) difference allowed between the matrices and the table
 
 
@@ -40,8 +44,9 @@ def _fail(path: Path, msg: str):
 
 def _number(path, where, v, positive=True):
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
-            or (v <= 0 if positive else v < 0):
-        _fail(path, f"{where} must be a {'positive' if positive else 'non-negative'} number (got {v!r})")
+            or (v < MIN_POSITIVE if positive else v < 0) or v > MAX_MAGNITUDE:
+        _fail(path, f"{where} must be a {'positive' if positive else 'non-negative'} number, "
+              f"{MIN_POSITIVE if positive else 0:g} <= x <= {MAX_MAGNITUDE:g} (got {v!r})")
     return float(v)
 
 
@@ -49,7 +54,7 @@ def read_folder(folder) -> BeamBody:
     folder = Path(folder)
     path = folder / "body.toml"
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(read_limited(path, MAX_FILE_BYTES, "body.toml").decode("utf-8"))
     except FileNotFoundError:
         _fail(path, "no such file (an imported body is a folder with body.toml)")
     except (OSError, UnicodeDecodeError) as exc:
@@ -65,6 +70,8 @@ def read_folder(folder) -> BeamBody:
     nodes = data.get("nodes")
     if not isinstance(nodes, list) or len(nodes) < 2:
         _fail(path, "nodes must be a list of at least two x coordinates [m]")
+    if len(nodes) > MAX_ELEMENTS + 1:
+        _fail(path, f"{len(nodes)} nodes: more than the limit of {MAX_ELEMENTS + 1} ({MAX_ELEMENTS} elements)")
     nodes = [_number(path, f"nodes[{i}]", x, positive=i > 0) for i, x in enumerate(nodes)]
     n = len(nodes) - 1
     elems = data.get("elements")
@@ -140,12 +147,22 @@ def _dof_permutation(path, dofs, n) -> np.ndarray:
 
 
 def _read_mtx(path: Path, size: int) -> np.ndarray:
-    from scipy.io import mmread
+    from scipy.io import mminfo, mmread
 
     try:
-        mat = mmread(str(path))
+        data = read_limited(path, MAX_FILE_BYTES, "Matrix Market file")
     except FileNotFoundError:
         _fail(path, "no such file")
+    try:  # the header's size before anything is allocated: a 10^6 x 10^6 claim is refused here
+        rows, cols, entries, fmt = mminfo(io.BytesIO(data))[:4]
+    except Exception as exc:  # scipy raises ValueError/IndexError/... for malformed files
+        _fail(path, f"not a readable Matrix Market file ({type(exc).__name__}: {exc})".replace("\n", " "))
+    if (rows, cols) != (size, size):
+        _fail(path, f"is {rows} x {cols}; the dof map has {size} dofs")
+    if entries > size * size:
+        _fail(path, f"declares {entries} entries; a {size} x {size} matrix has at most {size * size}")
+    try:
+        mat = mmread(io.BytesIO(data))
     except Exception as exc:  # scipy raises ValueError/IndexError/... for malformed files
         _fail(path, f"not a readable Matrix Market file ({type(exc).__name__}: {exc})".replace("\n", " "))
     mat = mat.toarray() if hasattr(mat, "toarray") else np.asarray(mat)

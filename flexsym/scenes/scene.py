@@ -27,6 +27,8 @@ from pathlib import Path
 import sympy as sp
 
 from flexsym.core.errors import SpecError
+from flexsym.core.files import read_limited
+from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
 from flexsym.spec.maneuver import EXPRESSION_PREFIX, parse_theta
 from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
 
@@ -103,8 +105,14 @@ class _Reader:
             self.fail(f"[{tab}] {key}", f"must be a number, not {type(val).__name__} ({val!r})")
         if not math.isfinite(val):
             self.fail(f"[{tab}] {key}", f"must be finite (got {val!r})")
+        if abs(val) > MAX_MAGNITUDE:
+            self.fail(f"[{tab}] {key}", f"{val!r} is beyond the limit |x| <= {MAX_MAGNITUDE:g} (SI units; "
+                      "larger values overflow the generated code's arithmetic)")
         if positive and not val > 0:
             self.fail(f"[{tab}] {key}", f"must be > 0 (got {val!r})")
+        if positive and val < MIN_POSITIVE:
+            self.fail(f"[{tab}] {key}", f"{val!r} is below the limit {MIN_POSITIVE:g} (a positive quantity; "
+                      "its reciprocal powers appear in the equations)")
         return float(val)
 
     def string(self, tab: str, key: str, required=True, default=None) -> str | None:
@@ -131,9 +139,12 @@ class _Reader:
 def load_scene(path, model: str | None = None):
     """A Scene, or a SystemScene for a mechanism. model: a variant name that replaces the
     scene's [model] (flexsym run --model), or every flexible body's model in a system."""
+    if not isinstance(path, (str, Path)):
+        raise SpecError(f"load_scene(): path must be the path of a .toml scene (got "
+                        f"{type(path).__name__} {path!r})")
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = tomllib.loads(read_limited(path, MAX_FILE_BYTES, "scene file").decode("utf-8"))
     except FileNotFoundError:
         raise SpecError(f"{path}: no such scene file") from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -52,7 +52,8 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.scenes.assembly import Assembly, assemble, poses, theta0
-from flexsym.spec.maneuver import check_theta, maneuver_of, parse_expression, t
+from flexsym.spec.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
+from flexsym.spec.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
 from flexsym.spec.system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
@@ -179,6 +180,10 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     system_tab = data.get("system", {})
     name = r.string("[system]", system_tab, "name", default=name)
     description = r.string("[system]", system_tab, "description", default="")
+    for key, limit in (("body", MAX_BODIES), ("joint", MAX_JOINTS)):
+        if len(_entries(r, data, key)) > limit:  # before anything is read (system.py's limit)
+            r.fail(f"[[{key}]]", f"{len(data[key])} entries, more than the limit of {limit} (the "
+                   "derivation's cost grows quickly with the number of bodies)")
     bodies = tuple(_body(r, k, tab, model, base) for k, tab in enumerate(_entries(r, data, "body")))
     joints = tuple(_joint(r, k, tab) for k, tab in enumerate(_entries(r, data, "joint")))
     drivers = tuple(_driver(r, k, tab) for k, tab in enumerate(_entries(r, data, "driver")))
@@ -354,6 +359,9 @@ def _joint(r: _Items, k: int, tab: dict) -> Joint:
         r.fail(f"{where} point", "missing (a joint to ground needs the ground point [x, y])")
     if parent != GROUND and point is not None:
         r.fail(f"{where} point", "applies to a joint whose parent is \"ground\" only")
+    if kind == "clamp" and "initial" in tab:
+        r.fail(f"{where} initial", "applies to revolute and prismatic joints only (a clamp has no "
+               "coordinate; use offset for its angle)")
     initial, fixed, rate = _initial(r, where, tab)
     return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
                  axis=r.pair(where, tab, "axis"), offset=r.number(where, tab, "offset", default=0.0),
@@ -443,7 +451,8 @@ def check_system(system: System, t_end: float = 20.0) -> System:
     for d in system.drivers:
         label = f"{where}: driver '{d.name}'"
         if d.kind == "motor":
-            _expression(d.expression, names, f"{label} {'torque' if coords[d.joint].kind == 'revolute' else 'force'}")
+            law = f"{label} {'torque' if coords[d.joint].kind == 'revolute' else 'force'}"
+            _at_rest(_expression(d.expression, names, law), coords, names, t_end, d.expression, law)
         elif d.expression:
             try:
                 check_theta(d.expression, t_end)
@@ -463,7 +472,8 @@ def check_system(system: System, t_end: float = 20.0) -> System:
                     raise SpecError(f"{label}: parameter ts = {v!r} must be > 0")
     for load in system.loads:
         if isinstance(load, Torque):
-            _expression(load.expression, names, f"{where}: load {load.name or 'torque'} torque")
+            label = f"{where}: load {load.name or 'torque'} torque"
+            _at_rest(_expression(load.expression, names, label), coords, names, t_end, load.expression, label)
     for o in system.outputs:
         _carried(system, o)
     return system
@@ -472,6 +482,18 @@ def check_system(system: System, t_end: float = 20.0) -> System:
 def checked_system(system: System, t_end: float = 20.0) -> tuple[System, Assembly]:
     """check_system, then the assembly at t = 0: (the assembled system, what moved)."""
     return check_assembly(check_system(system, t_end))
+
+
+def _at_rest(expr, coords: dict, names: dict, t_end: float, text: str, label: str) -> None:
+    """A motor's law on [0, t_end] with every joint at its initial value and at rest: a pole
+    or an overflow in t (e.g. 1/(t - 1), exp(100 t)) is refused here, naming the driver,
+    rather than stopping the run."""
+    at_rest = {names[j]: coords[j].initial for j in coords} | {names[f"{j}_rate"]: 0.0 for j in coords}
+    expr = expr.xreplace(at_rest)
+    if expr.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
+        raise SpecError(f"{label} = '{text}' is infinite or undefined with every joint at its initial "
+                        "value and at rest (a division by zero?)")
+    check_time_function(expr, t_end, text, label)
 
 
 def _expression(text: str, names: dict, label: str) -> sp.Expr:

@@ -24,6 +24,7 @@ import numpy as np
 
 from flexsym.toolchain.build import Built
 from flexsym.core.errors import SpecError
+from flexsym.spec.limits import is_real
 from flexsym.codegen.generate import read_manifest
 from flexsym.spec.options import API, BY_NAME, INTEGRATORS, RunOptions, validate
 from flexsym.toolchain.run import RunResult
@@ -169,7 +170,7 @@ class InProcessModel:
                 raise SpecError(f"unknown parameter '{name}' of {self.built.name} "
                                 f"(run-time parameters: {', '.join(self.run_time_names)}; "
                                 f"options: {', '.join(PER_RUN_OPTIONS)})")
-        cols = {k: np.asarray(runs[k], dtype=float).ravel() for k in runs}
+        cols = {k: _values(k, runs[k]) for k in runs}
         n = len(next(iter(cols.values()))) if cols else 1
         if any(len(c) != n for c in cols.values()):
             raise SpecError("every parameter needs the same number of values (one per run)")
@@ -179,7 +180,7 @@ class InProcessModel:
         opts = {k: v for k, v in option_inputs(o).items() if k not in cols}
         all_names = list(opts) + names
         inputs = np.ascontiguousarray(np.hstack([np.tile(list(opts.values()), (n, 1)), table]))
-        at = np.ascontiguousarray(np.atleast_1d(np.asarray(at, dtype=float)))
+        at = _values("at", at, finite=True, allow_empty=True)
         ncs, nf = len(self.columns), len(SUMMARY_FIELDS) + len(at)
         values = np.zeros((n, ncs, nf))
         stats = np.zeros((n, len(STAT_FIELDS)))
@@ -239,6 +240,20 @@ class InProcessModel:
             valid.append(not note)
             notes.append("; ".join(note))
         return np.array(valid, dtype=bool), notes
+
+
+def _values(name: str, given, finite: bool = False, allow_empty: bool = False) -> np.ndarray:
+    """A parameter's values (one per run) as a contiguous float array: real numbers only (a
+    bool, complex, string or None is refused, not converted to 1.0 or nan). nan and inf are
+    real: the runtime checks each run's values and fails that run alone (its message says
+    which value); finite=True refuses them here (for values shared by every run, such as at)."""
+    items = np.atleast_1d(np.asarray(given, dtype=object)).ravel()
+    for v in items:
+        if not is_real(v) or (finite and not np.isfinite(float(v))):
+            raise SpecError(f"batch(): {name}: {v!r} is not a {'finite ' if finite else ''}real number")
+    if not len(items) and not allow_empty:
+        raise SpecError(f"batch(): {name}: no values")
+    return np.ascontiguousarray(items.astype(float))
 
 
 def _ptr(a: np.ndarray):

@@ -40,6 +40,7 @@ import numpy as np
 
 from flexsym.spec.beam_element import numeric_element_matrices
 from flexsym.core.errors import SpecError
+from flexsym.spec.limits import MAX_MAGNITUDE, MIN_POSITIVE
 
 GAUSS_POINTS = 8  # exact for polynomials of degree 15 per element (invariants reach 14)
 SIG_DIGITS = 13  # invariants are rounded to this many significant digits (deterministic code)
@@ -471,8 +472,10 @@ def scene_body(r) -> BeamBody:
         vals = {}
         for key, short in SEGMENT_KEYS.items():
             v = seg.get(key)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                r.fail(f"{where} {key}", f"must be a positive number (got {v!r})")
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+                    or not MIN_POSITIVE <= v <= MAX_MAGNITUDE:
+                r.fail(f"{where} {key}", f"must be a positive number, {MIN_POSITIVE:g} <= x <= "
+                       f"{MAX_MAGNITUDE:g} (got {v!r})")
             vals[short] = float(v)
         segments.append((vals.pop("length"), Section(**vals)))
     masses = []
@@ -487,8 +490,9 @@ def scene_body(r) -> BeamBody:
         vals = {}
         for key in ("x", "mass", "rotary"):
             v = pm.get(key, 0.0)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                r.fail(f"{where} {key}", f"must be a number >= 0 (got {v!r})")
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0 \
+                    or v > MAX_MAGNITUDE:
+                r.fail(f"{where} {key}", f"must be a number >= 0 and <= {MAX_MAGNITUDE:g} (got {v!r})")
             vals[key] = float(v)
         masses.append(PointMass(**vals))
     total = sum(length for length, _ in segments)

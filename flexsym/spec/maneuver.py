@@ -156,10 +156,10 @@ def _log10_abs(x: sp.Number) -> float:
     return float(sp.log(abs(x), 10).evalf(15))
 
 
-def _check_magnitude(value, text):
+def _check_magnitude(value, text, label="theta(t)"):
     if value.is_Number and value.is_finite is not False and value != 0:
         if _log10_abs(value) > MAX_MAGNITUDE:
-            raise SpecError(f"theta(t) = '{text}': the constant {sp.Float(value, 3)} is beyond "
+            raise SpecError(f"{label} = '{text}': the constant {sp.Float(value, 3)} is beyond "
                             f"1e{MAX_MAGNITUDE} (double precision)")
     return value
 
@@ -175,7 +175,7 @@ def _build(node, text, env=None, label="theta(t)"):
                 or not math.isfinite(node.value):
             raise bad(f"the constant {node.value!r}")
         return _check_magnitude(sp.Integer(node.value) if isinstance(node.value, int)
-                                else sp.Float(repr(node.value)), text)
+                                else sp.Float(repr(node.value)), text, label)
     if isinstance(node, ast.Name):
         if node.id in env:
             return env[node.id]
@@ -196,11 +196,11 @@ def _build(node, text, env=None, label="theta(t)"):
                 if a != 0 and float(b) * _log10_abs(a) > MAX_MAGNITUDE:
                     raise SpecError(f"{label} = '{text}': {a}**{b} is beyond 1e{MAX_MAGNITUDE} "
                                     "(double precision)")
-            return _check_magnitude(a**b, text)
+            return _check_magnitude(a**b, text, label)
         op = _BINARY.get(type(node.op))
         if op is None:
             raise bad(f"the operator {type(node.op).__name__}")
-        return _check_magnitude(op(a, b), text)
+        return _check_magnitude(op(a, b), text, label)
     if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and not node.keywords:
         name, args = node.func.id, node.args
         if name == "ifelse" and len(args) == 3:
@@ -318,6 +318,31 @@ def _check_numeric(expr, t_end, text):
         for ts in switches(g):
             if 0.0 < ts < t_end:
                 raise SpecError(f"theta(t) = '{text}': singular at t = {ts:.6g} s ({what})")
+
+
+def check_time_function(expr: sp.Expr, t_end: float, text: str, label: str) -> None:
+    """A function of t alone (a motor's torque at a fixed state) on [0, t_end]: real and finite
+    on check_theta's grid, and no pole (a zero of a denominator, of cos under tan, of the
+    argument of log or of a fractional power, found as a sign change on the grid)."""
+    grid = np.linspace(0.0, float(t_end), GRID)
+    try:
+        v = np.asarray(_numeric([expr])(grid)[0])
+        bad = ~np.isfinite(v) if v.dtype != object else np.ones(v.shape, bool)
+        if np.iscomplexobj(v):
+            bad |= np.imag(v) != 0
+        if np.any(bad):
+            k = int(np.argmax(bad))
+            raise SpecError(f"{label} = '{text}' is not real and finite at t = {grid[k]:.6g} s (it "
+                            "must be on [0, t_end])")
+        for g, what in _singular_points(expr):
+            gv = np.real(np.asarray(_numeric([g])(grid)[0], dtype=complex))
+            idx = np.nonzero((np.sign(gv[:-1]) * np.sign(gv[1:]) < 0) | (gv == 0)[1:])[0]
+            if len(idx):
+                raise SpecError(f"{label} = '{text}': singular near t = {grid[idx[0] + 1]:.6g} s ({what})")
+    except SpecError:
+        raise
+    except _SYMPY_ERRORS + (NameError, KeyError) as exc:
+        raise SpecError(f"{label} = '{text}': cannot be evaluated ({type(exc).__name__}: {exc})") from None
 
 
 def _singular_points(expr):

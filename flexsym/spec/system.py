@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import math
 import re
+from collections import deque
 from dataclasses import dataclass, field, fields
 
 from flexsym.core.errors import SpecError
+from flexsym.spec.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
 from flexsym.spec.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
@@ -34,7 +36,35 @@ _OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
 
 
 def _finite(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    return is_real(v) and math.isfinite(v)
+
+
+def _numbers(item, label: str):
+    """(label, value) of every number slot in a system's item (a dataclass), nested tuples,
+    sections and (name, value) parameters included; its text fields (names, kinds,
+    references, expressions), flags (a joint's `fixed`), an optional slot left None (a missing
+    axis or rate) and a beam's deformation model (checked by its own validate) are not number
+    slots, anything else in a slot is (and must be a real number)."""
+    for f in fields(item):
+        v = getattr(item, f.name)
+        if f.name == "model" or isinstance(v, str) or f.type == "bool" or (v is None and "None" in str(f.type)):
+            continue  # no axis: a revolute or clamp joint (_check_joint decides); fixed: checked there
+        if f.name == "params" and isinstance(v, (tuple, list)):
+            for p in v:
+                if isinstance(p, (tuple, list)) and len(p) == 2:
+                    yield from _leaves(p[1], f"{label} {f.name} {p[0]}")
+            continue
+        yield from _leaves(v, f"{label} {f.name}")
+
+
+def _leaves(v, label):
+    if hasattr(v, "__dataclass_fields__"):
+        yield from _numbers(v, label)
+    elif isinstance(v, (tuple, list)):
+        for k, x in enumerate(v):
+            yield from _leaves(x, f"{label}[{k}]")
+    else:
+        yield label, v
 
 
 def _name(what: str, name) -> None:
@@ -57,6 +87,7 @@ class Section:
             v = getattr(self, key)
             if not _finite(v) or v <= 0:
                 raise SpecError(f"{where}: section {key} = {v!r} must be a finite number > 0")
+            check_positive(v, f"{where}: section {key}")
 
 
 @dataclass(frozen=True)
@@ -89,6 +120,8 @@ class RigidBody:
             raise SpecError(f"{where}: mass {self.mass!r} must be a finite number > 0")
         if not _finite(self.inertia) or self.inertia <= 0:
             raise SpecError(f"{where}: inertia {self.inertia!r} must be a finite number > 0")
+        check_positive(self.mass, f"{where}: mass")
+        check_positive(self.inertia, f"{where}: inertia")
         if len(self.com) != 2 or not all(_finite(c) for c in self.com):
             raise SpecError(f"{where}: com {self.com!r} must be two finite numbers")
         _check_markers(where, self.markers)
@@ -123,6 +156,7 @@ class FlexibleBeam:
         where = f"body '{self.name}'"
         if not _finite(self.length) or self.length <= 0:
             raise SpecError(f"{where}: length {self.length!r} must be a finite number > 0")
+        check_positive(self.length, f"{where}: length")
         if not isinstance(self.section, Section):
             raise SpecError(f"{where}: section must be a Section(rho, E, A, I)")
         self.section.check(where)
@@ -285,6 +319,18 @@ class System:
         raise SpecError(f"system '{self.name}': body '{body}' has no marker '{mname}' "
                         f"(its markers: {known})")
 
+    def reserved_columns(self) -> dict:
+        """Names the results already use besides the outputs -> what they are: t, violation,
+        T, V, h (energy), every joint (its coordinate) and every elastic coordinate."""
+        taken = {"t": "the time", "violation": "the constraint violation", "T": "the kinetic energy",
+                 "V": "the potential energy", "h": "the energy's step error"}
+        taken |= {j.name: f"joint '{j.name}'" for j in self.joints if isinstance(j, Joint)}
+        for b in self.bodies:
+            if getattr(b, "flexible", False):
+                taken |= {f"{b.name}_{c}": f"an elastic coordinate of '{b.name}'"
+                          for c in getattr(b.model, "coordinates", ())}
+        return taken
+
     def tree(self) -> Tree:
         return spanning_tree(self)
 
@@ -294,6 +340,17 @@ class System:
         where = f"system '{self.name}'"
         if not self.bodies:
             raise SpecError(f"{where}: no bodies")
+        for what, items, types in (("body", self.bodies, (RigidBody, FlexibleBeam)), ("joint", self.joints, (Joint,)),
+                                   ("driver", self.drivers, (Driver,)), ("output", self.outputs, (Output,)),
+                                   ("load", self.loads, (Gravity, PointForce, Torque, SpringDamper))):
+            if not isinstance(items, (tuple, list)) or not all(isinstance(x, types) for x in items):
+                kinds = " or ".join(t.__name__ for t in types)
+                raise SpecError(f"{where}: {what} entries must be {kinds} (got {items!r:.80})")
+        for what, items, limit in (("bodies", self.bodies, MAX_BODIES), ("joints", self.joints, MAX_JOINTS)):
+            if len(items) > limit:
+                raise SpecError(f"{where}: {len(items)} {what}, more than the limit of {limit} (the "
+                                "derivation's cost grows quickly with the number of bodies)")
+        self._check_magnitudes()
         names: dict[str, str] = {}
         for what, items in (("body", self.bodies), ("joint", self.joints),
                             ("driver", self.drivers)):
@@ -321,6 +378,7 @@ class System:
         for load in self.loads:
             self._check_load(load)
         columns = set()
+        taken = self.reserved_columns()
         for o in self.outputs:
             if not isinstance(o, Output):
                 raise SpecError(f"{where}: outputs must be Output(column, quantity)")
@@ -330,12 +388,32 @@ class System:
                                 "(not 't')")
             if o.column in columns:
                 raise SpecError(f"{where}: duplicate output column '{o.column}'")
+            same = isinstance(o.quantity, str) and o.column == o.quantity.strip()  # T = "T": itself
+            if o.column in taken and not same:
+                raise SpecError(f"{where}: output column '{o.column}' is already the name of "
+                                f"{taken[o.column]} in the results (choose another name)")
             columns.add(o.column)
             parse_output(self, o.quantity)
         for p in self.params:
             if len(p) != 2 or not NAME_RE.match(str(p[0])) or not _finite(p[1]):
                 raise SpecError(f"{where}: parameter {p!r} must be (name, finite number)")
         return self
+
+    def _check_magnitudes(self) -> None:
+        """Every number of the system: a real number (not bool, complex, str, None), finite and
+        |x| <= MAX_MAGNITUDE (flexsym/spec/limits.py), before anything else uses it."""
+        where = f"system '{self.name}'"
+        for kind, items in (("body", self.bodies), ("joint", self.joints), ("driver", self.drivers),
+                            ("load", self.loads)):
+            for k, item in enumerate(items):
+                if not hasattr(item, "__dataclass_fields__"):
+                    continue  # the type checks below name it
+                name = getattr(item, "name", "") or f"#{k + 1}"
+                for label, v in _numbers(item, f"{where}: {kind} '{name}'"):
+                    check_number(v, label)
+        for p in self.params:
+            if isinstance(p, tuple) and len(p) == 2:
+                check_number(p[1], f"{where}: parameter {p[0]!r}")
 
     def _check_joint(self, j: Joint) -> None:
         where = f"system '{self.name}': joint '{j.name}'"
@@ -366,6 +444,9 @@ class System:
             if ax is None or len(ax) != 2 or not all(_finite(a) for a in ax) or ax[0] == ax[1] == 0:
                 raise SpecError(f"{where}: a prismatic joint needs an axis (two finite numbers, "
                                 "not both 0) in the parent's frame")
+            if math.hypot(*ax) < MIN_AXIS:
+                raise SpecError(f"{where}: axis {list(ax)} is shorter than {MIN_AXIS:g} (it is a "
+                                "direction, normalised: write e.g. [1, 0])")
         elif j.axis is not None:
             raise SpecError(f"{where}: axis applies to prismatic joints only")
         for key in ("offset", "initial"):
@@ -373,8 +454,13 @@ class System:
                 raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
         if j.rate is not None and not _finite(j.rate):
             raise SpecError(f"{where}: rate {j.rate!r} must be a finite number")
+        if not isinstance(j.fixed, bool):
+            raise SpecError(f"{where}: fixed {j.fixed!r} must be true or false")
         if (j.fixed or j.rate is not None) and not j.has_coordinate:
             raise SpecError(f"{where}: a {j.kind} joint has no coordinate to fix or give a rate")
+        if j.kind == "clamp" and j.initial != 0:
+            raise SpecError(f"{where}: initial applies to revolute and prismatic joints only (a "
+                            "clamp has no coordinate; use offset for its angle)")
         if len(j.point) != 2 or not all(_finite(c) for c in j.point):
             raise SpecError(f"{where}: point {j.point!r} must be two finite numbers")
 
@@ -470,14 +556,16 @@ def spanning_tree(system: System) -> Tree:
     where = f"system '{system.name}'"
     parent_of = {}
     order = []
-    queue = [GROUND]
+    queue = deque([GROUND])
     seen = {GROUND}
+    by_parent: dict[str, list] = {}  # joints by their parent body, in file order (linear)
+    for j in system.joints:
+        by_parent.setdefault(j.parent.partition(".")[0] if j.parent != GROUND else GROUND, []).append(j)
     while queue:
-        here = queue.pop(0)
-        for j in system.joints:
-            pbody = j.parent.partition(".")[0] if j.parent != GROUND else GROUND
+        here = queue.popleft()
+        for j in by_parent.get(here, ()):
             cbody = j.child.partition(".")[0]
-            if pbody != here or cbody in seen:
+            if cbody in seen:
                 continue
             child = system.body(cbody)
             if child.flexible and system.marker(j.child)[1].x != 0:

@@ -100,12 +100,19 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
     flags = SANITIZE_FLAGS if sanitize else ""
     final = root / f"{name}-{'asan-' if sanitize else ''}{build_key(gen_dir, compiler, flags)}"
     built = Built(name, final, final / f"flexsym_{name}", final / f"libflexsym_{name}.so")
-    if (final / COMPLETE).exists():
+    if _complete(built):
         return built
     with file_lock(root / f".{final.name}.lock"):
-        if not (final / COMPLETE).exists():  # not built meanwhile by another process
+        if not _complete(built):  # not built meanwhile by another process
+            if final.exists():  # marked complete but an artefact is gone: built again
+                shutil.rmtree(final)
             _build_into(gen_dir, final, name, cmake, compiler, jobs, flags)
     return built
+
+
+def _complete(built: Built) -> bool:
+    """The marker and the artefacts it vouches for (a library deleted by hand is rebuilt)."""
+    return all(p.is_file() for p in (built.build_dir / COMPLETE, built.executable, built.library))
 
 
 def _build_into(gen_dir: Path, final: Path, name: str, cmake: str, compiler: str, jobs: int,
