@@ -200,12 +200,12 @@ def test_plot_of_a_system_from_synthetic_rows(tmp_path):
     assert (tmp_path / "s2.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_readme_example_is_the_slider_crank_scene_and_its_pd_law_reads():
+def test_documented_example_is_the_slider_crank_scene_and_its_pd_law_reads():
     import re
     import tomllib
 
-    text = (ROOT / "README.md").read_text()
-    block = text.split("### Describing a system", 1)[1].split("```toml\n", 1)[1].split("```", 1)[0]
+    text = (ROOT / "docs/howto/mechanisms.md").read_text()
+    block = text.split("## Describing a system", 1)[1].split("```toml\n", 1)[1].split("```", 1)[0]
     data = tomllib.loads(block)
     assert system_from_dict(data, "slider_crank") == load_scene(SCENES / "slider_crank.toml").system
     law = re.search(r'a PD law `torque = "([^"]+)"`', text).group(1)

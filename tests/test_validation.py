@@ -388,11 +388,24 @@ def test_select_is_robust_to_timing_noise():
     assert choose([_cand(2, 0.5, error=0.1)], 0.01) is None
 
 
-# ----- README commands against the parser ------------------------------------------------------------
+# ----- README and documentation commands against the parser ---------------------------------------
+def doc_pages() -> list[Path]:
+    """The README and every page of the documentation site."""
+    return [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+
+
 def readme_commands() -> list[tuple[str, bool]]:
-    """(command, documented as refused) for every `flexsym ...` line in the README's shell
-    code blocks; a command followed by a `# flexsym: error` comment is a documented refusal."""
-    lines = (ROOT / "README.md").read_text().splitlines()
+    """(command, documented as refused) for every `flexsym ...` line in the shell code blocks of
+    the README and the documentation; a command followed by a `# flexsym: error` comment is a
+    documented refusal."""
+    cmds = []
+    for page in doc_pages():
+        cmds += page_commands(page.read_text())
+    return cmds
+
+
+def page_commands(text: str) -> list[tuple[str, bool]]:
+    lines = text.splitlines()
     cmds, lang = [], None
     for i, line in enumerate(lines):
         if line.startswith("```"):
@@ -403,7 +416,7 @@ def readme_commands() -> list[tuple[str, bool]]:
                 if len(span.split()) > 2 and not re.search(r"[A-Z]{2,}|[\[|…]|F\.csv|F\.png", span):
                     cmds.append((span, False))
             continue
-        if lang not in ("bash", "sh"):
+        if lang not in ("bash", "sh", "console"):
             continue
         refused = i + 1 < len(lines) and lines[i + 1].startswith("# flexsym: error")
         for part in re.split(r"&&|;", line.split("#")[0]):
@@ -424,10 +437,12 @@ def test_readme_commands_parse():
     assert len(cmds) >= 12 and any(refused for _, refused in cmds)
     parser = build_parser()
     for cmd, documented_refusal in cmds:
+        if "--help" in shlex.split(cmd):  # prints help and exits 0
+            continue
         try:
             args = parser.parse_args(shlex.split(cmd)[1:])
         except SystemExit:
-            pytest.fail(f"README command does not parse: {cmd}")
+            pytest.fail(f"documented command does not parse: {cmd}")
         if args.command == "run" and not args.variant.endswith(".toml"):
             check = lambda: validate(given_options(args, RUN_OPTIONS) | {"params": _params(args.param)},  # noqa: E731
                                      CLI, resolve(args)[0])
@@ -441,15 +456,16 @@ def test_readme_commands_parse():
 def test_readme_option_table_is_the_table():
     from flexsym.spec.options import markdown_table
 
-    assert markdown_table() in (ROOT / "README.md").read_text(), "run `python -m flexsym.spec.options --markdown`"
+    assert markdown_table() in (ROOT / "docs/reference/options.md").read_text(), \
+        "run `python -m flexsym.spec.options --markdown` and paste it into docs/reference/options.md"
 
 
 def test_every_table_option_is_a_run_flag_and_documented():
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs/reference/options.md").read_text()
     help_text = build_parser()._subparsers._group_actions[0].choices["run"].format_help()
     for o in OPTIONS:
         assert o.flag in help_text
-        assert f"`{o.flag}" in text, f"{o.flag} is not in the README"
+        assert f"`{o.flag}" in text, f"{o.flag} is not in docs/reference/options.md"
 
 
 # ----- fuzz: random expressions and scene mutations -----------------------------------------------

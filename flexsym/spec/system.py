@@ -253,7 +253,7 @@ class Torque:
 @dataclass(frozen=True)
 class SpringDamper:
     """A linear spring-damper between two points: force k (l - l0) + c l' along the line
-    (V = k (l - l0)^2 / 2; l0 = 0: V = k |r_b - r_a|^2 / 2, smooth at l = 0)."""
+    (V = k (l - l0)^2 / 2; l0 = 0: V = k * abs(r_b - r_a)^2 / 2, smooth at l = 0)."""
 
     a: str  # "body.marker" or "ground" (at point_a)
     b: str
