@@ -209,10 +209,14 @@ def test_ctrl_c_keeps_finished_runs_and_resume_completes(isolated_cache, tmp_pat
     out, part = tmp_path / "t.csv", tmp_path / "t.csv.partial"
     cmd = [sys.executable, "-m", "flexsym.apps.cli", "sweep", "m3", "--integrator", "radau5", "--dt", "0.01",
            "--step", "0.25", "--vary", "ws=2:8:4000", "--out", str(out), "--workers", "2"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 120
-    while not (part.exists() and len(part.read_text().splitlines()) > 200) and time.time() < deadline:
-        time.sleep(0.01)
+    # The sweep holds once 200 runs are in the partial file (a test hook), so the signal lands
+    # mid-sweep however fast or loaded the machine is.
+    env = dict(os.environ, FLEXSYM_TEST_HOLD_SWEEP_AFTER="200")
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.time() + 900  # a bound on a hang, not on the machine's speed
+    while not (part.exists() and len(part.read_text().splitlines()) > 200):
+        assert proc.poll() is None and time.time() < deadline, proc.communicate()
+        time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "--resume" in err and not out.exists()

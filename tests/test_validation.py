@@ -329,6 +329,13 @@ def _children(pid: int) -> list[int]:
     return kids
 
 
+def _exe(pid: int) -> str:
+    try:
+        return os.readlink(f"/proc/{pid}/exe")
+    except OSError:
+        return ""
+
+
 def _alive(pid: int) -> bool:
     try:
         return Path(f"/proc/{pid}/stat").read_text().split()[2] not in ("Z", "X")
@@ -346,23 +353,22 @@ def test_killed_run_leaves_no_driver_and_no_file(tmp_path, sig):
     out.write_text("earlier\n")
     proc = subprocess.Popen([sys.executable, "-m", "flexsym.apps.cli", "run", "m3", "--t-end", "1000", "--dt", "1e-5",
                              "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    child = None
-    for _ in range(600):  # the driver starts after Python's imports and checks
-        kids = _children(proc.pid)
-        if kids:
-            child = kids[0]
-            break
+    # Conditions, not sleeps: each wait ends when its state is reached; the deadlines only bound
+    # a hang (the machine may be loaded).
+    deadline = time.time() + 600
+    while not (kids := _children(proc.pid)):  # the driver starts after Python's imports and checks
+        assert proc.poll() is None and time.time() < deadline, proc.communicate()
         time.sleep(0.05)
-    assert child is not None, proc.communicate()
-    time.sleep(0.3)
+    child = kids[0]
+    while _exe(child) == _exe(proc.pid):  # forked, not yet the driver (exec pending)
+        assert _alive(child) and time.time() < deadline, "the driver ended before it started"
+        time.sleep(0.05)
+    assert os.path.basename(_exe(child)).startswith("flexsym_"), _exe(child)  # the built driver
     proc.send_signal(sig)
-    proc.communicate(timeout=30)
-    for _ in range(100):
-        if not _alive(child):
-            break
+    proc.communicate(timeout=600)
+    while _alive(child):
+        assert time.time() < deadline, "the driver outlived flexsym"
         time.sleep(0.05)
-    assert not _alive(child), "the driver outlived flexsym"
-    time.sleep(0.5)
     assert out.read_text() == "earlier\n"
     leftovers = sorted(p.name for p in tmp_path.iterdir())
     assert leftovers == ["r.csv"] or sig == signal.SIGKILL, leftovers

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import mpmath
+import textwrap
+
 import sympy as sp
 
 from flexsym.emit.cemit import emit
@@ -31,6 +33,28 @@ def _latex_names(der: Derivation) -> dict:
     return names
 
 
+
+WIDTH = 100  # columns of the plain-text report; a line up to LONG (a table row) is kept whole
+LONG = 120
+
+
+def plain(expr, width: int = WIDTH) -> str:
+    """An expression as plain text, one term of a sum per line, wrapped at `width` columns:
+    symbol names are printed as they are (a 2-D pretty print reads 'x^2' in a name as a power
+    and runs lines thousands of columns wide)."""
+    if isinstance(expr, sp.MatrixBase):
+        return "\n".join(f"[{i},{j}] = " + plain(expr[i, j], width).lstrip()
+                         for i in range(expr.rows) for j in range(expr.cols) if expr[i, j] != 0) or "0"
+    terms = expr.as_ordered_terms() if isinstance(expr, sp.Add) else [expr]
+    lines = []
+    for k, term in enumerate(terms):
+        text = sp.sstr(term)
+        if k:
+            text = ("- " + sp.sstr(-term)) if text.startswith("-") else "+ " + text
+        lines += textwrap.wrap(text, width, initial_indent="  ", subsequent_indent="      ",
+                               break_on_hyphens=False) or ["  "]
+    return "\n".join(lines)
+
 class Report:
     def __init__(self, spec: VariantSpec, latex: bool = False):
         self.spec = spec
@@ -48,13 +72,19 @@ class Report:
     def fmt(self, expr) -> str:
         if self.latex:
             return sp.latex(expr, symbol_names=self._names)
-        return sp.pretty(expr, use_unicode=True, wrap_line=False)
+        return plain(expr)
 
     def title(self, text: str) -> None:
         self.lines += ["", text, "-" * len(text)]
 
     def add(self, text: str = "") -> None:
-        self.lines.append(text)
+        for line in text.split("\n"):
+            if len(line) > LONG and not self.latex and not line.lstrip().startswith("|"):
+                indent = " " * (len(line) - len(line.lstrip()))
+                self.lines += textwrap.wrap(line, WIDTH, initial_indent="", subsequent_indent=indent + "    ",
+                                            break_on_hyphens=False, drop_whitespace=True) or [line]
+            else:
+                self.lines.append(line)
 
     def render(self, sections=SECTIONS) -> str:
         if self.spec.kind == "fe":

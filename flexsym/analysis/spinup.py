@@ -105,13 +105,17 @@ def _save_atomically(fig, path: Path) -> None:
             os.remove(tmp)
 
 
-def describe(r: RunResult, outputs, status: str | None = None) -> str:
-    """Per output column: extremes with their times and the final value. status: the
-    verdict on the result (validity.assess), else the run's own status."""
-    rows = ["| quantity | min | at t [s] | max | at t [s] | final |", "|---|---|---|---|---|---|"]
+def describe(r: RunResult, outputs, status: str | None = None, units: dict | None = None) -> str:
+    """Per output column: extremes with their times and the final value (in `units`, when
+    given: column -> SI unit). status: the verdict on the result (validity.assess), else the
+    run's own status."""
+    units = units or {}
+    rows = ["| quantity | unit | min | at t [s] | max | at t [s] | final |",
+            "|---|---|---|---|---|---|---|"]
     for c in outputs:
         y = r[c]
         i, j = int(np.argmin(y)), int(np.argmax(y))
-        rows.append(f"| {c} | {y[i]:.6g} | {r.t[i]:.3f} | {y[j]:.6g} | {r.t[j]:.3f} | {y[-1]:.6g} |")
+        rows.append(f"| {c} | {units.get(c, '')} | {y[i]:.6g} | {r.t[i]:.3f} | {y[j]:.6g} | {r.t[j]:.3f} "
+                    f"| {y[-1]:.6g} |")
     status = status if status is not None else ("ok" if r.ok else r.message)
     return "\n".join(rows) + f"\n\nstatus: {status}; integration CPU {r.summary['cpu_median'] * 1e3:.2f} ms"

@@ -189,8 +189,12 @@ def cmd_run(args) -> int:
     verdict = assess(spec, res, options.params)
     s = Summary(spec, res)
     ts = options.params.get("ts", options.t_end)
-    print(describe(res, spec.outputs, verdict.status) if scene is not None or "v_tip" not in res.columns
-          else table([s], ts, options.t_end))
+    if scene is not None or "v_tip" not in res.columns:
+        from flexsym.spec.output_names import info
+
+        print(describe(res, spec.outputs, verdict.status, {o: info(o, spec.points).unit for o in spec.outputs}))
+    else:
+        print(table([s], ts, options.t_end))
     if out is not None:
         if res.written == "complete":
             print(f"results: {out}")
@@ -257,7 +261,18 @@ def _run_system(args, scene) -> int:
     status = "ok" if res.ok else f"stopped: {res.message}"
     print(f"{system.name}: {options.integrator}, dt = {options.dt:g} s, t_end = "
           f"{options.t_end:g} s: {status}")
+    if len(res.t):
+        from flexsym.analysis.spinup import describe
+        from flexsym.spec.system import output_unit
+
+        shown = [o.column for o in scene.system.outputs]  # the user's, not the plot's columns
+        units = {o.column: output_unit(scene.system, o.quantity) for o in scene.system.outputs}
+        print(describe(res, shown, status, units))
     if res.written != "none":
+        if plot is not None:  # the CSV does not depend on whether a picture was asked for
+            from flexsym.toolchain.run import drop_columns
+
+            drop_columns(out, {o.column for o in system.outputs} - {o.column for o in scene.system.outputs})
         print(f"results{' (truncated)' if res.written == 'truncated' else ''}: {out}")
     if plot is not None and len(res.t) > 1:
         from flexsym.analysis.system_plot import plot_system
@@ -453,6 +468,10 @@ def cmd_select(args) -> int:
         raise SpecError(f"--max-bending: must be one of 1..{MAX_BENDING} (got {args.max_bending})")
     repeat = validate(given_options(args, ("repeat",)), CLI).repeat
     scene = load_scene(args.scene)
+    if not hasattr(scene, "spec"):  # a mechanism (system scene)
+        raise SpecError(f"{args.scene}: select chooses among one-beam variants; for a mechanism, "
+                        "compare models with `flexsym run SCENE --model m2|m3|ef` (select for "
+                        "mechanisms is not available yet)")
     print(f"{scene.path}: candidates on outputs {', '.join(scene.spec.outputs)}, tolerance {tol:g}")
     results, best = select(scene, tol, max_bending=int(args.max_bending), repeat=repeat,
                            exact=args.exact)

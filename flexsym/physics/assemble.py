@@ -194,12 +194,34 @@ class SystemDerivation:
         return self.T, self.V, jacobi_integral(self.T, self.M, self.qd, self.V)
 
 
+def _held_beyond_root(system: System, beam: str) -> str:
+    """The first joint, force or spring acting on the beam anywhere but at its root ('' if none)."""
+    def beyond(ref: str) -> bool:
+        return ref.partition(".")[0] == beam and ref.partition(".")[2] != "root"
+
+    for j in system.joints:
+        if beyond(j.parent) or beyond(j.child):
+            return f"joint '{j.name}'"
+    for load in system.loads:
+        refs = [getattr(load, k, "") for k in ("marker", "a", "b")]
+        if any(isinstance(r, str) and beyond(r) for r in refs):
+            return f"load '{load.name or type(load).__name__}'"
+    return ""
+
+
 def _unsupported(system: System, tree) -> None:
     where = f"system '{system.name}'"
     for b in system.bodies:
         if b.flexible and b.model.kind == "modal" and STRAIN_MODELS[b.model.strain].kinematics == "exact":
             raise SpecError(f"{where}: body '{b.name}': the exact kinematics (strain model 'exact') "
                             "is derived for a guided hub only; use ef for a geometrically exact body")
+        if b.flexible and b.model.kind == "modal" and b.model.strain == "prestress":
+            held = _held_beyond_root(system, b.name)
+            if held:
+                raise SpecError(f"{where}: body '{b.name}': the prestress model's axial force is the "
+                                f"beam's own centrifugal load, which holds for a beam free beyond its "
+                                f"root; {held} loads it axially: use m2 or m3 (N from equilibrium), "
+                                "or ef")
         body = getattr(b.model, "body", None) if b.flexible else None
         if body is not None:  # the body's data are the beam's: markers and p must agree
             ref = body.reference

@@ -32,6 +32,7 @@ import itertools
 import json
 import math
 import os
+import time
 import re
 import threading
 from dataclasses import dataclass, field, replace
@@ -471,6 +472,9 @@ def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int 
     out = Path(out)
     part = partial_path(out)
     check_partial(out, resume)
+    hold = os.environ.get("FLEXSYM_TEST_HOLD_SWEEP_AFTER")
+    if hold and on_chunk is None:  # tests: a sweep that cannot finish before their signal
+        on_chunk = _hold_after(int(hold))
     done = _read_partial(part, plan) if part.exists() else {}
     header = plan.header()
     todo = [i for i in range(len(plan)) if i not in done]
@@ -501,6 +505,15 @@ def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int 
     os.replace(tmp, out)
     part.unlink()
     return out
+
+
+def _hold_after(rows: int):
+    """on_chunk that, once `rows` runs are in the partial file, waits for a signal: a test
+    interrupts the sweep at a known point whatever the machine's speed."""
+    def hold(done: int, total: int) -> None:
+        while done >= rows:
+            time.sleep(3600)
+    return hold
 
 
 def _collect(plan: SweepPlan, part: Path, done: dict, results, progress, on_chunk) -> None:

@@ -630,6 +630,20 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
     return fn, args
 
 
+def output_unit(system: System, quantity: str) -> str:
+    """The SI unit of an output quantity (for summaries, CSV readers and plot axes)."""
+    fn, args = parse_output(system, quantity)
+    if fn in ("angle", "rate", "torque"):
+        joint = system.joint(args[0] if fn != "torque" else
+                             next(d.joint for d in system.drivers if d.name == args[0]))
+        linear = joint.kind == "prismatic"
+        return {"angle": ("rad", "m"), "rate": ("rad/s", "m/s"), "torque": ("N m", "N")}[fn][linear]
+    if fn == "reaction":
+        return "N m" if args[1] == "moment" else "N"
+    return {"x": "m", "y": "m", "v": "m", "u": "m", "w": "m", "N": "N", "M": "N m", "T": "J",
+            "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)"}[fn]
+
+
 def beam_station(system: System, beam: FlexibleBeam, text: str, where: str) -> float:
     """A station on a beam: a marker name or a number (m), 0 <= x <= length."""
     for m in beam.all_markers:

@@ -99,7 +99,16 @@ def _driver(cmd: list[str]) -> subprocess.CompletedProcess:
     """Run the driver; it ends with this process (FLEXSYM_PARENT_PID, see driver.c), and an
     exception here (a signal turned into one by the CLI, Ctrl-C) kills it before it returns."""
     env = dict(os.environ, FLEXSYM_PARENT_PID=str(os.getpid()))
-    return subprocess.run(cmd, capture_output=True, text=True, env=env)
+    with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env) as proc:
+        try:
+            out, err = proc.communicate()
+        except BaseException:
+            # subprocess.run kills the driver on Ctrl-C but does not wait for it: the driver
+            # could still write into its temporary folder while that is being removed.
+            proc.kill()
+            proc.wait()
+            raise
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 
 def _with_header(csv: Path, header) -> None:
@@ -110,6 +119,24 @@ def _with_header(csv: Path, header) -> None:
         dst.write(src.readline())
         dst.writelines(f"# {line}\n" for line in header)
         shutil.copyfileobj(src, dst)
+    os.replace(tmp, csv)
+
+
+def drop_columns(csv: Path, names) -> None:
+    """Rewrite a result CSV without the named columns (text kept as written; atomic): the
+    columns a picture needed stay out of the user's file."""
+    names = set(names)
+    tmp = csv.with_name(f".{csv.name}.cols.{os.getpid()}")
+    with open(csv, encoding="utf-8") as src, open(tmp, "w", encoding="utf-8") as dst:
+        header = src.readline().rstrip("\n").split(",")
+        keep = [i for i, c in enumerate(header) if c not in names]
+        dst.write(",".join(header[i] for i in keep) + "\n")
+        for line in src:
+            if line.startswith("#"):
+                dst.write(line)
+            else:
+                fields = line.rstrip("\n").split(",")
+                dst.write(",".join(fields[i] for i in keep) + "\n")
     os.replace(tmp, csv)
 
 

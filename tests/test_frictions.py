@@ -1,0 +1,92 @@
+"""What a user's first mechanisms ran into (issue 18, item 1), each checked as the user sees
+it: the exit code, the one line, the files written or not, the printed summary."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexsym.apps.cli import main
+from flexsym.scenes.scene import load_scene
+from flexsym.spec.system import output_unit
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "scenes"
+
+
+def run_cli(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.mark.parametrize("scene", ["slider_crank", "pendulum", "hub", "four_bar", "stepped_hub"])
+def test_select_on_a_mechanism_is_refused_in_one_line(capsys, scene, tmp_path, monkeypatch):
+    monkeypatch.setenv("FLEXSYM_CACHE", str(tmp_path / "cache"))
+    code, out, err = run_cli(capsys, "select", SCENES / f"{scene}.toml", "--tol", "0.01")
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and f"{scene}.toml" in err and "--model" in err
+    assert not (tmp_path / "cache").exists()  # refused before any work
+
+
+@pytest.mark.parametrize("scene, holder", [("slider_crank", "joint 'slider_pin'"),
+                                           ("four_bar", "joint 'loop'")])
+def test_prestress_on_a_beam_held_beyond_its_root_is_refused(capsys, scene, holder, tmp_path):
+    """prestress's N is the beam's own centrifugal load: a coupler or connecting rod is loaded
+    axially by its pins, so the model would be silently wrong there (N_mid 0.19 N against ef's
+    6.08 N on the slider-crank)."""
+    out = tmp_path / "r.csv"
+    code, _, err = run_cli(capsys, "run", SCENES / f"{scene}.toml", "--model", "prestress", "--out", out)
+    assert code == 2 and "prestress" in err and holder in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_prestress_on_a_free_beam_still_runs(capsys, tmp_path):
+    """S3: the pendulum's beam is free beyond its pin: prestress stays available."""
+    code, out, _ = run_cli(capsys, "run", SCENES / "pendulum.toml", "--model", "prestress", "--t-end", "0.01")
+    assert code == 0 and "ok" in out
+
+
+def test_a_mechanism_run_prints_every_output_with_its_unit(capsys):
+    code, out, _ = run_cli(capsys, "run", SCENES / "slider_crank.toml", "--t-end", "0.02")
+    assert code == 0
+    rows = {line.split("|")[1].strip(): line.split("|")[2].strip() for line in out.splitlines()
+            if line.startswith("| ") and not line.startswith("| quantity")}
+    assert rows == {"x_s": "m", "w_mid": "m", "N_mid": "N"}
+    assert "status: ok" in out
+
+
+def test_a_one_beam_scene_summary_carries_units(capsys):
+    code, out, _ = run_cli(capsys, "run", SCENES / "paper.toml", "--t-end", "0.5")
+    assert code == 0
+    assert "| v_tip | m |" in out and "| M_A | N m |" in out
+
+
+def test_output_units():
+    system = load_scene(SCENES / "slider_crank.toml").system
+    cases = {"x(slider.pin)": "m", "angle(crank_joint)": "rad", "rate(crank_joint)": "rad/s",
+             "angle(slide)": "m", "rate(slide)": "m/s", "N(rod, mid)": "N", "M(rod, 0.1)": "N m",
+             "w(rod, mid)": "m", "reaction(slider_pin, x)": "N", "reaction(crank_pin, moment)": "N m",
+             "T": "J", "V": "J", "violation": "1 (of the size)"}
+    assert {q: output_unit(system, q) for q in cases} == cases
+
+
+def test_the_csv_does_not_depend_on_the_picture(capsys, tmp_path):
+    """--plot needs marker positions as extra columns; they stay out of the user's CSV: the
+    file is byte for byte the one written without --plot."""
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    assert run_cli(capsys, "run", SCENES / "pendulum.toml", "--t-end", "0.05", "--out", a)[0] == 0
+    assert run_cli(capsys, "run", SCENES / "pendulum.toml", "--t-end", "0.05", "--out", b,
+                   "--plot", tmp_path / "b.png")[0] == 0
+    assert a.read_bytes() == b.read_bytes()
+    assert (tmp_path / "b.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("variant", ["m3", "exact", "ef"])
+def test_inspect_is_readable_and_names_integrals_as_they_are(capsys, variant):
+    """No line wider than 120 columns (was up to 10,000), and an integral's name is printed as
+    written (the 2-D printer read '^' and '_' in names as exponents and subscripts)."""
+    code, out, _ = run_cli(capsys, "inspect", variant)
+    assert code == 0
+    assert max(len(line) for line in out.splitlines()) <= 120
+    if variant == "m3":
+        assert "J[H[v_cp1,v_cp1]*phi_v_cp1]" in out
