@@ -26,7 +26,7 @@ _models: dict = {}
 @pytest.fixture(scope="session")
 def derivation():
     from flexsym.codegen.derive import derive
-    from flexsym.spec.variant import builtin
+    from flexsym.model.variant import builtin
 
     def get(name):
         spec = builtin(name)
@@ -40,7 +40,7 @@ def derivation():
 @pytest.fixture(scope="session")
 def model(isolated_cache):
     from flexsym.toolchain.pipeline import compiled
-    from flexsym.spec.variant import builtin
+    from flexsym.model.variant import builtin
 
     def get(name):
         spec = builtin(name)
@@ -56,7 +56,7 @@ def simulate(isolated_cache):
     """simulate(variant, **run options) -> RunResult (builds once per variant)."""
     from flexsym.toolchain.pipeline import prepare
     from flexsym.toolchain.run import run_built
-    from flexsym.spec.variant import builtin
+    from flexsym.model.variant import builtin
 
     builds = {}
 

@@ -15,8 +15,8 @@ import pytest
 from flexsym.apps import api
 from flexsym.apps.cli import main
 from flexsym.core.errors import SpecError
-from flexsym.spec.limits import MAX_BODIES, MAX_FILE_BYTES, MAX_JOINTS
-from flexsym.spec.system import Driver, Gravity, Joint, Marker, Output, RigidBody, System
+from flexsym.model.limits import MAX_BODIES, MAX_FILE_BYTES, MAX_JOINTS
+from flexsym.model.system import Driver, Gravity, Joint, Marker, Output, RigidBody, System
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -182,7 +182,7 @@ def test_huge_scene_file_is_refused_unread(tmp_path, capsys, empty_cache):
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory):
     from flexsym.scenes.feimport import write_folder
-    from flexsym.spec.fedata import BeamBody, PointMass, Section
+    from flexsym.model.fedata import BeamBody, PointMass, Section
 
     inner = Section(7.0e10, 3000.0, 4.0e-4, 2.0e-7)
     folder = tmp_path_factory.mktemp("fe") / "blade"
@@ -392,7 +392,7 @@ def test_build_with_its_library_gone_is_rebuilt(m1_kernels):
     """A build directory marked complete whose library was deleted is built again, not used."""
     from flexsym.toolchain.build import build
 
-    from flexsym.spec.variant import builtin
+    from flexsym.model.variant import builtin
     from flexsym.toolchain.pipeline import generated_folder
 
     built = m1_kernels.built

@@ -13,9 +13,9 @@ import sympy as sp
 from flexsym.physics.energy import BEAM_PARAMS, alpha, w
 from flexsym.codegen.generate import MANIFEST, check_folder, generate_files, read_manifest
 from flexsym.codegen.derive import build_kernels
-from flexsym.spec.maneuver import t as t_sym
+from flexsym.model.maneuver import t as t_sym
 from flexsym.core.paths import generated_dir
-from flexsym.spec.variant import BUILTIN, builtin
+from flexsym.model.variant import BUILTIN, builtin
 
 from conftest import BUILTIN_NAMES
 
@@ -104,7 +104,7 @@ def test_generation_is_deterministic_within_a_process():
 
 def _hash_in_subprocess(seed: str) -> str:
     code = ("import hashlib, json; from flexsym.codegen.generate import generate_files; "
-            "from flexsym.spec.variant import builtin; "
+            "from flexsym.model.variant import builtin; "
             "f = generate_files(builtin('m2')); "
             "print(hashlib.sha256(json.dumps(f, sort_keys=True).encode()).hexdigest())")
     env = dict(os.environ, PYTHONHASHSEED=seed)

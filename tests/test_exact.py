@@ -10,8 +10,8 @@ from flexsym.physics import exact as X
 from flexsym.codegen.derive import derive
 from flexsym.physics.energy import BEAM_PARAMS
 from flexsym.codegen.derive import build_kernels
-from flexsym.spec.modes import mode
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.modes import mode
+from flexsym.model.variant import builtin, customize
 from flexsym.physics.validity import assess, truncation_share
 
 P0 = np.array([p.default for p in BEAM_PARAMS])
@@ -54,7 +54,7 @@ def _kinetic_scipy(der, q, qd, w, p=P0):
 def mode_slope(m):
     import sympy as sp
 
-    from flexsym.spec.modes import s
+    from flexsym.model.modes import s
 
     return sp.lambdify(s, sp.diff(m.expr, s), "numpy")
 

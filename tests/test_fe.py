@@ -10,7 +10,7 @@ from flexsym.physics.energy import alpha, w
 from flexsym.physics.fe import build_element_kernels, derive_element
 from flexsym.toolchain.pipeline import compiled, prepare
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 
 RHO, E, A, I, L = 3000.0, 7.0e10, 4.0e-4, 2.0e-7, 10.0
 OMEGA1 = 1.8751040687119611**2 * np.sqrt(E * I / (RHO * A * L**4))

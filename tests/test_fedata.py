@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from flexsym.spec import fedata
+from flexsym.model import fedata
 from flexsym.apps.cli import main
 from flexsym.codegen.derive import derive
 from flexsym.core.errors import SpecError
-from flexsym.spec.fedata import BeamBody, PointMass, Section
+from flexsym.model.fedata import BeamBody, PointMass, Section
 from flexsym.scenes.feimport import read_folder, write_folder
-from flexsym.spec.modes import ModeRef, clamped_free_beta, clamped_pinned_beta
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.modes import ModeRef, clamped_free_beta, clamped_pinned_beta
+from flexsym.model.variant import builtin, customize
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "stepped_blade.toml"

@@ -7,7 +7,7 @@ import pytest
 
 from flexsym.apps.cli import main
 from flexsym.scenes.scene import load_scene
-from flexsym.spec.system import output_unit
+from flexsym.model.system import output_unit
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"

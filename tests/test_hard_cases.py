@@ -11,7 +11,7 @@ import pytest
 
 from flexsym.toolchain.pipeline import compiled, prepare
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.variant import builtin, customize
 from flexsym.physics.validity import VALIDITY_LIMIT, assess
 
 L = 10.0

@@ -8,7 +8,7 @@ from flexsym.apps import api
 from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import prepare
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 from flexsym.physics.validity import assess
 
 # variant, run options, parameter sets: every integrator, modal and finite elements

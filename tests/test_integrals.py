@@ -10,7 +10,7 @@ from scipy import integrate
 
 from flexsym.physics.energy import ENERGY_TERMS, A, E, L, build_fields
 from flexsym.physics.integrals import REL_TOL, IntegralTable
-from flexsym.spec.modes import Mode, ModeRef, s
+from flexsym.model.modes import Mode, ModeRef, s
 
 from conftest import BUILTIN_NAMES
 
@@ -48,7 +48,7 @@ def test_modal_integrals_match_scipy_quad(derivation, name):
 
 def test_gauss_path_agrees_with_exact_path():
     """Integrals that sympy does in closed form, redone by the quadrature path, agree to 25 digits."""
-    from flexsym.spec.modes import mode
+    from flexsym.model.modes import mode
 
     modes = {m.name: m for m in (mode(ModeRef("axial", "static")), mode(ModeRef("axial", "sine", 2)),
                                  mode(ModeRef("bending", "static")))}
@@ -74,7 +74,7 @@ def test_geometric_stiffness_of_cubic_field_matches_paper_element_matrix():
     """One beam element: u = s * eta (linear axial field), v = Hermite cubic with nodal dofs
     d = (v1, L th1, v2, L th2). The cubic energy term EA/2 int u_x v_x^2 dx must equal
     1/2 P q^T K_GL q with P = EA (u2 - u1)/L and K_GL of the paper's eq. (8)."""
-    from flexsym.spec.modes import mode
+    from flexsym.model.modes import mode
 
     axial = mode(ModeRef("axial", "static"))
     bending = _hermite_modes()

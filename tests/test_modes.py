@@ -4,7 +4,7 @@ import pytest
 import sympy as sp
 
 from flexsym.core.errors import SpecError
-from flexsym.spec.modes import (FAMILIES, ModeRef, clamped_free_beta, clamped_pinned_beta, mode,
+from flexsym.model.modes import (FAMILIES, ModeRef, clamped_free_beta, clamped_pinned_beta, mode,
                            parse_mode_token, s)
 
 ALL_MODES = [ModeRef(axis, fam, k) for (axis, fam), f in FAMILIES.items()

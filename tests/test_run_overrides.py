@@ -1,6 +1,6 @@
 """Run options on the command line for scene files (issue 19, item 5): `flexsym run SCENE --dt ...`
 replaces the scene's [solver] / [output] values, validated once with them through the option table
-(flexsym/spec/options.py with_overrides), and records the effective options in the CSV header."""
+(flexsym/model/options.py with_overrides), and records the effective options in the CSV header."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -9,7 +9,7 @@ import pytest
 
 from flexsym.toolchain.build import SANITIZE_FLAGS, build, find_compiler
 from flexsym.toolchain.pipeline import generated_folder
-from flexsym.spec.variant import BUILTIN
+from flexsym.model.variant import BUILTIN
 
 VARIANTS = [v.name for v in BUILTIN]
 SHORT = {  # integrator -> options of a short run

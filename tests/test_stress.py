@@ -5,7 +5,7 @@ import pytest
 
 from flexsym.toolchain.pipeline import compiled, prepare
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.variant import builtin, customize
 
 RHO, E, A, I, L = 3000.0, 7.0e10, 4.0e-4, 2.0e-7, 10.0
 OMEGA = 6.0

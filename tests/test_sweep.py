@@ -13,7 +13,7 @@ from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import prepare
 from flexsym.core.progress import Progress
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 from flexsym.sim.sweep import make_plan, read_table
 
 pd = pytest.importorskip("pandas")

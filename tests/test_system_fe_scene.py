@@ -44,11 +44,11 @@ def test_scene_equals_the_python_system_row_for_row(tmp_path):
     N and M from equilibrium): the same System, and the CLI's rows equal run_system's bit for bit."""
     from dataclasses import replace
 
-    from flexsym.spec.fedata import BeamBody, PointMass
-    from flexsym.spec.fedata import Section as FeSection
-    from flexsym.spec.variant import VariantSpec, _refs
+    from flexsym.model.fedata import BeamBody, PointMass
+    from flexsym.model.fedata import Section as FeSection
+    from flexsym.model.variant import VariantSpec, _refs
     from flexsym.toolchain.pipeline import run_system
-    from flexsym.spec.library import hub_system
+    from flexsym.model.library import hub_system
 
     body = BeamBody.from_segments([(5.0, FeSection(7e10, 3000.0, 4e-4, 2e-7)),
                                    (5.0, FeSection(7e10, 3000.0, 2e-4, 5e-8))], 100,
@@ -83,13 +83,13 @@ def test_scene_equals_the_python_system_row_for_row(tmp_path):
 
 
 def lib_marker(name, x):
-    from flexsym.spec.system import Marker
+    from flexsym.model.system import Marker
 
     return Marker(name, x)
 
 
 def lib_output(column, quantity):
-    from flexsym.spec.system import Output
+    from flexsym.model.system import Output
 
     return Output(column, quantity)
 
@@ -127,8 +127,8 @@ def test_folder_body_reads_like_its_segments(tmp_path):
 
 
 def _bad_folder(tmp_path: Path, what: str) -> None:
-    from flexsym.spec.fedata import BeamBody
-    from flexsym.spec.fedata import Section as FeSection
+    from flexsym.model.fedata import BeamBody
+    from flexsym.model.fedata import Section as FeSection
     from flexsym.scenes.feimport import write_folder
 
     folder = write_folder(BeamBody.from_segments([(10.0, FeSection(7e10, 3000.0, 4e-4, 2e-7))], 4),

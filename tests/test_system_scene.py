@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from flexsym.spec import library as lib
+from flexsym.model import library as lib
 from flexsym.apps.cli import main
 from flexsym.core.errors import SpecError
 from flexsym.scenes.scene import load_scene
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 from flexsym.scenes.system_scene import check_assembly, initial_poses, system_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -4,10 +4,10 @@ from dataclasses import replace
 import pytest
 
 from flexsym.core.errors import SpecError
-from flexsym.spec.variant import builtin
-from flexsym.spec.system import (Driver, FlexibleBeam, Joint, Marker, Output, RigidBody, System,
+from flexsym.model.variant import builtin
+from flexsym.model.system import (Driver, FlexibleBeam, Joint, Marker, Output, RigidBody, System,
                              spanning_tree)
-from flexsym.spec.library import (PAPER_SECTION, hub_system, pendulum_system,
+from flexsym.model.library import (PAPER_SECTION, hub_system, pendulum_system,
                                       slider_crank_system, spin_up_system)
 
 M3 = builtin("m3")
@@ -91,7 +91,7 @@ def test_system_generation_is_deterministic_across_hash_seeds():
     import sys
 
     code = ("import hashlib, json; from flexsym.codegen.sysgen import generate_system_files; "
-            "from flexsym.spec.system import *; "
+            "from flexsym.model.system import *; "
             "s = System('osc', bodies=(RigidBody('block', 2.0, 0.01, markers=(Marker('c', 0.0),)),), "
             "joints=(Joint('slide', 'prismatic', 'ground', 'block.c', axis=(1.0, 0.0), initial=0.1),), "
             "loads=(SpringDamper('ground', 'block.c', 50.0, 2.0, 1.0, point_a=(-1.0, 0.0)), Gravity()), "

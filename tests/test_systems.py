@@ -8,8 +8,8 @@ import sympy as sp
 from flexsym.physics.assemble import derive_system
 from flexsym.codegen.derive import derive
 from flexsym.physics.energy import BEAM_PARAMS, alpha, w
-from flexsym.spec.variant import builtin
-from flexsym.spec.library import spin_up_system
+from flexsym.model.variant import builtin
+from flexsym.model.library import spin_up_system
 
 PARAMS = {p.symbol: p.default for p in BEAM_PARAMS}
 
@@ -57,8 +57,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from flexsym.spec.system import Output
-from flexsym.spec.library import hub_system, pendulum_system
+from flexsym.model.system import Output
+from flexsym.model.library import hub_system, pendulum_system
 
 J_TOTAL = 40.0 + 3000 * 4e-4 * 10.0**3 / 3  # J_h + rho A L^3 / 3 (hub + rigid beam)
 
@@ -191,7 +191,7 @@ def _x_rigid(t, r=0.15, l=0.3):
 @pytest.fixture(scope="module")
 def slider_crank_built():
     from flexsym.toolchain.pipeline import prepare_system
-    from flexsym.spec.library import slider_crank_system
+    from flexsym.model.library import slider_crank_system
 
     system = slider_crank_system(builtin("m3"))
     extra = (Output("T", "T"), Output("V", "V"), Output("tau", "torque(crank_drive)"),
@@ -268,7 +268,7 @@ def test_spring_damper_on_a_prismatic_joint():
     l0 > 0 from a ground point one length away) against the damped oscillator's closed form
     x = x0 e^(-z w t) (cos w_d t + z / sqrt(1 - z^2) sin w_d t); 7.6e-9 m measured (0.1 ms)."""
     from flexsym.toolchain.pipeline import run_system
-    from flexsym.spec.system import Joint, Marker, RigidBody, SpringDamper, System
+    from flexsym.model.system import Joint, Marker, RigidBody, SpringDamper, System
 
     m, k, c, x0 = 2.0, 50.0, 2.0, 0.1
     wn = math.sqrt(k / m)
@@ -291,7 +291,7 @@ def test_s0_ef_system_equals_todays_ef():
     max |dv_tip| 1.0e-11 m measured (different assembly and rounding of the stiff axial dofs)."""
     from flexsym.toolchain.pipeline import prepare
     from flexsym.toolchain.run import run_built
-    from flexsym.spec.variant import customize
+    from flexsym.model.variant import customize
     from flexsym.toolchain.pipeline import prepare_system
 
     ef = customize(builtin("ef"), elements=4)
@@ -309,7 +309,7 @@ def test_s3_ef_conserves_energy_and_agrees_with_m3(pendulum_built):
     peak settles 1.9 % above #3's. The vibration's phase drifts apart over 2 s, so only peaks
     are compared)."""
     from flexsym.toolchain.run import run_built
-    from flexsym.spec.variant import customize
+    from flexsym.model.variant import customize
     from flexsym.toolchain.pipeline import prepare_system
 
     system = pendulum_system(customize(builtin("ef"), elements=4))

@@ -6,8 +6,8 @@ import pytest
 
 from flexsym.codegen import sysgen
 from flexsym.emit.kernels import SympyToCasadi
-from flexsym.spec.variant import builtin, customize
-from flexsym.spec.library import pendulum_system
+from flexsym.model.variant import builtin, customize
+from flexsym.model.library import pendulum_system
 from flexsym.toolchain.pipeline import run_system
 
 
@@ -103,8 +103,8 @@ def test_kinetic_terms_by_ad_equal_sympy_lagrange():
 
     from flexsym.physics.assemble import EF_T, ef_guided_force
     from flexsym.physics.efbody import generic_element
-    from flexsym.spec.system import Output
-    from flexsym.spec.library import slider_crank_system
+    from flexsym.model.system import Output
+    from flexsym.model.library import slider_crank_system
     from dataclasses import replace
 
     system = slider_crank_system(customize(builtin("ef"), elements=2))
@@ -167,9 +167,9 @@ def test_root_moment_from_equilibrium_converges_with_the_motion():
     elements' curvature moment than 4 elements' curvature is (it is the same quantity)."""
     from dataclasses import replace
 
-    from flexsym.spec.system import Output
+    from flexsym.model.system import Output
     from flexsym.analysis.system_bench import EF_EQUILIBRIUM
-    from flexsym.spec.library import hub_system
+    from flexsym.model.library import hub_system
 
     quantity, sign = EF_EQUILIBRIUM["hub"]["M_A"]
     runs = {}
@@ -204,9 +204,9 @@ def hub_runs():
     reference), m3 with M from equilibrium, prestress with M from the curvature (the scene's)."""
     from dataclasses import replace
 
-    from flexsym.spec.system import Output
+    from flexsym.model.system import Output
     from flexsym.analysis.system_bench import EF_EQUILIBRIUM, ef_system
-    from flexsym.spec.library import hub_system
+    from flexsym.model.library import hub_system
 
     opts = dict(t_end=20.0, dt=1e-3, interval=1e-2, integrator="genalpha")
     quantity, sign = EF_EQUILIBRIUM["hub"]["M_A"]

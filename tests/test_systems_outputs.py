@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from flexsym.core.errors import SpecError
-from flexsym.spec.variant import builtin
-from flexsym.spec.system import Gravity, Joint, Marker, Output, RigidBody, System
-from flexsym.spec.library import slider_crank_system
+from flexsym.model.variant import builtin
+from flexsym.model.system import Gravity, Joint, Marker, Output, RigidBody, System
+from flexsym.model.library import slider_crank_system
 
 JOINTS = ("slider_pin", "slide", "crank_pin", "crank_joint")
 
@@ -142,7 +142,7 @@ def test_s0_equilibrium_n_and_m_equal_todays(variant):
     from flexsym.physics.assemble import derive_system
     from flexsym.codegen.derive import derive
     from flexsym.physics.energy import BEAM_PARAMS, alpha, w
-    from flexsym.spec.library import spin_up_system
+    from flexsym.model.library import spin_up_system
 
     stations = {"A": "root", "s0p75": "7.5"}  # the paper beam: L = 10 m
     spec = replace(builtin(variant), axial_force="equilibrium", moment="equilibrium",
@@ -170,7 +170,7 @@ def test_s3_equilibrium_with_gravity_meets_the_pin():
     and its zero moment."""
     from flexsym.toolchain.run import run_built
     from flexsym.toolchain.pipeline import prepare_system
-    from flexsym.spec.library import pendulum_system
+    from flexsym.model.library import pendulum_system
 
     system = pendulum_system(replace(builtin("m1"), axial_force="equilibrium",
                                      moment="equilibrium"))
@@ -191,12 +191,12 @@ def test_body_from_fe_data_in_a_system_converges_to_the_analytic_modes():
     invariants computed from the discretisation, as the one-beam path) against the analytic
     #1 over 0.5 s: w_mid at O(h^4) (measured 1.6e-6 -> 1.1e-7 m of a 1.2 mm peak), M_mid (the
     body's element recovery, linear curvature per element) at O(h^2) (2.7e-3 -> 7.0e-4 N m)."""
-    from flexsym.spec.fedata import BeamBody
-    from flexsym.spec.fedata import Section as FeSection
+    from flexsym.model.fedata import BeamBody
+    from flexsym.model.fedata import Section as FeSection
     from flexsym.toolchain.run import run_built
     from flexsym.toolchain.pipeline import prepare_system
-    from flexsym.spec.library import PENDULUM_SECTION as P
-    from flexsym.spec.library import pendulum_system
+    from flexsym.model.library import PENDULUM_SECTION as P
+    from flexsym.model.library import pendulum_system
 
     def run(model):
         return run_built(prepare_system(pendulum_system(model)), t_end=0.5, dt=1e-4)
@@ -215,10 +215,10 @@ def test_body_from_fe_data_in_a_system_converges_to_the_analytic_modes():
 
 def test_bad_system_outputs_and_bodies_are_refused_with_one_line():
     from flexsym.physics.assemble import derive_system
-    from flexsym.spec.fedata import BeamBody
-    from flexsym.spec.fedata import Section as FeSection
-    from flexsym.spec.library import PENDULUM_SECTION as P
-    from flexsym.spec.library import pendulum_system
+    from flexsym.model.fedata import BeamBody
+    from flexsym.model.fedata import Section as FeSection
+    from flexsym.model.library import PENDULUM_SECTION as P
+    from flexsym.model.library import pendulum_system
 
     system = pendulum_system(builtin("m1"))
     with pytest.raises(SpecError, match=r"output 'reaction\(pin\)': needs \(joint, component\)"):

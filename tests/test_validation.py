@@ -18,11 +18,11 @@ import pytest
 from flexsym.apps import api
 from flexsym.apps.cli import build_parser, main
 from flexsym.core.errors import SpecError
-from flexsym.spec.maneuver import check_theta
-from flexsym.spec.options import OPTIONS, c_header, validate
+from flexsym.model.maneuver import check_theta
+from flexsym.model.options import OPTIONS, c_header, validate
 from flexsym.core.paths import PACKAGE_DIR, runtime_dir
 from flexsym.analysis.model_select import Candidate, choose
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.variant import builtin, customize
 
 ROOT = PACKAGE_DIR.parent
 
@@ -55,7 +55,7 @@ def refused(capsys, workdir, argv, fragment, code=2):
 def test_limits_header_is_current():
     """runtime_c/include/flexsym/limits.h is written from the option table (one place)."""
     header = runtime_dir() / "include" / "flexsym" / "limits.h"
-    assert header.read_text() == c_header(), "run `python -m flexsym.spec.options > runtime_c/include/flexsym/limits.h`"
+    assert header.read_text() == c_header(), "run `python -m flexsym.model.options > runtime_c/include/flexsym/limits.h`"
 
 
 # ----- the command line ------------------------------------------------------------------------
@@ -132,8 +132,8 @@ def test_bad_command_line_is_refused(capsys, workdir, argv, fragment):
 
 def test_names_with_a_newline_never_pass():
     """`$` matches before a trailing newline: the name checks use fullmatch / \\Z."""
-    from flexsym.spec.output_names import LABEL_RE
-    from flexsym.spec.variant import NAME_RE
+    from flexsym.model.output_names import LABEL_RE
+    from flexsym.model.variant import NAME_RE
 
     assert NAME_RE.match("good") and not NAME_RE.match("good\n")
     assert LABEL_RE.fullmatch("hub") and not LABEL_RE.fullmatch("hub\n")
@@ -437,7 +437,7 @@ def test_readme_commands_parse():
     import shlex
 
     from flexsym.apps.cli import RUN_OPTIONS, _params, resolve
-    from flexsym.spec.options import CLI, given_options
+    from flexsym.model.options import CLI, given_options
 
     cmds = readme_commands()
     assert len(cmds) >= 12 and any(refused for _, refused in cmds)
@@ -460,10 +460,10 @@ def test_readme_commands_parse():
 
 
 def test_readme_option_table_is_the_table():
-    from flexsym.spec.options import markdown_table
+    from flexsym.model.options import markdown_table
 
     assert markdown_table() in (ROOT / "docs/reference/options.md").read_text(), \
-        "run `python -m flexsym.spec.options --markdown` and paste it into docs/reference/options.md"
+        "run `python -m flexsym.model.options --markdown` and paste it into docs/reference/options.md"
 
 
 def test_every_table_option_is_a_run_flag_and_documented():

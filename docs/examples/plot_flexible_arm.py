@@ -9,9 +9,9 @@ generated, compiled and run by flexsym (the first run builds it; later runs reus
 # %%
 import matplotlib.pyplot as plt
 
-from flexsym.spec.system import (FlexibleBeam, Gravity, Joint, Marker, Output, RigidBody,
+from flexsym.model.system import (FlexibleBeam, Gravity, Joint, Marker, Output, RigidBody,
                                  Section, System)
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 from flexsym.toolchain.pipeline import run_system
 
 steel = Section(rho=7850.0, E=2.1e11, A=5.0e-5, I=2.0e-10)  # SI units

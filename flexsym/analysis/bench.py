@@ -27,7 +27,7 @@ from flexsym.codegen.generate import generate_files, write_folder
 from flexsym.toolchain.pipeline import prepare
 from flexsym.core.progress import Progress
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 
 SPIN = {"ws": 6.0, "ts": 15.0}
 T_END = 20.0

@@ -28,7 +28,7 @@ import numpy as np
 from flexsym.core.errors import FlexsymError
 from flexsym.toolchain.pipeline import prepare
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.variant import builtin, customize
 from flexsym.physics.validity import truncation_share
 
 REF_ELEMENTS, REF_DT = 32, 5e-4
@@ -103,9 +103,9 @@ def quadrature_error_of_run(spec, r, case: StudyCase) -> float:
     import sympy as sp
 
     from flexsym.codegen.derive import derive
-    from flexsym.spec.parameters import BEAM_PARAMS
+    from flexsym.model.parameters import BEAM_PARAMS
     from flexsym.physics.exact import quadrature_error
-    from flexsym.spec.maneuver import maneuver_of, t as t_sym
+    from flexsym.model.maneuver import maneuver_of, t as t_sym
 
     der = derive(spec)
     man = maneuver_of(spec.maneuver)

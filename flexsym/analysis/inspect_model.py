@@ -10,8 +10,8 @@ from flexsym.emit.cemit import emit
 from flexsym.codegen.derive import build_kernels, derive
 from flexsym.codegen.generate import C_PREFIX, fingerprint
 from flexsym.physics.modal import Derivation
-from flexsym.spec.variant import QUAD_POINTS, VariantSpec
-from flexsym.spec.strain_models import STRAIN_MODELS
+from flexsym.model.variant import QUAD_POINTS, VariantSpec
+from flexsym.model.strain_models import STRAIN_MODELS
 
 SECTIONS = ("modes", "energy", "integrals", "mass", "stiffness", "equations", "ops")
 
@@ -271,8 +271,8 @@ def plot_modes(der: Derivation, path) -> None:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from flexsym.spec.fedata import BodyMode, evaluate
-    from flexsym.spec.modes import s
+    from flexsym.model.fedata import BodyMode, evaluate
+    from flexsym.model.modes import s
 
     x = np.linspace(0.0, 1.0, 401)
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharex=True)

@@ -28,7 +28,7 @@ from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import prepare
 from flexsym.core.progress import Progress
 from flexsym.toolchain.run import RunResult, run_built
-from flexsym.spec.variant import BUILTIN, VariantSpec, _refs
+from flexsym.model.variant import BUILTIN, VariantSpec, _refs
 
 BENDING = ("static", "cp1", "cp2", "cp3", "cp4")
 STRAINS = (("prestress", ((),)), ("foreshortening", ((),)),

@@ -14,7 +14,7 @@ from flexsym.codegen.generate import generate_files, write_folder
 from flexsym.toolchain.pipeline import prepare
 from flexsym.core.progress import Progress
 from flexsym.toolchain.run import RunResult, run_built
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.variant import builtin, customize
 
 PAPER_CPU = {"geometric": 11.03, "geometric_sine": 12.96, "foreshortening": 10.13, "ef": 357.0}
 PAPER_LABEL = {"geometric": "#1", "geometric_sine": "#2", "foreshortening": "#3", "prestress": "-",

@@ -8,7 +8,7 @@ import numpy as np
 
 from flexsym.toolchain.pipeline import prepare
 from flexsym.toolchain.run import RunResult, run_built
-from flexsym.spec.variant import VariantSpec
+from flexsym.model.variant import VariantSpec
 
 
 @dataclass

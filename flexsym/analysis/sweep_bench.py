@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from flexsym.sim.inprocess import load
-from flexsym.spec.options import API, validate
+from flexsym.model.options import API, validate
 from flexsym.toolchain.pipeline import prepare
 from flexsym.toolchain.run import run_built
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 from flexsym.sim.sweep import make_plan, prepare_plan, run_sweep, settings_of
 
 CASE = dict(integrator="radau5", dt=0.01, step=0.25, t_end=20.0)

@@ -26,12 +26,12 @@ import numpy as np
 
 from dataclasses import replace
 
-from flexsym.spec.options import Where, validate
-from flexsym.spec.variant import builtin, customize
+from flexsym.model.options import Where, validate
+from flexsym.model.variant import builtin, customize
 from flexsym.core.paths import PACKAGE_DIR
 from flexsym.toolchain.run import run_built
 from flexsym.scenes.scene import load_scene
-from flexsym.spec.system import Output
+from flexsym.model.system import Output
 from flexsym.toolchain.pipeline import prepare_system
 
 SCENES_DIR = PACKAGE_DIR.parent / "scenes"

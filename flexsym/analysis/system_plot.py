@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from flexsym.spec.system import Marker, Output, System
+from flexsym.model.system import Marker, Output, System
 
 STATIONS = 11  # points along a beam, root and tip included
 

@@ -15,11 +15,11 @@ from pathlib import Path
 
 from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import compiled, generated_folder, prepare
-from flexsym.spec.limits import is_real
-from flexsym.spec.options import API, RUNTIME_DEFAULTS, validate
+from flexsym.model.limits import is_real
+from flexsym.model.options import API, RUNTIME_DEFAULTS, validate
 from flexsym.toolchain.run import RunResult, check_output_path, run_built
 from flexsym.scenes.scene import Scene, load_scene
-from flexsym.spec.variant import builtin
+from flexsym.model.variant import builtin
 
 __all__ = ["load_scene", "system", "variant", "generate", "build", "run", "simulate", "inspect", "kernels",
            "inprocess", "sweep"]
@@ -28,7 +28,7 @@ __all__ = ["load_scene", "system", "variant", "generate", "build", "run", "simul
 def variant(name_or_spec, **overrides):
     """A spec: a built-in name/alias (m0..m3, prestress, ef) or a spec, with optional overrides
     as on the command line (strain=, axial="static,sin1", bending=, outputs=, elements=, ...)."""
-    from flexsym.spec.variant import customize
+    from flexsym.model.variant import customize
 
     if not isinstance(name_or_spec, str) and not hasattr(name_or_spec, "validate"):
         raise SpecError(f"variant(): name_or_spec must be a variant name such as 'm3' or a spec "
@@ -71,9 +71,9 @@ def kernels(target):
 def system(data, name: str = "system", t_end: float | None = None):
     """A System from the data of a system scene as a dict ({"body": [...], "joint": [...],
     "driver": [...], "output": {"columns": {...}}, ...}), or a System built in Python (e.g. by
-    flexsym.spec.library): checked exactly as a scene file is (one line per problem), and
+    flexsym.model.library): checked exactly as a scene file is (one line per problem), and
     assembled at t = 0 (flexsym/scenes/assembly.py: the joints' initial values closing the loops)."""
-    from flexsym.spec.system import System
+    from flexsym.model.system import System
     from flexsym.scenes.system_scene import checked_system, system_from_dict
 
     if not isinstance(data, (dict, System)):
@@ -110,7 +110,7 @@ def run(scene, out=None) -> RunResult:
 
 def simulate(target="m3", *, out=None, **options) -> RunResult:
     """Run a variant on the spin-up (or its own manoeuvre). Options as `flexsym run` and the
-    table in flexsym.spec.options (t_end, dt, integrator, ws, ts, params={...}, tol, step, ...):
+    table in flexsym.model.options (t_end, dt, integrator, ws, ts, params={...}, tol, step, ...):
     checked before anything is generated or built; defaults from the table."""
     spec = _spec_of(target)
     o = validate(options, API, spec)

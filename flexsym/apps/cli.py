@@ -10,7 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from flexsym.core.errors import FlexsymError, SpecError
-from flexsym.spec.options import (BY_NAME, CLI, OPTIONS, RUNTIME_DEFAULTS, Where, add_arguments,
+from flexsym.model.options import (BY_NAME, CLI, OPTIONS, RUNTIME_DEFAULTS, Where, add_arguments,
                                   given_options, validate, with_overrides)
 
 
@@ -56,7 +56,7 @@ def _elements(text):
 def resolve(args, systems: bool = False):
     """(spec, scene or None) from a variant name with overrides, or from a scene file; with
     systems, a system scene gives (None, SystemScene)."""
-    from flexsym.spec.variant import builtin, customize
+    from flexsym.model.variant import builtin, customize
 
     if args.variant.endswith(".toml"):
         from flexsym.scenes.scene import load_scene
@@ -89,7 +89,7 @@ def resolve_spec(args):
 def cmd_generate(args) -> int:
     from flexsym.codegen.generate import generate
     from flexsym.toolchain.pipeline import cache_folder, checked_in_folder, is_builtin
-    from flexsym.spec.variant import BUILTIN
+    from flexsym.model.variant import BUILTIN
 
     if args.variant == "all":  # every built-in variant into generated/
         for spec in BUILTIN:
@@ -190,7 +190,7 @@ def cmd_run(args) -> int:
     s = Summary(spec, res)
     ts = options.params.get("ts", options.t_end)
     if scene is not None or "v_tip" not in res.columns:
-        from flexsym.spec.output_names import info
+        from flexsym.model.output_names import info
 
         print(describe(res, spec.outputs, verdict.status, {o: info(o, spec.points).unit for o in spec.outputs}))
     else:
@@ -263,7 +263,7 @@ def _run_system(args, scene) -> int:
           f"{options.t_end:g} s: {status}")
     if len(res.t):
         from flexsym.analysis.spinup import describe
-        from flexsym.spec.system import output_unit
+        from flexsym.model.system import output_unit
 
         shown = [o.column for o in scene.system.outputs]  # the user's, not the plot's columns
         units = {o.column: output_unit(scene.system, o.quantity) for o in scene.system.outputs}
@@ -414,7 +414,7 @@ def _names(text: str, label: str) -> list[str]:
 
 def cmd_spinup(args) -> int:
     from flexsym.toolchain.run import check_output_dir
-    from flexsym.spec.variant import builtin
+    from flexsym.model.variant import builtin
     from flexsym.analysis.spinup import plot, run_variants, table
 
     specs = [builtin(v) for v in _names(args.variants, "--variants")]
@@ -437,7 +437,7 @@ def cmd_spinup(args) -> int:
 def cmd_paper(args) -> int:
     from flexsym.analysis.paper import run_paper
     from flexsym.toolchain.run import check_output_dir
-    from flexsym.spec.variant import builtin
+    from flexsym.model.variant import builtin
 
     o = validate(given_options(args, SPINUP_OPTIONS[:4] + ("repeat",)), CLI, builtin("m3"))
     ref_dt = replace(BY_NAME["dt"], flag="--ref-dt").convert(args.ref_dt, CLI)
@@ -595,9 +595,9 @@ def cmd_exact_study(args) -> int:
 
 
 def cmd_variants(args) -> int:
-    from flexsym.spec.strain_models import STRAIN_MODELS
-    from flexsym.spec.modes import FAMILIES
-    from flexsym.spec.variant import BUILTIN
+    from flexsym.model.strain_models import STRAIN_MODELS
+    from flexsym.model.modes import FAMILIES
+    from flexsym.model.variant import BUILTIN
 
     print("built-in variants:")
     for v in BUILTIN:
@@ -634,7 +634,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("run", help="simulate the spin-up with a variant, or a scene file")
     _variant_args(p)
-    g = p.add_argument_group("run options (checked against the table in flexsym/spec/options.py)")
+    g = p.add_argument_group("run options (checked against the table in flexsym/model/options.py)")
     add_arguments(g, RUN_OPTIONS)
     p.add_argument("--param", action="append", help="beam or manoeuvre parameter NAME=VALUE "
                    "(rho, E, A, I, L, ws, ts); repeatable")
@@ -724,7 +724,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "a table with one row per run (local processes or a Dask cluster)")
     _variant_args(p)
     g = p.add_argument_group("run options shared by every run (checked against the table in "
-                             "flexsym/spec/options.py)")
+                             "flexsym/model/options.py)")
     add_arguments(g, SWEEP_OPTIONS)
     p.add_argument("--param", action="append", help="fixed beam or manoeuvre parameter NAME=VALUE")
     p.add_argument("--vary", action="append", metavar="NAME=SPEC",

@@ -6,8 +6,8 @@ from __future__ import annotations
 from flexsym.physics.exact import build_exact_kernels, derive_exact
 from flexsym.emit.kernels import Kernel
 from flexsym.physics.modal import Derivation, build_modal_kernels, derive_modal
-from flexsym.spec.variant import VariantSpec
-from flexsym.spec.strain_models import STRAIN_MODELS
+from flexsym.model.variant import VariantSpec
+from flexsym.model.strain_models import STRAIN_MODELS
 
 
 def _exact(spec: VariantSpec) -> bool:

@@ -19,12 +19,12 @@ import mpmath
 
 from flexsym.emit.cemit import EmittedKernel, c_double, emit
 from flexsym.codegen.derive import build_kernels, derive
-from flexsym.spec.parameters import BEAM_PARAMS
+from flexsym.model.parameters import BEAM_PARAMS
 from flexsym.physics.fe import build_element_kernels, c_prefix, derive_element, output_plan
-from flexsym.spec.maneuver import maneuver_of
-from flexsym.spec.output_names import info as output_info
+from flexsym.model.maneuver import maneuver_of
+from flexsym.model.output_names import info as output_info
 from flexsym.core.paths import templates_dir
-from flexsym.spec.variant import CLAMP_OUTPUTS, QUAD_POINTS, VariantSpec
+from flexsym.model.variant import CLAMP_OUTPUTS, QUAD_POINTS, VariantSpec
 from flexsym.core.versions import generator_hash, tool_versions
 
 MANIFEST = "manifest.json"

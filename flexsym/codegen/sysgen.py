@@ -30,13 +30,13 @@ from flexsym.physics.fe import le
 from flexsym.codegen.generate import MANIFEST, _environment, write_folder
 from flexsym.physics.lagrange import equations_of_motion_sx
 from flexsym.emit.kernels import SympyToCasadi, group_by_parameters, make_kernels, matrix_sx
-from flexsym.spec.maneuver import t as t_sym
+from flexsym.model.maneuver import t as t_sym
 from flexsym.core.paths import cache_dir, file_lock, module_file, templates_dir
-from flexsym.spec.system import System, length_scale, system_to_dict
+from flexsym.model.system import System, length_scale, system_to_dict
 from flexsym.core.versions import generator_hash, tool_versions
 
 C_PREFIX = "fsm_"
-_OWN = ("physics.assemble", "physics.efbody", "spec.system", "codegen.sysgen")
+_OWN = ("physics.assemble", "physics.efbody", "model.system", "codegen.sysgen")
 
 
 def fingerprint(system: System) -> str:

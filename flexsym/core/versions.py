@@ -13,12 +13,12 @@ from flexsym.core.paths import module_file, templates_dir
 
 # Modules whose code decides what is generated: a change in any of them changes the
 # fingerprint of every variant, so checked-in generated code is detected as stale.
-GENERATOR_MODULES = ("spec.modes", "physics.integrals", "physics.energy", "spec.strain_models",
-                     "spec.maneuver", "spec.output_names", "spec.parameters", "spec.system",
-                     "spec.library", "physics.assemble", "physics.efbody", "physics.outputs",
-                     "spec.variant", "physics.lagrange", "physics.modal", "codegen.derive",
-                     "emit.kernels", "emit.cemit", "codegen.generate", "physics.fe", "spec.fedata",
-                     "physics.exact", "spec.beam_element")
+GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "model.strain_models",
+                     "model.maneuver", "model.output_names", "model.parameters", "model.system",
+                     "model.library", "physics.assemble", "physics.efbody", "physics.outputs",
+                     "model.variant", "physics.lagrange", "physics.modal", "codegen.derive",
+                     "emit.kernels", "emit.cemit", "codegen.generate", "physics.fe", "model.fedata",
+                     "physics.exact", "model.beam_element")
 
 
 def tool_versions() -> dict[str, str]:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import casadi as ca
 import sympy as sp
 
-from flexsym.spec.maneuver import t as t_sym
+from flexsym.model.maneuver import t as t_sym
 
 
 @dataclass(frozen=True)

@@ -43,11 +43,11 @@ from flexsym.physics.efbody import EfPart, ef_part
 from flexsym.core.errors import SpecError
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force, jacobi_integral
-from flexsym.spec.maneuver import Param, maneuver_of, parse_expression, parse_theta, t
-from flexsym.spec.modes import s
+from flexsym.model.maneuver import Param, maneuver_of, parse_expression, parse_theta, t
+from flexsym.model.modes import s
 from flexsym.physics.outputs import field_at, output_expression
-from flexsym.spec.strain_models import STRAIN_MODELS
-from flexsym.spec.system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
+from flexsym.model.strain_models import STRAIN_MODELS
+from flexsym.model.system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
                      beam_station, length_scale, parse_output)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import sympy as sp
 
 from flexsym.physics.integrals import IntegralTable
-from flexsym.spec.modes import Mode, s
-from flexsym.spec.parameters import BEAM_PARAMS
+from flexsym.model.modes import Mode, s
+from flexsym.model.parameters import BEAM_PARAMS
 
 rho, E, A, I, L = (p.symbol for p in BEAM_PARAMS)
 w, alpha = sp.symbols("w alpha", real=True)  # theta' and theta'' (known inputs)

@@ -46,12 +46,12 @@ from flexsym.core.errors import FlexsymError
 from flexsym.physics.integrals import IntegralTable, gauss_legendre
 from flexsym.emit.kernels import make_kernels, maneuver_sx, translator
 from flexsym.physics.lagrange import equations_of_motion_sx, generalized_force
-from flexsym.spec.maneuver import maneuver_of
+from flexsym.model.maneuver import maneuver_of
 from flexsym.physics.modal import Derivation, DerivedTerm
-from flexsym.spec.modes import s
-from flexsym.spec.output_names import point_of
+from flexsym.model.modes import s
+from flexsym.model.output_names import point_of
 from flexsym.physics.outputs import output_expression
-from flexsym.spec.strain_models import STRAIN_MODELS
+from flexsym.model.strain_models import STRAIN_MODELS
 
 M_POINTS = 6  # Gauss points per segment (cumulative integrals cost m^2 per segment)
 QUAD_RTOL = 1e-6  # accuracy check of the quadrature (relative; see choose_quadrature)

@@ -27,9 +27,9 @@ from flexsym.physics.energy import A, E, I, alpha, rho, w
 from flexsym.physics.integrals import gauss_legendre
 from flexsym.emit.kernels import make_kernels, maneuver_sx, translator
 from flexsym.physics.lagrange import equations_of_motion
-from flexsym.spec.maneuver import Maneuver, maneuver_of
-from flexsym.spec.output_names import point_of
-from flexsym.spec.variant import CLAMP_OUTPUTS, QUAD_POINTS, FESpec
+from flexsym.model.maneuver import Maneuver, maneuver_of
+from flexsym.model.output_names import point_of
+from flexsym.model.variant import CLAMP_OUTPUTS, QUAD_POINTS, FESpec
 
 xi = sp.Symbol("xi", real=True)
 le = sp.Symbol("l", positive=True)  # element length, p[L] / elements at run time

@@ -20,7 +20,7 @@ import sympy as sp
 from sympy.simplify.fu import TR8
 
 from flexsym.core.errors import FlexsymError
-from flexsym.spec.modes import Mode, s
+from flexsym.model.modes import Mode, s
 
 QUAD_DPS = 34
 QUAD_TOL = mpmath.mpf("1e-20")  # target agreement of successive rules (relative to scale)
@@ -280,7 +280,7 @@ class BodyIntegralTable(IntegralTable):
     def weight_at(self, kind: str, at) -> sp.Expr:
         import numpy as np
 
-        from flexsym.spec import fedata
+        from flexsym.model import fedata
 
         body, x = self.body, float(at)
         if kind == "nhat":
@@ -294,7 +294,7 @@ class BodyIntegralTable(IntegralTable):
         """The factor at points pts, each inside element elem[i]."""
         import numpy as np
 
-        from flexsym.spec import fedata
+        from flexsym.model import fedata
 
         body = self.body
         if f.kind == "weight":
@@ -328,7 +328,7 @@ class BodyIntegralTable(IntegralTable):
     def _evaluate(self, a, b, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
         import numpy as np
 
-        from flexsym.spec import fedata
+        from flexsym.model import fedata
 
         body = self.body
         a, b = float(a), float(b)

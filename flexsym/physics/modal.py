@@ -25,13 +25,13 @@ from flexsym.physics.energy import BEAM_PARAMS, ENERGY_TERMS, alpha, w
 from flexsym.physics.integrals import IntegralTable
 from flexsym.emit.kernels import Kernel, make_kernels, maneuver_sx, matrix_sx, translator
 from flexsym.physics.lagrange import jacobi_integral
-from flexsym.spec.maneuver import Maneuver, maneuver_of
-from flexsym.spec.modes import Mode
+from flexsym.model.maneuver import Maneuver, maneuver_of
+from flexsym.model.modes import Mode
 from flexsym.physics.outputs import output_expression
-from flexsym.spec.variant import VariantSpec
-from flexsym.spec.strain_models import STRAIN_MODELS, StrainModel
-from flexsym.spec.system import Output, Section
-from flexsym.spec.library import spin_up_system
+from flexsym.model.variant import VariantSpec
+from flexsym.model.strain_models import STRAIN_MODELS, StrainModel
+from flexsym.model.system import Output, Section
+from flexsym.model.library import spin_up_system
 
 
 @dataclass

@@ -22,11 +22,11 @@ from __future__ import annotations
 import sympy as sp
 
 from flexsym.physics.energy import A, E, I, L, alpha, rho, w
-from flexsym.spec import beam_element
+from flexsym.model import beam_element
 from flexsym.core.errors import SpecError
 from flexsym.physics.integrals import Factor
-from flexsym.spec.modes import s
-from flexsym.spec.output_names import point_of, stress_method
+from flexsym.model.modes import s
+from flexsym.model.output_names import point_of, stress_method
 
 
 def field_at(der, expr: sp.Expr, at) -> sp.Expr:
@@ -131,7 +131,7 @@ def _body_element_method(der, at, want_N: bool, side: int = 0) -> sp.Expr:
     end value of the element on the left (side -1), on the right (+1), or their mean (0)."""
     import numpy as np
 
-    from flexsym.spec.fedata import locate
+    from flexsym.model.fedata import locate
 
     body = der.spec.body
     sn = [sp.Float(repr(float(x)), 17) for x in body.s_nodes]

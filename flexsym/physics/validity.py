@@ -37,7 +37,7 @@ class Assessment:
 
 @lru_cache(maxsize=None)
 def _mode_peak(ref) -> float:
-    from flexsym.spec.modes import mode, s
+    from flexsym.model.modes import mode, s
 
     fn = sp.lambdify(s, mode(ref).expr, "numpy")
     return float(np.max(np.abs(fn(np.linspace(0.0, 1.0, 2001)))))
@@ -54,7 +54,7 @@ def deflection_bound(spec, result) -> tuple[np.ndarray, str]:
 @lru_cache(maxsize=None)
 def _curvature_gram(refs: tuple) -> np.ndarray:
     """G_ij = int_0^1 Phi_i'' Phi_j'' ds (Simpson on 2001 points: a norm, not a kernel value)."""
-    from flexsym.spec.modes import mode, s
+    from flexsym.model.modes import mode, s
 
     x = np.linspace(0.0, 1.0, 2001)
     vals = np.array([np.broadcast_to(sp.lambdify(s, sp.diff(mode(r).expr, s, 2), "numpy")(x), x.shape)
@@ -124,7 +124,7 @@ BETA1 = 1.8751040687119611  # first root of 1 + cos(b) cosh(b) = 0 (clamped-free
 def first_bending_frequency(params: dict) -> float:
     """omega_1 = beta_1^2 sqrt(EI / (rho A L^4)) of the clamped-free Euler-Bernoulli beam with
     the run's parameters (defaults: the paper's beam, 3.798 rad/s)."""
-    from flexsym.spec.parameters import BEAM_PARAMS
+    from flexsym.model.parameters import BEAM_PARAMS
 
     p = {q.name: q.default for q in BEAM_PARAMS} | dict(params)
     return BETA1**2 * (p["E"] * p["I"] / (p["rho"] * p["A"] * p["L"] ** 4)) ** 0.5

@@ -32,8 +32,8 @@ import numpy as np
 import sympy as sp
 
 from flexsym.core.errors import SpecError
-from flexsym.spec.maneuver import maneuver_of, parse_theta, t
-from flexsym.spec.system import GROUND, System
+from flexsym.model.maneuver import maneuver_of, parse_theta, t
+from flexsym.model.system import GROUND, System
 
 CLOSE_TOL = 1e-12  # a loop is closed when max |Phi| <= this x the size (the runtime's default)
 RANK_TOL = 1e-8    # singular values below this x the largest one count as zero

@@ -29,8 +29,8 @@ import numpy as np
 
 from flexsym.core.errors import SpecError
 from flexsym.core.files import read_limited
-from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
-from flexsym.spec.fedata import BeamBody, PointMass, Section, check_mesh_keys
+from flexsym.model.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
+from flexsym.model.fedata import BeamBody, PointMass, Section, check_mesh_keys
 
 FORMAT = "flexsym-beam-fe-1"
 DOF_NAMES = ("u", "v", "theta")

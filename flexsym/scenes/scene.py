@@ -28,9 +28,9 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.core.files import read_limited
-from flexsym.spec.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
-from flexsym.spec.maneuver import EXPRESSION_PREFIX, parse_theta
-from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
+from flexsym.model.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
+from flexsym.model.maneuver import EXPRESSION_PREFIX, parse_theta
+from flexsym.model.options import OPTIONS, RunOptions, Where, validate
 
 # Keys of each table; run options (solver, output, manoeuvre values) come from the option table.
 _RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene}
@@ -163,8 +163,8 @@ def load_scene(path, model: str | None = None):
         if not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model):
             r.fail("--model", f"'{model}' is not a variant name")
         data["model"] = {"variant": model, "name": f"{_default_name(path)}_{model}"[:48]}
-        from flexsym.spec.output_names import axial_force_available
-        from flexsym.spec.variant import builtin
+        from flexsym.model.output_names import axial_force_available
+        from flexsym.model.variant import builtin
 
         try:
             base = builtin(model)
@@ -179,7 +179,7 @@ def load_scene(path, model: str | None = None):
     if "body" in data:
         if "beam" in data:
             r.fail("[body]", "give either [beam] (a uniform beam) or [body] (finite-element data), not both")
-        from flexsym.spec.fedata import scene_body
+        from flexsym.model.fedata import scene_body
         from flexsym.scenes.feimport import scene_folder
 
         body = scene_folder(r) if "folder" in data["body"] else scene_body(r)
@@ -242,7 +242,7 @@ def _outputs(r: _Reader, quantities: list[str], length: float):
     if not isinstance(named, dict):
         r.fail("[output] positions", "must be a table of name = position in metres")
     points, outputs, columns = {}, [], {}
-    from flexsym.spec.output_names import LABEL_RE, POINTS
+    from flexsym.model.output_names import LABEL_RE, POINTS
 
     def position(label: str, x) -> None:
         if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
@@ -288,7 +288,7 @@ def _outputs(r: _Reader, quantities: list[str], length: float):
 
 
 def _spec(r: _Reader, maneuver: str, outputs, points, body=None):
-    from flexsym.spec.variant import VariantSpec, _refs, builtin, customize
+    from flexsym.model.variant import VariantSpec, _refs, builtin, customize
 
     tab = r.data["model"]
     variant = r.string("model", "variant", required=False)

@@ -27,14 +27,14 @@ scene (flexsym/scenes/scene.py), unchanged.
     [[load]]    kind = "force": marker, fx, fy, frame = ground | body;
                 kind = "torque": body, torque = "expression"; kind = "spring": a, b
                 (body.marker each), k, c, l0
-    [solver]    run options (flexsym/spec/options.py: integrator, dt, t_end, ...)
+    [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
                 grammar: angle(J), rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
                 M(B, x), reaction(J), torque(D), T, V, momentum, violation)
 
 Checks, each one line naming the file and the item, before anything is derived or written:
 the TOML's types and keys here; names, references, masses, the spanning tree, drivers,
-loads and output names in System.validate (flexsym/spec/system.py); then check_system: every
+loads and output names in System.validate (flexsym/model/system.py); then check_system: every
 expression through the bounded parser of maneuver.py with only its allowed names, manoeuvre
 parameters, each requested beam output carried by some mode of the body's model, and the
 assembly at t = 0 (flexsym/scenes/assembly.py: the free joint coordinates and rates are solved
@@ -52,10 +52,10 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.scenes.assembly import Assembly, assemble, poses, theta0
-from flexsym.spec.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
-from flexsym.spec.limits import MAX_BODIES, MAX_JOINTS
-from flexsym.spec.options import OPTIONS, RunOptions, Where, validate
-from flexsym.spec.system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
+from flexsym.model.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
+from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
+from flexsym.model.options import OPTIONS, RunOptions, Where, validate
+from flexsym.model.system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
                      parse_output)
 
@@ -284,7 +284,7 @@ class _BodyData:
 
 
 def _fe_body(r: _Items, where: str, tab: dict, base: Path):
-    from flexsym.spec.fedata import scene_body
+    from flexsym.model.fedata import scene_body
     from flexsym.scenes.feimport import scene_folder
 
     reader = _BodyData(r, where, tab, base)
@@ -301,7 +301,7 @@ def _fe_body(r: _Items, where: str, tab: dict, base: Path):
 def _model(r: _Items, where: str, given, flag: str | None):
     """A deformation model: a variant name, or { variant, elements } or { strain, axial, bending },
     either table with axial_force / moment = "constitutive" | "equilibrium"."""
-    from flexsym.spec.variant import VariantSpec, _refs, builtin, customize
+    from flexsym.model.variant import VariantSpec, _refs, builtin, customize
 
     where = flag or where
     if given is None:
@@ -516,7 +516,7 @@ def _carried(system: System, o: Output) -> None:
     if model.kind != "modal":
         return  # finite elements carry every field
     s = sp.nsimplify(x / beam.length, rational=True) if 0 < x < beam.length else sp.Integer(int(x > 0))
-    from flexsym.spec.output_names import axial_force_available
+    from flexsym.model.output_names import axial_force_available
 
     if fn in ("v", "w", "M"):
         order = 2 if fn == "M" else 0
@@ -572,7 +572,7 @@ def load_system_scene(path: Path, data: dict, name: str, model: str | None = Non
 def _model_outputs(system: System) -> System:
     """--model with a modal variant that has no axial mode: N comes from the axial inertial
     forces (as for one-beam scenes), so the scene's N outputs stay available."""
-    from flexsym.spec.output_names import axial_force_available
+    from flexsym.model.output_names import axial_force_available
 
     wants_n = {parse_output(system, o.quantity)[1][0] for o in system.outputs
                if o.quantity.strip().startswith("N(")}

@@ -48,7 +48,7 @@ class FmuOptions:
 def check_request(opts: FmuOptions, out: Path | None, spec) -> None:
     """Refuse what the FMU cannot do, before anything is generated, built or written
     (spec None: a system)."""
-    from flexsym.spec.maneuver import maneuver_of
+    from flexsym.model.maneuver import maneuver_of
 
     if opts.input not in INPUT_MODES:
         raise SpecError(f"--input '{opts.input}': expected one of {', '.join(INPUT_MODES)}")

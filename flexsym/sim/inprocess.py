@@ -24,9 +24,9 @@ import numpy as np
 
 from flexsym.toolchain.build import Built
 from flexsym.core.errors import SpecError
-from flexsym.spec.limits import is_real
+from flexsym.model.limits import is_real
 from flexsym.codegen.generate import read_manifest
-from flexsym.spec.options import API, BY_NAME, INTEGRATORS, RunOptions, validate
+from flexsym.model.options import API, BY_NAME, INTEGRATORS, RunOptions, validate
 from flexsym.toolchain.run import RunResult
 from flexsym.physics.validity import VALIDITY_LIMIT, deflection_weights
 
@@ -270,7 +270,7 @@ def load(spec) -> InProcessModel:
 
 
 def load_system(system) -> InProcessModel:
-    """Generate and build a system (flexsym/spec/system.py) when needed, and load its library;
+    """Generate and build a system (flexsym/model/system.py) when needed, and load its library;
     batch() then takes its p and drive parameter names (e.g. E, or BEAM_E with several beams)."""
     from flexsym.toolchain.pipeline import prepare_system, system_folder
 

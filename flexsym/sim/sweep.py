@@ -42,7 +42,7 @@ import numpy as np
 
 from flexsym.core.errors import FlexsymError, SpecError, ToolchainError
 from flexsym.core.progress import Progress
-from flexsym.spec.options import API, BY_NAME, Option, RunOptions, Where, check_params, validate
+from flexsym.model.options import API, BY_NAME, Option, RunOptions, Where, check_params, validate
 
 SAMPLINGS = ("random", "lhs")
 MAX_RUNS = 10_000_000
@@ -180,8 +180,8 @@ def _fingerprint(spec) -> str:
 
 
 def sweepable(spec) -> list[str]:
-    from flexsym.spec.parameters import BEAM_PARAMS
-    from flexsym.spec.maneuver import maneuver_of
+    from flexsym.model.parameters import BEAM_PARAMS
+    from flexsym.model.maneuver import maneuver_of
 
     if isinstance(spec, SystemTarget):
         return list(spec.params) + initial_state_names(spec)

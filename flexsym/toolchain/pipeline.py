@@ -12,8 +12,8 @@ from flexsym.codegen.generate import MANIFEST, check_folder, fingerprint, genera
 from flexsym.codegen.sysgen import fingerprint as system_fingerprint
 from flexsym.codegen.sysgen import generate_system_files
 from flexsym.core.paths import cache_dir, file_lock, generated_dir
-from flexsym.spec.system import System
-from flexsym.spec.variant import BUILTIN, VariantSpec
+from flexsym.model.system import System
+from flexsym.model.variant import BUILTIN, VariantSpec
 from flexsym.toolchain.run import check_options, run_built
 
 

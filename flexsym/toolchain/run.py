@@ -13,14 +13,14 @@ import numpy as np
 
 from flexsym.toolchain.build import Built
 from flexsym.core.errors import FlexsymError, SimulationError, SpecError
-from flexsym.spec.options import API, INTEGRATORS, RunOptions, validate
+from flexsym.model.options import API, INTEGRATORS, RunOptions, validate
 
 __all__ = ["INTEGRATORS", "RunResult", "run_built", "check_options", "check_output_path"]
 
 
 def check_options(*, spec=None, **given) -> RunOptions:
     """Refuse bad run options before anything is generated, built or written: the option table
-    (flexsym.spec.options.validate) with keyword names; returns the validated options."""
+    (flexsym.model.options.validate) with keyword names; returns the validated options."""
     return validate(given, API, spec)
 
 
@@ -144,7 +144,7 @@ def run_built(built: Built, options: RunOptions | None = None, *, out: Path | No
               raise_on_failure: bool = False, header=(), **given) -> RunResult:
     """Integrate with the built driver. Options are a RunOptions from `options.validate`, or
     keywords checked here against the same table (t_end, dt, integrator, params, tol, step,
-    out_every, repeat, newton, energy, ...; see flexsym.spec.options.OPTIONS).
+    out_every, repeat, newton, energy, ...; see flexsym.model.options.OPTIONS).
     dt is the step of the fixed-step integrators (rk4, genalpha, newmark, radau5); for dopri5
     (steps adapted to tol) and for radau5 given a step, it sets the output grid.
     out: the CSV is replaced only by a completed run or, when the run stopped after at least

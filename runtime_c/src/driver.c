@@ -18,7 +18,7 @@
  * close, 3 simulation stopped, 4 I/O.
  * The CSV is written to a temporary file and renamed, so an existing file is replaced
  * only by a complete one; after a divergence it holds the rows computed up to then.
- * Limits and defaults come from flexsym/limits.h (written from flexsym/spec/options.py); flexsym
+ * Limits and defaults come from flexsym/limits.h (written from flexsym/model/options.py); flexsym
  * checks every option before starting the driver, so these checks are a last line of defence.
  * With FLEXSYM_PARENT_PID set (flexsym sets it), the driver ends when that process does
  * (Linux: PR_SET_PDEATHSIG), so a killed run leaves no orphan that writes later.

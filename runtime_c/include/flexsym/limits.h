@@ -1,5 +1,5 @@
-/* DO NOT EDIT: written by `python -m flexsym.spec.options > runtime_c/include/flexsym/limits.h`
- * from the option table in flexsym/spec/options.py (the one place for run limits and
+/* DO NOT EDIT: written by `python -m flexsym.model.options > runtime_c/include/flexsym/limits.h`
+ * from the option table in flexsym/model/options.py (the one place for run limits and
  * defaults). The runtime refuses runs beyond these limits as a last line of defence. */
 #ifndef FLEXSYM_LIMITS_H
 #define FLEXSYM_LIMITS_H

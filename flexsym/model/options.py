@@ -7,7 +7,7 @@ checks a set of given values against the table, and against each other (step, ro
 counts against LIMITS), before anything is generated, built or written; it names an option as
 its source spells it (`--dt`, `[solver] dt` in a scene, `dt=` in Python). The C runtime keeps
 its own checks only as a last line of defence; its limits and defaults come from this table
-through runtime_c/include/flexsym/limits.h, written by `python -m flexsym.spec.options`
+through runtime_c/include/flexsym/limits.h, written by `python -m flexsym.model.options`
 (tests/test_validation.py fails when the header is stale).
 
 Adding an option: add a row to OPTIONS (and, if the driver takes it, a `driver` flag that
@@ -260,7 +260,7 @@ def validate(given: dict, where: Where = API, spec=None) -> RunOptions:
                 raise where.error(opt, f"given twice (also as --param {name}=...)")
             params[name] = values.pop(name)
     if maneuver is not None:  # defaults of the manoeuvre's own parameters
-        from flexsym.spec.maneuver import maneuver_of
+        from flexsym.model.maneuver import maneuver_of
 
         for p in maneuver_of(maneuver).params:
             params.setdefault(p.name, DEFAULTS[p.name] if p.name in DEFAULTS else p.default)
@@ -270,7 +270,7 @@ def validate(given: dict, where: Where = API, spec=None) -> RunOptions:
     if dt > t_end:
         raise where.error("dt", f"{dt:g} s is larger than {where.label('t_end')} = {t_end:g} s")
     if maneuver is not None and maneuver.startswith("expression:"):
-        from flexsym.spec.maneuver import check_theta
+        from flexsym.model.maneuver import check_theta
 
         try:
             check_theta(maneuver[len("expression:"):], t_end)
@@ -327,8 +327,8 @@ def validate(given: dict, where: Where = API, spec=None) -> RunOptions:
 
 def check_params(params: dict, where: Where = API, maneuver: str | None = None) -> dict:
     """Beam parameters (positive, finite) and manoeuvre parameters (as the table says)."""
-    from flexsym.spec.parameters import BEAM_PARAMS
-    from flexsym.spec.maneuver import MANEUVERS, maneuver_of
+    from flexsym.model.parameters import BEAM_PARAMS
+    from flexsym.model.maneuver import MANEUVERS, maneuver_of
 
     beam = {p.name for p in BEAM_PARAMS}
     man = ({p.name for p in maneuver_of(maneuver).params} if maneuver is not None
@@ -373,8 +373,8 @@ def with_overrides(scene_given: dict, overrides: dict, path: Path, spec=None) ->
 
 # ----- the C runtime's limits and defaults -----------------------------------------------------
 def c_header() -> str:
-    lines = ["/* DO NOT EDIT: written by `python -m flexsym.spec.options > runtime_c/include/flexsym/limits.h`",
-             " * from the option table in flexsym/spec/options.py (the one place for run limits and",
+    lines = ["/* DO NOT EDIT: written by `python -m flexsym.model.options > runtime_c/include/flexsym/limits.h`",
+             " * from the option table in flexsym/model/options.py (the one place for run limits and",
              " * defaults). The runtime refuses runs beyond these limits as a last line of defence. */",
              "#ifndef FLEXSYM_LIMITS_H", "#define FLEXSYM_LIMITS_H", ""]
     for key, value in LIMITS.items():
@@ -391,7 +391,7 @@ def c_header() -> str:
 
 def markdown_table() -> str:
     """The option table as README markdown (tests/test_validation.py keeps the README's copy
-    identical: `python -m flexsym.spec.options --markdown`)."""
+    identical: `python -m flexsym.model.options --markdown`)."""
     rows = ["| option | scene key | default | allowed | integrators | what |", "|---|---|---|---|---|---|"]
     for o in OPTIONS:
         default = RUNTIME_DEFAULTS.get(o.name, o.default)

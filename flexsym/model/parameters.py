@@ -2,7 +2,7 @@
 the parameter vector p in every generated kernel)."""
 from __future__ import annotations
 
-from flexsym.spec.maneuver import Param
+from flexsym.model.maneuver import Param
 
 # Order fixes the layout of the parameter vector p in every generated kernel.
 BEAM_PARAMS: tuple[Param, ...] = (

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from flexsym.spec.system import (Driver, FlexibleBeam, Gravity, Joint, Marker, Output, RigidBody, Section,
+from flexsym.model.system import (Driver, FlexibleBeam, Gravity, Joint, Marker, Output, RigidBody, Section,
                      System)
 
 PAPER_SECTION = Section(rho=3000.0, E=7.0e10, A=4.0e-4, I=2.0e-7)

@@ -19,8 +19,8 @@ from collections import deque
 from dataclasses import dataclass, field, fields
 
 from flexsym.core.errors import SpecError
-from flexsym.spec.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
-from flexsym.spec.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
+from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
+from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
 JOINT_KINDS = ("revolute", "prismatic", "clamp")
@@ -401,7 +401,7 @@ class System:
 
     def _check_magnitudes(self) -> None:
         """Every number of the system: a real number (not bool, complex, str, None), finite and
-        |x| <= MAX_MAGNITUDE (flexsym/spec/limits.py), before anything else uses it."""
+        |x| <= MAX_MAGNITUDE (flexsym/model/limits.py), before anything else uses it."""
         where = f"system '{self.name}'"
         for kind, items in (("body", self.bodies), ("joint", self.joints), ("driver", self.drivers),
                             ("load", self.loads)):

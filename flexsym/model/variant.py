@@ -15,11 +15,11 @@ from dataclasses import dataclass, field, replace
 import sympy as sp
 
 from flexsym.core.errors import SpecError
-from flexsym.spec.maneuver import maneuver_of
-from flexsym.spec.modes import ModeRef, mode, parse_mode_token
-from flexsym.spec.output_names import (STRESS_OUTPUTS, canonical_output, check_output_names, default_outputs,
+from flexsym.model.maneuver import maneuver_of
+from flexsym.model.modes import ModeRef, mode, parse_mode_token
+from flexsym.model.output_names import (STRESS_OUTPUTS, canonical_output, check_output_names, default_outputs,
                            stress_method)
-from flexsym.spec.strain_models import STRAIN_MODELS
+from flexsym.model.strain_models import STRAIN_MODELS
 
 NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")  # used with match: \Z, not $ (a trailing newline)
 QUAD_POINTS = 5  # ef: Gauss points per element (exact for EA eps^2, degree 8 in xi; kappa^2 is rational)
@@ -50,7 +50,7 @@ class VariantSpec:
         """The shape of a mode: the library's analytic one, or the body's computed one."""
         if self.body is None:
             return mode(ref)
-        from flexsym.spec.fedata import body_mode
+        from flexsym.model.fedata import body_mode
 
         return body_mode(self.body, ref)
 

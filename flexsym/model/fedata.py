@@ -38,9 +38,9 @@ from functools import cached_property
 
 import numpy as np
 
-from flexsym.spec.beam_element import numeric_element_matrices
+from flexsym.model.beam_element import numeric_element_matrices
 from flexsym.core.errors import SpecError
-from flexsym.spec.limits import MAX_MAGNITUDE, MIN_POSITIVE
+from flexsym.model.limits import MAX_MAGNITUDE, MIN_POSITIVE
 
 GAUSS_POINTS = 8  # exact for polynomials of degree 15 per element (invariants reach 14)
 SIG_DIGITS = 13  # invariants are rounded to this many significant digits (deterministic code)
@@ -406,7 +406,7 @@ class BodyMode:
 
     @property
     def bcs(self):
-        from flexsym.spec.modes import BoundaryCondition as B
+        from flexsym.model.modes import BoundaryCondition as B
 
         bc = [B(0, 0, 0)] if self.ref.axis == "axial" else [B(0, 0, 0), B(1, 0, 0)]
         if self.ref.family == "static":
