@@ -215,21 +215,28 @@ def test_documented_example_is_the_slider_crank_scene_and_its_pd_law_reads():
 
 def test_pendulum_scene_runs_with_csv_and_plot(tmp_path, capsys):
     """S3 end to end (derivation and generation by flexsym/physics/assemble.py, sysgen.py): the CSV
-    has the benchmark's columns at 1 ms rows, and the picture's columns agree with the run's
-    own outputs: the tip station is (x_tip, y_tip) and the mid station's distance from the
-    chord is w_mid (sign included), computed independently from the station positions."""
-    from flexsym.analysis.system_plot import chord_distance
+    has the benchmark's columns at 1 ms rows and none of the picture's; the picture's columns
+    (the same system with its stations as outputs) agree with the run's own outputs: the tip
+    station is (x_tip, y_tip) and the mid station's distance from the chord is w_mid (sign
+    included), computed independently from the station positions."""
+    from flexsym.analysis.system_plot import chord_distance, with_plot_outputs
+    from flexsym.toolchain.pipeline import run_system
 
     out, plot = tmp_path / "s3.csv", tmp_path / "s3.png"
     assert main(["run", str(SCENES / "pendulum.toml"), "--out", str(out), "--plot", str(plot)]) == 0
     assert "beam deflection from the chord scaled x" in capsys.readouterr().out
     header = out.read_text().splitlines()[0].split(",")
     assert header[:5] == ["t", "x_tip", "y_tip", "w_mid", "M_mid"]
+    assert not any(c.startswith(("px_", "py_")) for c in header)
     data = np.loadtxt(out, delimiter=",", skiprows=1)
     col = {name: data[:, k] for k, name in enumerate(header)}
     assert len(data) == 2001 and np.allclose(np.diff(col["t"]), 1e-3, atol=1e-12)
-    assert np.array_equal(col["px_beam_tip"], col["x_tip"]) and np.array_equal(col["py_beam_tip"], col["y_tip"])
-    stations = np.stack([np.column_stack([col[f"px_beam_{m}"], col[f"py_beam_{m}"]])
+    scene = load_scene(SCENES / "pendulum.toml")
+    pic = run_system(with_plot_outputs(scene.system)[0], t_end=scene.options.t_end, dt=scene.options.dt,
+                     integrator=scene.options.integrator, interval=1e-3)
+    assert all(np.array_equal(pic[c], col[c]) for c in ("x_tip", "y_tip", "w_mid", "M_mid"))
+    assert np.array_equal(pic["px_beam_tip"], col["x_tip"]) and np.array_equal(pic["py_beam_tip"], col["y_tip"])
+    stations = np.stack([np.column_stack([pic[f"px_beam_{m}"], pic[f"py_beam_{m}"]])
                          for m in ["root"] + [f"plot{k}" for k in range(1, 10)] + ["tip"]], axis=1)
     w = np.array([chord_distance(p)[5] for p in stations])
     assert np.abs(col["w_mid"]).max() > 1e-4  # the strip does bend
