@@ -212,7 +212,10 @@ def test_ctrl_c_keeps_finished_runs_and_resume_completes(isolated_cache, tmp_pat
     # The sweep holds once 200 runs are in the partial file (a test hook), so the signal lands
     # mid-sweep however fast or loaded the machine is.
     env = dict(os.environ, FLEXSYM_TEST_HOLD_SWEEP_AFTER="200")
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    # SIGINT as a user has it, even when the suite itself runs as a background job (which
+    # inherits SIGINT ignored)
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 900  # a bound on a hang, not on the machine's speed
     while not (part.exists() and len(part.read_text().splitlines()) > 200):
         assert proc.poll() is None and time.time() < deadline, proc.communicate()

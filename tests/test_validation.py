@@ -329,6 +329,12 @@ def _children(pid: int) -> list[int]:
     return kids
 
 
+def _default_sigint() -> None:
+    """A child started from a background job inherits SIGINT ignored (POSIX shells do that), and
+    Python then never raises KeyboardInterrupt: give the process under test Ctrl-C as a user has it."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _exe(pid: int) -> str:
     try:
         return os.readlink(f"/proc/{pid}/exe")
@@ -352,7 +358,8 @@ def test_killed_run_leaves_no_driver_and_no_file(tmp_path, sig):
     out = tmp_path / "r.csv"
     out.write_text("earlier\n")
     proc = subprocess.Popen([sys.executable, "-m", "flexsym.apps.cli", "run", "m3", "--t-end", "1000", "--dt", "1e-5",
-                             "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                             "--out", str(out)], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=_default_sigint)
     # Conditions, not sleeps: each wait ends when its state is reached; the deadlines only bound
     # a hang (the machine may be loaded).
     deadline = time.time() + 600
