@@ -24,8 +24,11 @@ CASES = {
     "m1": ("m1", []),
     "m1-radau5": ("m1", ["--integrator", "radau5", "--dt", "0.01", "--t-end", "5"]),
     "m3-rk4": ("m3", ["--integrator", "rk4", "--dt", "0.005", "--t-end", "5"]),
-    "m3-newmark": ("m3", ["--integrator", "newmark", "--t-end", "5", "--ws", "4", "--ts", "10"]),
+    "m3-newmark": ("m3", ["--integrator", "newmark", "--t-end", "5", "--ws", "4", "--ts", "10",
+                          "--newmark-gamma", "0.6", "--newmark-beta", "0.3025"]),
+    "m1-rho": ("m1", ["--rho-inf", "0.5", "--newton", "full", "--newton-tol", "1e-13", "--t-end", "5"]),
     "scene": ("scenes/constant_speed.toml", []),
+    "scene-overridden": ("scenes/constant_speed.toml", ["--t-end", "3", "--rho-inf", "0.6"]),
     "ef": ("ef", ["--t-end", "2"]),  # banded matrices
 }
 ROOT = Path(__file__).resolve().parent.parent
@@ -233,6 +236,8 @@ def test_tunable_start_values_match_the_run(exported, tmp_path):
      "implicit integrator"),
     (["export-fmu", "m3", "--input", "torque", "--out", "{tmp}/x.fmu"], "--input"),
     (["export-fmu", "m3", "--dt", "-1", "--out", "{tmp}/x.fmu"], "--dt: must be > 0"),
+    (["export-fmu", "m3", "--rho-inf", "2", "--out", "{tmp}/x.fmu"], "--rho-inf: must be"),
+    (["export-fmu", "m3", "--penalty", "10", "--out", "{tmp}/x.fmu"], "--penalty"),
     (["export-fmu", str(ROOT / "scenes/constant_speed.toml"), "--input", "drive", "--out", "{tmp}/x.fmu"],
      "without theta'' terms"),
 ])

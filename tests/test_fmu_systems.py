@@ -76,7 +76,8 @@ def test_system_fmu_parameter_start_value_changes_the_run(exported, tmp_path):
 
 @pytest.mark.parametrize("argv, message", [
     (["--input", "drive"], "a system scene's FMU has no inputs yet"),
-    (["--integrator", "ali3p"], "given with a scene file"),
+    (["--ws", "5"], "--ws given with a system scene: set the driver's omega"),  # options as `run`'s
+    (["--dt", "-1"], "--dt: must be > 0"),
 ])
 def test_malformed_system_export_requests(capsys, tmp_path, argv, message):
     out = tmp_path / "x.fmu"

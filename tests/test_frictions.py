@@ -55,10 +55,14 @@ def test_a_mechanism_run_prints_every_output_with_its_unit(capsys):
     assert "status: ok" in out
 
 
-def test_a_one_beam_scene_summary_carries_units(capsys):
+def test_a_one_beam_scene_summary_and_csv_carry_units(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the scene writes its [output] file, paper.csv, here
     code, out, _ = run_cli(capsys, "run", SCENES / "paper.toml", "--t-end", "0.5")
     assert code == 0
     assert "| v_tip | m |" in out and "| M_A | N m |" in out
+    lines = (tmp_path / "paper.csv").read_text().splitlines()
+    assert lines[0].startswith("t,v_tip,M_A")
+    assert lines[1] == "# units: t [s], v_tip [m], M_A [N m], M_B [N m], M_C [N m]"
 
 
 def test_output_units():
@@ -90,3 +94,52 @@ def test_inspect_is_readable_and_names_integrals_as_they_are(capsys, variant):
     assert max(len(line) for line in out.splitlines()) <= 120
     if variant == "m3":
         assert "J[H[v_cp1,v_cp1]*phi_v_cp1]" in out
+
+
+def test_a_variant_made_with_generate_name_runs_by_that_name(capsys, tmp_path, monkeypatch):
+    """`flexsym generate m3 --name pre5 ...` then `flexsym run pre5` (and build, inspect, a chain
+    pre5 -> pre6): the saved definition rebuilds the same spec, so the generated code is reused."""
+    monkeypatch.setenv("FLEXSYM_CACHE", str(tmp_path / "cache"))
+    code, out, _ = run_cli(capsys, "generate", "m3", "--name", "pre5", "--bending", "static,cp1",
+                           "--outputs", "v_tip,M_A")
+    assert code == 0
+    folders = sorted(p.name for p in (tmp_path / "cache" / "variants").iterdir() if p.is_dir())
+    code, out, err = run_cli(capsys, "run", "pre5", "--t-end", "0.5", "--out", tmp_path / "a.csv")
+    assert code == 0 and "| pre5 |" in out and "generating" not in err  # the code generate made
+    assert (tmp_path / "a.csv").read_text().startswith("t,v_tip,M_A,v_static,v_cp1\n")
+    assert run_cli(capsys, "generate", "pre5", "--name", "pre6", "--bending", "static,cp1,cp2")[0] == 0
+    code, out, err = run_cli(capsys, "run", "pre6", "--t-end", "0.5", "--out", tmp_path / "b.csv")
+    assert code == 0 and "generating" not in err
+    # outputs not given are the new variant's defaults (as for any customisation)
+    assert (tmp_path / "b.csv").read_text().startswith("t,v_tip,u_tip,M_A,M_B,M_C,v_static,v_cp1,v_cp2\n")
+    after = sorted(p.name for p in (tmp_path / "cache" / "variants").iterdir() if p.is_dir())
+    assert [f for f in after if not f.startswith("pre6-")] == folders and len(after) == len(folders) + 1
+    assert run_cli(capsys, "inspect", "pre6")[0] == 0
+    code, _, err = run_cli(capsys, "run", "pre7")
+    assert code == 2 and err.count("\n") == 1 and "generate BASE --name NAME" in err
+    (tmp_path / "cache" / "variants" / "pre5.json").write_text("{not json")
+    code, _, err = run_cli(capsys, "run", "pre5")
+    assert code == 2 and err.count("\n") == 1 and "pre5.json: not a saved variant" in err
+
+
+def test_a_system_build_says_what_it_does(capsys, tmp_path, monkeypatch):
+    """Deriving and compiling a system takes 5-45 s: each stage is a line on stderr the first
+    time; a cached model runs without them."""
+    monkeypatch.setenv("FLEXSYM_CACHE", str(tmp_path / "cache"))
+    argv = ("run", SCENES / "pendulum.toml", "--t-end", "0.01", "--out", tmp_path / "p.csv")
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 0
+    stages = [ln for ln in err.splitlines() if ln.startswith("flexsym: system 'pendulum': ")]
+    assert [s.split(": ", 2)[2].split(" ")[0] for s in stages] == ["deriving", "derived", "kernels", "compiling"]
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 0 and "flexsym: system" not in err
+
+
+def test_output_piped_into_head_ends_quietly(tmp_path):
+    """`flexsym variants | head -1`: the reader leaves early; no traceback."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run(f"{sys.executable} -m flexsym.apps.cli variants | head -1", shell=True,
+                          capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert proc.stdout.count("\n") == 1 and "Traceback" not in proc.stderr and proc.stderr == ""

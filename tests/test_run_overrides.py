@@ -42,13 +42,15 @@ def test_overrides_equal_an_edited_scene_and_are_recorded(tmp_path, monkeypatch,
     cols_g, data_g, header_g = rows(tmp_path / "given.csv")
     assert cols_g == cols_e and data_g.shape == data_e.shape
     assert np.array_equal(data_g, data_e), "the same options give the same rows, bit for bit"
-    assert header_e == []  # nothing replaced: nothing recorded (the scene is the record)
-    assert len(header_g) == 1 and header_g[0].startswith("# run options: ")
-    listed = header_g[0].rsplit("(from the command line: ", 1)[1].rstrip(")").split(", ")
+    units = header_e[0]
+    assert units.startswith("# units: t [s]") and header_g[0] == units
+    assert header_e == [units]  # nothing replaced: nothing recorded (the scene is the record)
+    assert len(header_g) == 2 and header_g[1].startswith("# run options: ")
+    listed = header_g[1].rsplit("(from the command line: ", 1)[1].rstrip(")").split(", ")
     assert sorted(listed) == sorted(f for f in flags if f.startswith("--"))
     for flag, value in zip(flags[::2], flags[1::2]):
         key = flag[2:].replace("-", "_")
-        assert f"{key} = {value}" in header_g[0] or f"{key} = {float(value)!r}" in header_g[0]
+        assert f"{key} = {value}" in header_g[1] or f"{key} = {float(value)!r}" in header_g[1]
 
 
 @pytest.mark.parametrize("flags, says", [

@@ -157,7 +157,7 @@ MALFORMED = [
     ("marker_off_the_body", "markers = { step = 5.0 }", "markers = { step = 12.0 }", "marker 'step' at x = 12.0 is outside the beam"),
     ("no_mode_carries_v_tip", '"static", "cp1", "cp2"', '"cp1", "cp2"', "[[body]] 'blade' model: variant 'body': no bending mode moves the tip"),
     ("no_mode_carries_N", 'strain = "prestress", bending = ["static", "cp1", "cp2"], axial_force = "equilibrium"',
-     'strain = "foreshortening", bending = ["static", "cp1", "cp2"]', "output N_A = 'N(blade, root)': model 'body' (strain foreshortening) has no axial mode"),
+     'strain = "foreshortening", bending = ["static", "cp1", "cp2"], axial_force = "constitutive"', "output N_A = 'N(blade, root)': model 'body' (strain foreshortening) has no axial mode"),
     ("more_modes_than_elements", '"static", "cp1", "cp2"', '"static", "cp1", "cp2", "cp3", "cp4"', "the body's 2 elements have only 3 such modes"),
     ("elements_not_an_integer", "elements = 100", "elements = 1.5", "[[body]] 'blade' elements: must be an integer"),
 ]

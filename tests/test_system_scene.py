@@ -111,8 +111,8 @@ MALFORMED = [
     ("motor_unknown_name", GUIDED, MOTOR.format("-kp*(crank_joint - 1)"), "driver 'crank_drive' torque = '-kp*(crank_joint - 1)': the name 'kp' is not allowed"),
     ("motor_force_on_revolute", GUIDED, MOTOR.format("1").replace("torque =", "force ="), "a motor on the revolute joint 'crank_joint' gives a torque"),
     ("duplicate_names", 'name = "slide"', 'name = "rod"', "duplicate name 'rod'"),
-    ("no_mode_carries_N", 'model = "m2"', 'model = "m3"', "output N_mid = 'N(rod, mid)': model 'foreshortening'"),
-    ("no_mode_carries_M_at_tip", 'N_mid = "N(rod, mid)"', 'M_tip = "M(rod, tip)"', "output M_tip = 'M(rod, tip)': no bending mode"),
+    ("no_mode_carries_N", 'model = "m2"', 'model = { variant = "m3", axial_force = "constitutive" }',
+     "output N_mid = 'N(rod, mid)': model 'foreshortening'"),
     ("w_at_end", 'w_mid = "w(rod, mid)"', 'w_mid = "w(rod, tip)"', "distance from the chord is zero at the beam's ends"),
     ("marker_off_beam", "markers = { mid = 0.15 }", "markers = { mid = 0.5 }", "marker 'mid' at x = 0.5 is outside the beam"),
     ("prismatic_without_axis", "axis = [1.0, 0.0]\n", "", "joint 'slide': a prismatic joint needs an axis"),
@@ -272,8 +272,10 @@ def test_bench_systems_quick(tmp_path):
     """flexsym bench-systems --quick: the pendulum at two generalized-alpha steps and with
     Fox-Goodwin's Newmark (beta = 1/12) against its own reference step; every output's
     integration error shrinks when the step is halved, and at the same step the fourth-order
-    period error of beta = 1/12 is at least 10x below generalized-alpha's in every output
-    (measured 16x for M_mid, 77-340x for the others)."""
+    period error of beta = 1/12 is well below generalized-alpha's in every output (measured
+    77-340x in the motion; 9.5x in M_mid, which comes from equilibrium and so reads the
+    accelerations and the velocities' Coriolis terms as well: 16x when it was the modes'
+    curvature)."""
     from flexsym.analysis.system_bench import run_system_bench
 
     rows = run_system_bench(tmp_path, quick=True, log=lambda m: None)
@@ -282,6 +284,6 @@ def test_bench_systems_quick(tmp_path):
     assert all(r["status"] == "ok" and r["cpu_s"] > 0 for r in rows)
     for c in ("x_tip", "y_tip", "w_mid", "M_mid"):
         assert 0 < rows[1][f"err_{c}"] < 0.75 * rows[0][f"err_{c}"], c
-        assert 0 < rows[2][f"err_{c}"] < 0.1 * rows[1][f"err_{c}"], c
+        assert 0 < rows[2][f"err_{c}"] < (0.2 if c == "M_mid" else 0.02) * rows[1][f"err_{c}"], c
     assert (tmp_path / "bench_systems.csv").read_text().startswith("system,model,integrator,dt,cpu_s,err_max")
     assert "| pendulum | m3 | genalpha | 0.001 s |" in (tmp_path / "bench_systems.md").read_text()

@@ -8,7 +8,9 @@ import sympy as sp
 from flexsym.physics.assemble import derive_system
 from flexsym.codegen.derive import derive
 from flexsym.physics.energy import BEAM_PARAMS, alpha, w
-from flexsym.model.variant import builtin
+from dataclasses import replace
+
+from flexsym.model.variant import builtin, customize
 from flexsym.model.library import spin_up_system
 
 PARAMS = {p.symbol: p.default for p in BEAM_PARAMS}
@@ -18,12 +20,13 @@ PARAMS = {p.symbol: p.default for p in BEAM_PARAMS}
 def test_s0_equations_equal_todays_variant(variant):
     """S0 (one beam, root revolute guided by the spin-up) gives today's M, f and outputs: the
     generalised kinetic density with a frame at rest in translation reduces to today's."""
-    spec = builtin(variant)
-    old, new = derive(spec), derive_system(spin_up_system(spec))
+    spec = builtin(variant)  # the one-beam variant: M from the modes' curvature (the paper's)
+    old = derive(spec)
+    new = derive_system(spin_up_system(replace(spec, moment="constitutive")))
     theta, rate, acc = new.guided[0].symbols
     rnd = random.Random(7)
     vals = dict(PARAMS)
-    for a, b in zip(list(old.q) + list(old.qd), list(new.q) + list(new.qd)):
+    for a, b in zip(list(old.q) + list(old.qd) + list(old.qdd), list(new.q) + list(new.qd) + list(new.qdd)):
         vals[a] = vals[b] = rnd.uniform(-0.5, 0.5)
     vals |= {w: 1.3, rate: 1.3, alpha: 0.7, acc: 0.7, theta: 0.2}
     for a, b in ((old.numeric(old.M), new.M), (old.numeric(old.f), new.f)):
@@ -33,6 +36,16 @@ def test_s0_equations_equal_todays_variant(variant):
     for name in ("v_tip", "M_A"):
         a = float(old.numeric(old.outputs[name]).xreplace(vals))
         assert float(new.outputs[name].xreplace(vals)) == pytest.approx(a, rel=1e-14)
+    # a mechanism's default, M from equilibrium (assemble._equilibrium_stress: the frame's
+    # motion read from the system's kinematics) against the one-beam --moment equilibrium
+    # (outputs._equilibrium_M, written for the guided hub): two derivations, one value
+    old_eq = derive(customize(spec, moment="equilibrium", outputs="v_tip,M_A"))
+    new_eq = derive_system(spin_up_system(spec))
+    assert new_eq.system.bodies[0].model.moment == "equilibrium"
+    for name in ("M_A",):
+        a = float(old_eq.numeric(old_eq.outputs[name]).xreplace(vals))
+        assert abs(a) > 1.0
+        assert float(new_eq.outputs[name].xreplace(vals)) == pytest.approx(a, rel=1e-12)
 
 
 def test_s0_generated_system_runs_as_todays_m3():
@@ -45,7 +58,7 @@ def test_s0_generated_system_runs_as_todays_m3():
     spec = builtin("m3")
     kw = dict(t_end=20.0, dt=1e-3)
     today = run_built(prepare(spec, log=lambda m: None), **kw)
-    system = run_built(prepare_system(spin_up_system(spec)), **kw)
+    system = run_built(prepare_system(spin_up_system(replace(spec, moment="constitutive"))), **kw)
     assert today.ok and system.ok
     assert abs(today["v_tip"] - system["v_tip"]).max() <= 1e-9
     assert abs(today["M_A"] - system["M_A"]).max() <= 1e-9 * abs(today["M_A"]).max()

@@ -284,12 +284,12 @@ def test_slider_crank_m3_against_ef(slider_crank_runs):
 
 def test_slider_crank_m2_against_ef(slider_crank_runs):
     """m2 against ef-4 on S2 (ef-4's own errors as for m3). Measured m2 - ef-4: x_s 9.8e-4
-    (26x m3's; the README's table), w_mid's peak +1.0e-3, N_mid's peak -1.9e-2 (the
-    constitutive EA u' of two axial sine modes, 1.8 % low against ef-16 as well; README).
-    Tolerances 1.5e-3, 5e-3 and N_mid's peak in [-2.5e-2, -1.2e-2]
-    (the measured deficit +- 6e-3, ef-4's 7.9e-4 inside). Fails with: m1 (x_s 2.0e-3, w_mid
-    +4.3e-2), E + 10 % (w_mid -4.4e-2), rho + 10 % (w_mid +0.11, N_mid +2.5e-2)."""
+    (26x m3's), w_mid's peak +1.0e-3, N_mid's peak -4.6e-3 from equilibrium (a mechanism's
+    default; the constitutive EA u' of two axial sine modes was -1.9e-2, 1.8 % low against
+    ef-16 as well). Tolerances 1.5e-3, 5e-3 and 7e-3 (ef-4's own 7.9e-4 inside). Fails with:
+    m1 (x_s 2.0e-3, w_mid +4.3e-2), E + 10 % (w_mid -4.4e-2), rho + 10 % (w_mid +0.11,
+    N_mid +2.5e-2)."""
     ef, m2 = slider_crank_runs["ef"], slider_crank_runs["m2"]
     assert _rel(m2, ef, "x_s")[0] <= 1.5e-3
     assert abs(_rel(m2, ef, "w_mid")[1]) <= 5e-3
-    assert -2.5e-2 <= _rel(m2, ef, "N_mid")[1] <= -1.2e-2
+    assert abs(_rel(m2, ef, "N_mid")[1]) <= 7e-3

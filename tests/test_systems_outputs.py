@@ -189,8 +189,9 @@ def test_s3_equilibrium_with_gravity_meets_the_pin():
 def test_body_from_fe_data_in_a_system_converges_to_the_analytic_modes():
     """S3 with its beam as finite-element data (uniform, 8 and 16 Hermite elements; modes and
     invariants computed from the discretisation, as the one-beam path) against the analytic
-    #1 over 0.5 s: w_mid at O(h^4) (measured 1.6e-6 -> 1.1e-7 m of a 1.2 mm peak), M_mid (the
-    body's element recovery, linear curvature per element) at O(h^2) (2.7e-3 -> 7.0e-4 N m)."""
+    #1 over 0.5 s: w_mid at O(h^4) (measured 1.6e-6 -> 1.1e-7 m of a 1.2 mm peak), M_mid from
+    equilibrium (the default) at O(h^4) too (6.5e-4 -> 4.6e-5 N m), from the element curvature
+    (linear per element) at O(h^2) (2.7e-3 -> 7.0e-4 N m)."""
     from flexsym.model.fedata import BeamBody
     from flexsym.model.fedata import Section as FeSection
     from flexsym.toolchain.run import run_built
@@ -201,16 +202,20 @@ def test_body_from_fe_data_in_a_system_converges_to_the_analytic_modes():
     def run(model):
         return run_built(prepare_system(pendulum_system(model)), t_end=0.5, dt=1e-4)
 
-    ref = run(builtin("m1"))
+    m1 = builtin("m1")
+    ref, ref_c = run(m1), run(replace(m1, moment="constitutive"))
     errs = []
     for n in (8, 16):
         body = BeamBody.from_segments([(1.0, FeSection(P.E, P.rho, P.A, P.I))], n)
-        r = run(replace(builtin("m1"), body=body))
-        errs.append([np.abs(r[c] - ref[c]).max() for c in ("w_mid", "M_mid")])
-    (w8, m8), (w16, m16) = errs
+        r = run(replace(m1, body=body))
+        r_c = run(replace(m1, body=body, moment="constitutive"))
+        errs.append([np.abs(r["w_mid"] - ref["w_mid"]).max(), np.abs(r["M_mid"] - ref["M_mid"]).max(),
+                     np.abs(r_c["M_mid"] - ref_c["M_mid"]).max()])
+    (w8, m8, c8), (w16, m16, c16) = errs
     assert np.abs(ref["w_mid"]).max() > 1e-3
     assert w16 < 2e-7 and w8 / w16 > 12
-    assert 3.5 < m8 / m16 < 4.5
+    assert 3.5 < c8 / c16 < 4.5  # the element curvature: O(h^2)
+    assert m8 / m16 > 12  # the default, M from equilibrium: integrals of the motion, O(h^4)
 
 
 def test_bad_system_outputs_and_bodies_are_refused_with_one_line():

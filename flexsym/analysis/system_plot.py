@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from flexsym.model.system import Marker, Output, System
+from flexsym.model.system import Marker, Output, System, output_unit
 
 STATIONS = 11  # points along a beam, root and tip included
 
@@ -100,7 +100,7 @@ def plot_system(system: System, geometry: dict, columns: dict, path, instants: i
     for k, o in enumerate(shown):
         ax = fig.add_subplot(grid[k, 0])
         ax.plot(t, columns[o.column], lw=1)
-        ax.set_ylabel(o.column)
+        ax.set_ylabel(f"{o.column} [{output_unit(system, o.quantity)}]")
         ax.set_title(o.quantity, fontsize=8, loc="right")
         ax.grid(alpha=0.3)
         if k == len(shown) - 1:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import os
 import signal
+import re
 import sys
 import threading
 from dataclasses import replace
@@ -74,12 +75,46 @@ def resolve(args, systems: bool = False):
         return scene.spec, scene
     if getattr(args, "model", None) is not None:
         raise SpecError(f"--model replaces the model of a scene file; '{args.variant}' is not one")
-    base = builtin(args.variant)
     overrides = {k: getattr(args, k, None) for k in _OVERRIDES if k != "name"}
     overrides["elements"] = _elements(overrides["elements"])
+    base = _base_variant(args.variant)
     if all(v is None for v in overrides.values()) and getattr(args, "name", None) is None:
         return base.validate(), None
     return customize(base, name=getattr(args, "name", None), **overrides), None
+
+
+def _chain(name: str) -> tuple[str, dict]:
+    """(built-in base, overrides) of a built-in variant or of one saved by `flexsym generate
+    BASE --name NAME ...`."""
+    from flexsym.model.variant import builtin
+    from flexsym.toolchain.pipeline import saved_variant
+
+    try:
+        return builtin(name).name, {}
+    except SpecError as exc:
+        saved = saved_variant(name) if re.fullmatch(r"[a-z][a-z0-9_]{0,47}", name) else None
+        if saved is None:
+            raise SpecError(f"{exc}; a custom variant is run by name once `flexsym generate BASE "
+                            "--name NAME ...` has made it") from None
+        return saved
+
+
+def _definition(spec) -> dict:
+    """The customize() arguments that rebuild spec from its built-in base, every one explicit
+    (so that defaults a base implies, such as its outputs, cannot change the saved variant)."""
+    if spec.kind == "fe":
+        return {"elements": spec.elements, "maneuver": spec.maneuver, "outputs": ",".join(spec.outputs)}
+    return {"strain": spec.strain, "axial": ",".join(m.token for m in spec.axial),
+            "bending": ",".join(m.token for m in spec.bending), "maneuver": spec.maneuver,
+            "outputs": ",".join(spec.outputs), "stress": spec.stress,
+            "axial_force": spec.axial_force, "moment": spec.moment}
+
+
+def _base_variant(name: str):
+    from flexsym.model.variant import builtin, customize
+
+    base, overrides = _chain(name)
+    return customize(builtin(base), name=name, **overrides) if overrides else builtin(name)
 
 
 def resolve_spec(args):
@@ -103,6 +138,10 @@ def cmd_generate(args) -> int:
         check_output_dir(args.out, "--out")
     dest = Path(args.out) if args.out else (checked_in_folder(spec) if is_builtin(spec) else cache_folder(spec))
     g = generate(spec, dest)
+    if getattr(args, "name", None) is not None:  # `flexsym run NAME` finds it again
+        from flexsym.toolchain.pipeline import save_variant
+
+        save_variant(spec.name, _chain(args.variant)[0], _definition(spec))
     ops = ", ".join(f"{k} {v['total_ops']}" for k, v in g.manifest["kernels"].items())
     print(f"generated '{spec.name}' in {dest}\n  fingerprint {g.manifest['fingerprint'][:16]}...\n  ops: {ops}")
     return 0
@@ -185,14 +224,15 @@ def cmd_run(args) -> int:
         raise SpecError("--energy: the energy columns (T, V, h) go to the CSV file, and there is none: "
                         "give --out")
     built = prepare(spec)
-    res = run_built(built, options, out=out, header=_options_header(args, scene, options))
+    from flexsym.model.output_names import info
+
+    units = {o: info(o, spec.points).unit for o in spec.outputs}
+    res = run_built(built, options, out=out, header=[_units_line(units)] + _options_header(args, scene, options))
     verdict = assess(spec, res, options.params)
     s = Summary(spec, res)
     ts = options.params.get("ts", options.t_end)
     if scene is not None or "v_tip" not in res.columns:
-        from flexsym.model.output_names import info
-
-        print(describe(res, spec.outputs, verdict.status, {o: info(o, spec.points).unit for o in spec.outputs}))
+        print(describe(res, spec.outputs, verdict.status, units))
     else:
         print(table([s], ts, options.t_end))
     if out is not None:
@@ -215,6 +255,12 @@ def cmd_run(args) -> int:
     if not res.ok:
         return 3
     return 0 if verdict.valid else 4
+
+
+def _units_line(units: dict) -> str:
+    """The CSV header's units of the time and output columns (SI; the coordinates that may
+    follow are SI too: m, rad, and the modes' amplitudes in m)."""
+    return "units: " + ", ".join(f"{c} [{u}]" for c, u in ({"t": "s"} | units).items())
 
 
 def _options_header(args, scene, options) -> list[str]:
@@ -249,10 +295,14 @@ def _run_system(args, scene) -> int:
     from flexsym.toolchain.pipeline import prepare_system
 
     try:
-        built = prepare_system(system)
+        built = prepare_system(system, log=lambda msg: print(msg, file=sys.stderr, flush=True))
     except SpecError as exc:  # what the derivation does not support yet, named with the file
         raise SpecError(f"{scene.path}: {exc}") from None
-    header = _options_header(args, scene, options)
+    from flexsym.model.system import output_unit
+
+    shown = [o.column for o in scene.system.outputs]  # the user's, not the plot's columns
+    units = {o.column: output_unit(scene.system, o.quantity) for o in scene.system.outputs}
+    header = [_units_line(units)] + _options_header(args, scene, options)
     moved = scene.assembly.line(options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
     if moved:
         print(f"flexsym: {scene.path}: {moved}", file=sys.stderr)
@@ -263,10 +313,7 @@ def _run_system(args, scene) -> int:
           f"{options.t_end:g} s: {status}")
     if len(res.t):
         from flexsym.analysis.spinup import describe
-        from flexsym.model.system import output_unit
 
-        shown = [o.column for o in scene.system.outputs]  # the user's, not the plot's columns
-        units = {o.column: output_unit(scene.system, o.quantity) for o in scene.system.outputs}
         print(describe(res, shown, status, units))
     if res.written != "none":
         if plot is not None:  # the CSV does not depend on whether a picture was asked for
@@ -282,26 +329,23 @@ def _run_system(args, scene) -> int:
     return 0 if res.ok else 3
 
 
-FMU_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "interval", "ws", "ts")
+FMU_OPTIONS = tuple(n for n in RUN_OPTIONS if n not in ("repeat", "energy"))  # as `run`'s
 
 
 def _fmu_request(args, out: Path | None):
     """(spec, FmuOptions) for export-fmu and bench-fmu, checked before any work (one table)."""
     from flexsym.sim.fmu import FmuOptions, check_request
 
+    from flexsym.sim.fmu import tuning_of
+
     spec, scene = resolve(args, systems=True)
-    if scene is not None:
-        given = given_options(args, FMU_OPTIONS)
-        if given or args.param:
-            name = next(iter(given), "param")
-            raise SpecError(f"{scene.path}: --{name.replace('_', '-')} given with a scene file: set it "
-                            "in the scene")
-        o = scene.options
-    else:
-        o = validate(given_options(args, FMU_OPTIONS) | {"params": _params(args.param)}, CLI, spec)
+    o = _run_options(args, spec, scene, overrides=True)  # as `flexsym run` takes them
+    if o.energy:
+        raise SpecError(f"{scene.path}: [output] energy: the FMU's outputs are the scene's columns; "
+                        "energy columns are not exported")
     opts = FmuOptions(integrator=o.integrator, dt=o.dt, step=o.step, tol=o.tol, t_end=o.t_end,
                       interval=o.out_every * o.dt, params=o.params,
-                      input=getattr(args, "input", "none"))
+                      input=getattr(args, "input", "none"), tuning=tuning_of(o))
     check_request(opts, out, spec)
     return (spec if spec is not None else scene), opts
 
@@ -795,6 +839,10 @@ def main(argv=None) -> int:
     except Terminated as e:
         print(f"flexsym: terminated by signal {e.signum}", file=sys.stderr)
         return 128 + e.signum
+    except BrokenPipeError:  # `flexsym ... | head`: the reader left; files were written as usual
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes stdout at exit
+        return 128 + signal.SIGPIPE
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)

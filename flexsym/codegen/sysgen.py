@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import time
 from pathlib import Path
 
 import casadi as ca
@@ -222,11 +223,19 @@ def _unbounded(system: System, c) -> bool:
     return c.group == "node" and c.name.rsplit("_", 1)[-1].startswith("d")
 
 
-def generate_system_files(system: System) -> dict[str, str]:
+def generate_system_files(system: System, log=None) -> dict[str, str]:
+    """The generated folder's files; log(msg): a line per stage (derivation, kernels), so a
+    long derivation (ef bodies: 10-45 s) is not silent."""
+    log = log or (lambda msg: None)
+    start = time.perf_counter()
     der = derive_system(system)
+    log(f"derived ({len(der.q)} coordinates, {len(der.constraints)} constraint rows) in "
+        f"{time.perf_counter() - start:.1f} s; building the C kernels (casadi)")
+    start = time.perf_counter()
     fp = fingerprint(system)
     kernels = build_system_kernels(der)
     emitted = [emit(k, C_PREFIX) for k in kernels]
+    log(f"kernels emitted ({sum(k.total_ops for k in emitted)} operations) in {time.perf_counter() - start:.1f} s")
     versions = tool_versions()
     mass = next(k.function for k in kernels if k.name == "mass")
     qs, ds, ps = mass.sx_in()

@@ -67,6 +67,10 @@ def info(name: str, points=()) -> OutputInfo:
         return OutputInfo(name, "m", "transverse tip deflection v_o(L) in the moving frame")
     if name == "u_tip":
         return OutputInfo(name, "m", "axial tip displacement u_o(L) in the moving frame")
+    if name.endswith("_clamp"):  # ef's N_A_clamp, M_A_clamp
+        return OutputInfo(name, "N" if name[0] == "N" else "N m",
+                          f"{'axial force' if name[0] == 'N' else 'bending moment'} at the root "
+                          "from the clamp reaction")
     q, at = point_of(name, points)
     what = "axial force (tension > 0)" if q == "N" else "bending moment (EI v'')"
     return OutputInfo(name, "N" if q == "N" else "N m", f"{what} at x = {at} L")

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import re
 from collections import deque
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 from flexsym.core.errors import SpecError
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
@@ -28,8 +28,9 @@ DRIVER_KINDS = ("guided", "motor")
 OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "angle": "joint", "rate": "joint", "reaction": "joint", "torque": "driver",
     "x": "marker", "y": "marker",
-    "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam",
+    "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam", "sigma": "beam",
 }
+SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation")
 REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
 _OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
@@ -144,6 +145,16 @@ class FlexibleBeam:
     model: object
     markers: tuple[Marker, ...] = ()
     flexible = True
+
+    def __post_init__(self):
+        # N and M of a beam in a mechanism come from equilibrium unless its model says
+        # "constitutive": the modes' curvature is 5e-2 of the peak off at S1's clamped root
+        # (equilibrium 2.6e-4) and reads a moment at a pinned end where there is none
+        model = self.model
+        if getattr(model, "kind", None) == "modal" and "auto" in (model.axial_force, model.moment):
+            object.__setattr__(self, "model", replace(
+                model, **{k: "equilibrium" for k in ("axial_force", "moment")
+                          if getattr(model, k) == "auto"}))
 
     @property
     def all_markers(self) -> tuple[Marker, ...]:
@@ -621,13 +632,49 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
             raise SpecError(f"{where}: needs one 'body.marker'")
         system._ref(where, args[0])
     else:
-        if len(args) != 2:
+        if fn == "sigma" and len(args) != 3:
+            raise SpecError(f"{where}: needs (beam, x, y): x a marker name or a position in m, y "
+                            "the section point's distance from the beam's axis in m (+ toward the "
+                            "beam frame's +y)")
+        if fn != "sigma" and len(args) != 2:
             raise SpecError(f"{where}: needs (beam, x) with x a marker name or a position in m")
         b = system.body(args[0]) if args[0] in {b.name for b in system.bodies} else None
         if b is None or not b.flexible:
             raise SpecError(f"{where}: '{args[0]}' is not a flexible body")
-        beam_station(system, b, args[1], where)
+        x = beam_station(system, b, args[1], where)
+        if fn == "sigma":
+            section_point(b, x, args[2], where)
     return fn, args
+
+
+def section_at(beam: FlexibleBeam, x: float) -> tuple[float, float]:
+    """(A, I) of the section at station x: the beam's, or for a body from finite-element data
+    its element's there (at a node, the element beyond it; at the tip, the last one)."""
+    body = getattr(beam.model, "body", None)
+    if body is None:
+        return beam.section.A, beam.section.I
+    L = beam.length
+    k = next((e for e in range(len(body.sections)) if x < body.nodes[e + 1] * L / body.length),
+             len(body.sections) - 1)
+    ref = body.sections[0]
+    return (beam.section.A * body.sections[k].A / ref.A, beam.section.I * body.sections[k].I / ref.I)
+
+
+def section_point(beam: FlexibleBeam, x: float, text: str, where: str) -> float:
+    """y of sigma(beam, x, y): a number (m) within SIGMA_REACH radii of gyration of the axis
+    (farther is outside any section with this A and I: a typing error)."""
+    try:
+        y = float(text)
+    except ValueError:
+        raise SpecError(f"{where}: y = '{text}' is not a number (the section point's distance "
+                        "from the axis, in m)") from None
+    A, I = section_at(beam, x)
+    reach = SIGMA_REACH * math.sqrt(I / A)
+    if not (math.isfinite(y) and abs(y) <= reach):
+        raise SpecError(f"{where}: y = {text} m is farther from the axis than any section with "
+                        f"A = {A:g} m^2 and I = {I:g} m^4 reaches ({SIGMA_REACH:g} sqrt(I/A) = "
+                        f"{reach:.3g} m)")
+    return y
 
 
 def output_unit(system: System, quantity: str) -> str:
@@ -640,7 +687,7 @@ def output_unit(system: System, quantity: str) -> str:
         return {"angle": ("rad", "m"), "rate": ("rad/s", "m/s"), "torque": ("N m", "N")}[fn][linear]
     if fn == "reaction":
         return "N m" if args[1] == "moment" else "N"
-    return {"x": "m", "y": "m", "v": "m", "u": "m", "w": "m", "N": "N", "M": "N m", "T": "J",
+    return {"x": "m", "y": "m", "v": "m", "u": "m", "w": "m", "N": "N", "M": "N m", "sigma": "Pa", "T": "J",
             "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)"}[fn]
 
 

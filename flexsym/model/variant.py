@@ -23,6 +23,7 @@ from flexsym.model.strain_models import STRAIN_MODELS
 
 NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")  # used with match: \Z, not $ (a trailing newline)
 QUAD_POINTS = 5  # ef: Gauss points per element (exact for EA eps^2, degree 8 in xi; kappa^2 is rational)
+RECOVERIES = ("auto", "constitutive", "equilibrium")
 CLAMP_OUTPUTS = ("N_A_clamp", "M_A_clamp")  # ef: N and M at the root from the clamp reaction
 
 
@@ -38,8 +39,11 @@ class VariantSpec:
     maneuver: str = "spin_up"
     outputs: tuple[str, ...] = ("v_tip", "u_tip")
     stress: str = "continuum"  # or "element:N" (paper eq. 22-25 on N elements)
-    axial_force: str = "constitutive"  # or "equilibrium" (from the axial inertial forces)
-    moment: str = "constitutive"  # or "equilibrium" (M from the inertial loads beyond the station)
+    # N and M recovery: "constitutive" (EA u', EI v'' of the modes) or "equilibrium" (from the
+    # inertial and external loads beyond the station); "auto" is the one-beam spin-up's
+    # constitutive (the paper's) and a mechanism's equilibrium (FlexibleBeam resolves it)
+    axial_force: str = "auto"
+    moment: str = "auto"
     points: tuple[tuple[str, str], ...] = ()  # named output positions (label, fraction of L)
     left_out: tuple[tuple[str, str], ...] = ()  # (what, why): decided by a scene, in the manifest
     description: str = ""
@@ -72,11 +76,11 @@ class VariantSpec:
             "maneuver": self.maneuver,
             "outputs": list(self.outputs),
             "stress": self.stress,
-            "axial_force": self.axial_force,
+            "axial_force": "constitutive" if self.axial_force == "auto" else self.axial_force,
             "points": [list(p) for p in self.points],
             "left_out": [list(x) for x in self.left_out],
         } | ({"body": self.body.to_dict()} if self.body is not None else {}) | (
-            {"moment": self.moment} if self.moment != "constitutive" else {})
+            {"moment": self.moment} if self.moment == "equilibrium" else {})
 
     def validate(self) -> "VariantSpec":
         if not isinstance(self.name, str) or not NAME_RE.match(self.name):
@@ -112,10 +116,10 @@ class VariantSpec:
             raise SpecError(f"variant '{self.name}': {exc}") from None
         if not self.outputs:
             raise SpecError(f"variant '{self.name}': no outputs requested")
-        if self.moment not in ("constitutive", "equilibrium"):
+        if self.moment not in RECOVERIES:
             raise SpecError(f"variant '{self.name}': moment '{self.moment}' must be "
                             "'constitutive' or 'equilibrium'")
-        if self.axial_force not in ("constitutive", "equilibrium"):
+        if self.axial_force not in RECOVERIES:
             raise SpecError(f"variant '{self.name}': axial force '{self.axial_force}' must be "
                             "'constitutive' or 'equilibrium'")
         stress_method(self)

@@ -48,7 +48,8 @@ from flexsym.model.modes import s
 from flexsym.physics.outputs import field_at, output_expression
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
-                     beam_station, length_scale, parse_output)
+                     beam_station, length_scale, parse_output, section_at,
+                     section_point)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
 
@@ -209,7 +210,9 @@ def _held_beyond_root(system: System, beam: str) -> str:
     return ""
 
 
-def _unsupported(system: System, tree) -> None:
+def check_derivable(system: System, tree=None) -> None:
+    """Refuse, before any work, what the derivation does not support (one line)."""
+    tree = tree or system.tree()
     where = f"system '{system.name}'"
     for b in system.bodies:
         if b.flexible and b.model.kind == "modal" and STRAIN_MODELS[b.model.strain].kinematics == "exact":
@@ -294,7 +297,7 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     time and lists them in its manifest); valid with one flexible body only."""
     system.validate()
     tree = system.tree()
-    _unsupported(system, tree)
+    check_derivable(system, tree)
     guided = _guided(system)
     guided_by_joint = {g.joint: g for g in guided}
     params, psyms = _param_layout(system)
@@ -509,12 +512,26 @@ def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
     return Q
 
 
+def _spring_ends(der: SystemDerivation, load) -> list[sp.Matrix]:
+    return [sp.Matrix([sp.nsimplify(c) for c in point]) if ref == GROUND else marker_pose(der, ref)[0]
+            for ref, point in ((load.a, load.point_a), (load.b, load.point_b))]
+
+
+def _spring_force_on_a(der: SystemDerivation, load) -> sp.Matrix:
+    """The spring-damper's force on its end a (ground frame; on b: the opposite): along the
+    line from a to b, k (l - l0) + c l' (l0 = 0: k delta + c delta'), as _spring's Q."""
+    a, b = _spring_ends(der, load)
+    delta = b - a
+    k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
+    if l0 == 0:
+        return k * delta + c * der.ddt(delta)
+    length = sp.sqrt(delta.dot(delta))
+    return (k * (length - l0) + c * der.ddt(length)) * delta / length
+
+
 def _spring(der: SystemDerivation, load) -> tuple[sp.Expr, sp.Matrix]:
     """V = k (l - l0)^2 / 2 and Q = -dV/dq - c l' dl/dq of a spring-damper."""
-    ends = []
-    for ref, point in ((load.a, load.point_a), (load.b, load.point_b)):
-        ends.append(sp.Matrix([sp.nsimplify(c) for c in point]) if ref == GROUND
-                    else marker_pose(der, ref)[0])
+    ends = _spring_ends(der, load)
     delta = ends[1] - ends[0]
     k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
     if l0 == 0:  # no square root: smooth when the ends meet
@@ -620,6 +637,16 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
             r = sp.Matrix([_x(der, beam.name, x) + u, v]) - p0
             return _cross(d, r) / sp.sqrt(d.dot(d))
         return _stress(der, beam, x, fn, where)
+    if fn == "sigma":  # sigma = N/A - M y/I (M = EI v'' > 0 shortens the fibres at y > 0)
+        beam = system.body(args[0])
+        x = beam_station(system, beam, args[1], where)
+        y = sp.nsimplify(section_point(beam, x, args[2], where))
+        A_x, I_x = section_at(beam, x)  # the section there, as run-time parameters A, I scaled
+        A_ = BEAM_PARAMS[2].symbol * sp.nsimplify(A_x / beam.section.A)
+        I_ = BEAM_PARAMS[3].symbol * sp.nsimplify(I_x / beam.section.I)
+        psyms = der.flex[beam.name].psyms
+        N, M = (_stress(der, beam, x, q, where) for q in ("N", "M"))
+        return N / A_.xreplace(psyms) - M * y / I_.xreplace(psyms)
     raise SpecError(f"{where}: '{fn}' is not derived for systems yet")
 
 
@@ -803,8 +830,10 @@ def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix
                 F = _rot(der.poses[beam.name].angle) * F
             out.append((F, sp.Integer(0), marker_pose(der, load.marker)[0]))
         elif isinstance(load, SpringDamper) and (beyond(load.a) or beyond(load.b)):
-            raise SpecError(f"system '{system.name}': N or M from equilibrium on '{beam.name}' "
-                            "with a spring-damper on it is not derived")
+            Fa = _spring_force_on_a(der, load)
+            for ref, F in ((load.a, Fa), (load.b, -Fa)):
+                if beyond(ref):
+                    out.append((F, sp.Integer(0), marker_pose(der, ref)[0]))
     return out
 
 

@@ -518,7 +518,7 @@ def _carried(system: System, o: Output) -> None:
     s = sp.nsimplify(x / beam.length, rational=True) if 0 < x < beam.length else sp.Integer(int(x > 0))
     from flexsym.model.output_names import axial_force_available
 
-    if fn in ("v", "w", "M"):
+    if fn in ("v", "w") or (fn == "M" and model.moment != "equilibrium"):
         order = 2 if fn == "M" else 0
         if all(float(model.mode(m).value_at(order, s)) == 0 for m in model.bending):
             what = "curvature" if fn == "M" else "deflection"
@@ -558,8 +558,6 @@ def load_system_scene(path: Path, data: dict, name: str, model: str | None = Non
     if model is not None and (not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model)):
         raise SpecError(f"{prefix}--model: '{model}' is not a variant name")
     system, given, output_file = system_from_data(data, prefix, name, model, Path(path).parent)
-    if model is not None:
-        system = _model_outputs(system)
     options = validate(given, Where("scene", path))
     try:
         system, assembly = checked_system(system, options.t_end)
@@ -567,19 +565,6 @@ def load_system_scene(path: Path, data: dict, name: str, model: str | None = Non
         raise SpecError(f"{prefix}{exc}") from None
     return SystemScene(path, system, options, Path(output_file) if output_file else None, model,
                        assembly, given)
-
-
-def _model_outputs(system: System) -> System:
-    """--model with a modal variant that has no axial mode: N comes from the axial inertial
-    forces (as for one-beam scenes), so the scene's N outputs stay available."""
-    from flexsym.model.output_names import axial_force_available
-
-    wants_n = {parse_output(system, o.quantity)[1][0] for o in system.outputs
-               if o.quantity.strip().startswith("N(")}
-    bodies = tuple(replace(b, model=replace(b.model, axial_force="equilibrium"))
-                   if b.flexible and b.name in wants_n and b.model.kind == "modal"
-                   and not axial_force_available(b.model) else b for b in system.bodies)
-    return replace(system, bodies=bodies)
 
 
 def system_from_dict(data: dict, name: str = "system", t_end: float | None = None,

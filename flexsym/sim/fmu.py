@@ -43,6 +43,21 @@ class FmuOptions:
     interval: float       # DefaultExperiment stepSize (the rows of flexsym run)
     params: dict          # start values overriding the model's defaults
     input: str = "none"
+    tuning: tuple = ()    # (fsr_options field, value) of the integrator's settings given
+
+
+# run options -> the C runtime's fsr_options field (and the value it stores)
+TUNING = {"max_steps": ("max_steps", int), "newton": ("newton_full", lambda v: int(v == "full")),
+          "newton_tol": ("newton_tol", float), "rho_inf": ("rho_inf", float),
+          "newmark_gamma": ("nm_gamma", float), "newmark_beta": ("nm_beta", float),
+          "blowup": ("blowup", float), "penalty": ("penalty", float)}
+
+
+def tuning_of(options) -> tuple:
+    """The integrator settings of validated run options that differ from the runtime's
+    defaults because they were given (None: not given)."""
+    return tuple((field, conv(getattr(options, name))) for name, (field, conv) in TUNING.items()
+                 if getattr(options, name) is not None)
 
 
 def check_request(opts: FmuOptions, out: Path | None, spec) -> None:
@@ -127,6 +142,7 @@ def _outputs(manifest: dict) -> list[str]:
 def token(manifest: dict, opts: FmuOptions) -> str:
     """The model's fingerprint and a digest of the run options compiled into the binary."""
     cfg = f"{opts.integrator} {opts.dt!r} {opts.tol!r} {opts.input} {sorted(opts.params.items())!r}"
+    cfg += f" {list(opts.tuning)!r}" if opts.tuning else ""
     return manifest["fingerprint"] + ":" + hashlib.sha256(cfg.encode()).hexdigest()[:12]
 
 
@@ -139,6 +155,8 @@ def config_header(manifest: dict, opts: FmuOptions) -> str:
              f"#define FSU_DT {_num(opts.dt)}",
              f"#define FSU_STEP {_num(opts.step or 0.0)}",
              f"#define FSU_TOL {_num(opts.tol or 0.0)}",
+             "#define FSU_TUNE(o) do { " + "".join(
+                 f"(o).{f} = {v if isinstance(v, int) else _num(v)}; " for f, v in opts.tuning) + "} while (0)",
              f"#define FSU_NP {lay['np']}", f"#define FSU_NMP {lay['nmp']}",
              f"#define FSU_NY {lay['ny']}", f"#define FSU_NQ {lay['nq']}",
              "#define FSU_P_START {" + ", ".join(map(_num, p)) + "}",

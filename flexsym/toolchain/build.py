@@ -86,9 +86,10 @@ def _run(cmd: list[str], what: str, cwd: Path | None = None) -> None:
         raise ToolchainError(f"{what} failed (exit {proc.returncode}):\n{tail}")
 
 
-def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool = False) -> Built:
+def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool = False,
+          log=None) -> Built:
     """Build (or reuse) gen_dir under root (default: the cache's build folder); sanitize: a
-    separate build with SANITIZE_FLAGS."""
+    separate build with SANITIZE_FLAGS; log(msg): a line when it compiles."""
     gen_dir = Path(gen_dir).resolve()
     manifest = read_manifest(gen_dir)
     if manifest is None:
@@ -106,6 +107,8 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
         if not _complete(built):  # not built meanwhile by another process
             if final.exists():  # marked complete but an artefact is gone: built again
                 shutil.rmtree(final)
+            if log:
+                log(f"compiling '{name}' (cmake, {Path(compiler).name})")
             _build_into(gen_dir, final, name, cmake, compiler, jobs, flags)
     return built
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -13,8 +14,44 @@ from flexsym.codegen.sysgen import fingerprint as system_fingerprint
 from flexsym.codegen.sysgen import generate_system_files
 from flexsym.core.paths import cache_dir, file_lock, generated_dir
 from flexsym.model.system import System
+from flexsym.physics.assemble import check_derivable
 from flexsym.model.variant import BUILTIN, VariantSpec
 from flexsym.toolchain.run import check_options, run_built
+
+
+def saved_variant_file(name: str) -> Path:
+    return cache_dir() / "variants" / f"{name}.json"
+
+
+def save_variant(name: str, base: str, overrides: dict) -> Path:
+    """Remember how `flexsym generate BASE --name NAME ...` made a variant, so that
+    `flexsym run NAME` (build, inspect, ...) finds it again: the base and its overrides,
+    which rebuild the same spec (and so the same fingerprint and cached code)."""
+    path = saved_variant_file(name)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}")
+    tmp.write_text(json.dumps({"base": base, "overrides": overrides}, indent=1) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+    return path
+
+
+def saved_variant(name: str):
+    """(base, overrides) of a variant saved by `generate --name`, or None."""
+    from flexsym.core.errors import SpecError
+    from flexsym.core.files import read_limited
+
+    path = saved_variant_file(name)
+    try:
+        data = json.loads(read_limited(path, 1 << 16, "saved variant"))
+        base, overrides = data["base"], data["overrides"]
+        if not isinstance(base, str) or not isinstance(overrides, dict):
+            raise ValueError
+    except FileNotFoundError:
+        return None
+    except (ValueError, KeyError, TypeError, UnicodeDecodeError):
+        raise SpecError(f"{path}: not a saved variant (written by flexsym generate --name); "
+                        "generate it again") from None
+    return base, overrides
 
 
 def is_builtin(spec: VariantSpec) -> bool:
@@ -81,16 +118,21 @@ def _current(folder: Path, fp: str) -> bool:
     return True
 
 
-def prepare_system(system: System) -> Built:
-    """Generate (when not current) and build a system; returns the build (run with run_built)."""
+def prepare_system(system: System, log=None) -> Built:
+    """Generate (when not current) and build a system; returns the build (run with run_built).
+    log(msg): a line per stage of work actually done (nothing when cached)."""
     system.validate()
+    check_derivable(system)  # refused in one line before the first progress line
     folder = system_folder(system)
     fp = system_fingerprint(system)
+    say = (lambda msg: log(f"flexsym: system '{system.name}': {msg}")) if log else None
     if not _current(folder, fp):
         with file_lock(folder.parent / f".{folder.name}.lock"):
             if not _current(folder, fp):
-                write_folder(generate_system_files(system), folder)
-    return build(folder)
+                if say:
+                    say("deriving the equations (sympy; once per model, then cached)")
+                write_folder(generate_system_files(system, say), folder)
+    return build(folder, log=say)
 
 
 def run_system(system: System, out: Path | None = None, **options):

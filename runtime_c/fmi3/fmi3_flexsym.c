@@ -73,6 +73,7 @@ static void defaults(fsu* c)
     c->o.dt = FSU_DT;
     c->o.step = FSU_STEP;
     c->o.tol = FSU_TOL;
+    FSU_TUNE(c->o); /* the integrator settings given at export (rho_inf, Newmark, Newton, ...) */
     c->o.out_every = 1;
     c->o.p = c->p;
     c->o.mp = c->mp;
