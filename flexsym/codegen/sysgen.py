@@ -343,6 +343,9 @@ def generate_system_files(system: System) -> dict[str, str]:
         "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
                          for b, term, wrt, _, _ in der.terms],
         "outputs": dict(zip(der.outputs, (o.quantity for o in system.outputs))),
+    } | ({"damping": {b: ("ef elements: ef_damping kernel, alpha and beta in system.c"
+                          if b in der.ef_damping else "modal: -dD/dq' in force")
+                      for b in der.dissipation}} if der.dissipation else {}) | {
         "length_scale": scale, "mass_constant": mass_constant,
         "left_out": der.dropped,
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
@@ -368,6 +371,8 @@ def describe(system: System) -> str:
     for t_ in m["energy_terms"]:
         where = f"body {t_['body']}: " if t_["body"] else ""
         lines.append(f"{where}{t_['term']} acts on {', '.join(t_['differentiated_wrt'])}")
+    for body, how in m.get("damping", {}).items():
+        lines.append(f"body {body}: structural damping on its elastic coordinates ({how})")
     for name, k in m["kernels"].items():
         lines.append(f"kernel {k['c_name']}: {k['total_ops']} operations")
     return "\n".join(lines) + "\n"

@@ -32,7 +32,7 @@ scene (flexsym/scenes/scene.py), unchanged.
     [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
                 grammar: angle(J), rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
-                M(B, x), reaction(J), torque(D), T, V, momentum, violation)
+                M(B, x), reaction(J), torque(D), T, V, momentum, violation, dissipation)
 
 Checks, each one line naming the file and the item, before anything is derived or written:
 the TOML's types and keys here; names, references, masses, the spanning tree, drivers,
@@ -626,6 +626,11 @@ def summary(system: System) -> str:
             if getattr(b.model, "body", None) is not None:
                 what = what.replace(", rho", ", root section rho").replace(
                     "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
+            if b.damped:
+                d = b.damping
+                zeta = (", ".join(f"{z:g}" for z in d.zeta) if isinstance(d.zeta, (tuple, list))
+                        else f"{d.zeta:g}")
+                what += f"; damping zeta {zeta}, alpha {d.alpha:g} 1/s, beta {d.beta:g} s"
         else:
             what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
         lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")
