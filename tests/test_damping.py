@@ -223,6 +223,7 @@ BAD = [
     ("zeta_length", "damping = { zeta = [0.02, 0.03] }",
      "damping zeta has 2 values, model 'geometric_sine' has 5 coordinates (u_static, u_sin1, "
      "v_static, v_cp1, v_cp2)"),
+    ("zeta_empty", "damping = { zeta = [] }", "damping zeta has 0 values, model 'geometric_sine'"),
     ("zeta_ef", 'model = { variant = "ef", elements = 4 }\ndamping = { zeta = 0.02 }',
      "damping zeta applies to modal models (a ratio per mode); ef has no modes"),
     ("unknown_key", "damping = { gamma = 0.1 }", "[[body]] 'coupler' damping gamma: unknown key"),

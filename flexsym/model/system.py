@@ -135,18 +135,19 @@ class Damping:
             if not _finite(z) or z < 0:
                 raise SpecError(f"{where}: damping zeta = {_show(self.zeta)} must be a finite "
                                 "number >= 0 or a list of them")
+        modal = getattr(model, "kind", None) == "modal"
+        if modal and isinstance(self.zeta, (tuple, list)) and len(self.zeta) != len(model.coordinates):
+            coords = tuple(model.coordinates)
+            raise SpecError(f"{where}: damping zeta has {len(self.zeta)} values, model "
+                            f"'{model.name}' has {len(coords)} coordinates ({', '.join(coords)}): "
+                            "give one per coordinate, or one number for all")
         if not any(zs):
             return
-        if getattr(model, "kind", None) != "modal":
+        if not modal:
             raise SpecError(f"{where}: damping zeta applies to modal models (a ratio per mode); "
                             "ef has no modes: give beta (and alpha), e.g. beta = 2 zeta / omega "
                             "for the ratio zeta at omega (docs/howto/mechanisms.md, Structural "
                             "damping)")
-        coords = tuple(model.coordinates)
-        if isinstance(self.zeta, (tuple, list)) and len(self.zeta) != len(coords):
-            raise SpecError(f"{where}: damping zeta has {len(self.zeta)} values, model "
-                            f"'{model.name}' has {len(coords)} coordinates ({', '.join(coords)}): "
-                            "give one per coordinate, or one number for all")
 
 
 def _show(v) -> str:
