@@ -9,6 +9,11 @@ Kernels (dense, row-major; d = drive [t, theta_k, theta_k', theta_k''], p = para
 An ef body's kinetic energy is not in the sympy derivation: ef_kinetic_energy instantiates the
 generic element's T per element in casadi and build_system_kernels adds its Lagrange terms (AD)
 to mass, force, residual_jac, energy and the outputs that read T.
+  ef_damping(e, ed, pe, c) -> g, dg/de, dg/ded   a damped ef body's element damping force
+                                 -g = -dD/de' (efbody.generic_dissipation, casadi AD):
+                                 system.c adds it to force and residual_jac per element, as
+                                 ef_elastic; the output `dissipation` (2 D) sums D^e in casadi
+                                 (ef_dissipation). An undamped system's files are unchanged.
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
 and templates) and this module, assemble.py, efbody.py, system.py and templates/system/.
@@ -23,9 +28,10 @@ from pathlib import Path
 import casadi as ca
 import sympy as sp
 
-from flexsym.physics.assemble import EF_T, SystemDerivation, derive_system, ef_guided_force, length_param
+from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, derive_system, ef_guided_force,
+                                      length_param)
 from flexsym.emit.cemit import c_double, emit
-from flexsym.physics.efbody import _E, _ED, OM, VX, VY, EfPart, generic_element
+from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
 from flexsym.physics.energy import A, E, I, L, rho
 from flexsym.physics.fe import le
 from flexsym.codegen.generate import MANIFEST, _environment, write_folder
@@ -94,6 +100,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
             tr.symbols[ef_guided_force(g.joint)] = (
                 ca.mtimes(ca.jacobian(p_th, q), qd) + ca.mtimes(ca.jacobian(p_th, qd), qdd)
                 + ca.mtimes(ca.jacobian(p_th, d), ddot) - ca.jacobian(T_ef, d[1 + 3 * k]))
+    if der.ef_damping and any(e.has(EF_D) for e in der.outputs.values()):
+        tr.symbols[EF_D] = ef_dissipation(der, tr, x)  # the output `dissipation` (2 D)
     # outputs and ef elastic energies hold square roots and atan2: translated as they are
     y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
     dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
@@ -121,7 +129,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
              [("q", q), ("e", x["lam"]), ("d", d), ("p", p)],
              [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
         ]
-    return make_kernels(constraint_kernels + _ef_element_kernel(der) + [
+    return make_kernels(constraint_kernels + _ef_element_kernel(der) + _ef_damping_kernel(der) + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
@@ -153,6 +161,32 @@ def _ef_element_kernel(der: SystemDerivation) -> list:
              [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)]),
             ("ef_elastic_grad", "one ANCF element: elastic energy and its gradient (no Hessian)",
              [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
+
+
+def _ef_damping_element():
+    """(e, ed, pe, c, D^e) of efbody's generic element dissipation in casadi: pe = [l_e, rho A,
+    E A, E I], c = [alpha, beta]."""
+    e, ed, pe, c = ca.SX.sym("e", 8), ca.SX.sym("ed", 8), ca.SX.sym("pe", 4), ca.SX.sym("c", 2)
+    symbols = ({s: e[i] for i, s in enumerate(_E)} | {s: ed[i] for i, s in enumerate(_ED)}
+               | {le: pe[0], RA: pe[1], EA: pe[2], EI: pe[3]})
+    priority = {s: 2 for s in list(_E) + list(_ED)} | {le: 0, RA: 0, EA: 0, EI: 0}
+    etr = SympyToCasadi(symbols, priority)
+    D_beta, D_alpha = generic_dissipation()
+    return e, ed, pe, c, c[0] * etr(D_alpha) + c[1] * etr(D_beta)
+
+
+def _ef_damping_kernel(der: SystemDerivation) -> list:
+    """One ANCF element's damping force g = dD/de' and its Jacobians (casadi AD), generated
+    once when an ef body is damped, called per element by system.c (force gets -g)."""
+    if not der.ef_damping:
+        return []
+    e, ed, pe, c, D = _ef_damping_element()
+    g = ca.gradient(D, ed)
+    return [("ef_damping", "one ANCF element: damping force g = dD/de' and its Jacobians",
+             [("e", e), ("ed", ed), ("pe", pe), ("c", c)],
+             [("g", g), ("g_e", ca.jacobian(g, e)), ("g_ed", ca.jacobian(g, ed))]),
+            ("ef_damping_force", "one ANCF element: damping force g = dD/de' (no Jacobians)",
+             [("e", e), ("ed", ed), ("pe", pe), ("c", c)], [("g", g)])]
 
 
 def ef_kinetic_energy(der: SystemDerivation, tr: SympyToCasadi, x: dict) -> ca.SX:
@@ -187,12 +221,40 @@ def ef_kinetic_energy(der: SystemDerivation, tr: SympyToCasadi, x: dict) -> ca.S
     return T
 
 
+def ef_dissipation(der: SystemDerivation, tr: SympyToCasadi, x: dict) -> ca.SX:
+    """The damped ef bodies' element dissipation: efbody's generic D^e = beta D_beta + alpha
+    D_alpha (e, e'; l_e, rho A, E A, E I), one casadi function instantiated per element with its
+    nodal values, rates and section (ef_elements' entries), as ef_kinetic_energy."""
+    e, ed, pe, c, D_e = _ef_damping_element()
+    element = ca.Function("ef_dissipation", [e, ed, pe, c], [D_e])
+    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
+    q, qd, p = x["q"], x["qd"], x["p"]
+    D = ca.SX(0.0)
+    for body in ef_elements(der):
+        if body["name"] not in der.ef_damping:
+            continue
+        alpha, beta = der.ef_damping[body["name"]]
+        part = der.flex[body["name"]]
+        L_, E_, A_, I_ = (p[i] for i in body["params"])
+        rho_ = p[pindex[part.psyms[rho]]]
+        f = part.fractions
+        for k, el in enumerate(body["elements"]):
+            mu, ea, ei = (float(r) for r in part.ratios[k])
+            section = ca.vertcat(L_ * float(f[k + 1] - f[k]), rho_ * A_ * mu, E_ * A_ * ea, E_ * I_ * ei)
+            ev = ca.vertcat(*[(q[i] if i >= 0 else 0) + float(a) * L_ + float(b) for i, a, b in el])
+            edv = ca.vertcat(*[qd[i] if i >= 0 else ca.SX(0.0) for i, _, _ in el])
+            D += element(ev, edv, section, ca.vertcat(float(alpha), float(beta)))
+    return D
+
+
 def ef_elements(der: SystemDerivation) -> list[dict]:
     """Per ef body, what system.c needs to assemble its elements: the parameter indices of
     [L, E, A, I], the element count, and per element and entry (x1 y1 x1' y1' x2 ...) the
     coordinate index (-1: none) and the value a*L + b added to it (fixed root, node x = kL/n,
     or the body's node); a body from finite-element data also gets, per element, its length
-    as a fraction of L and its E A and E I relative to the root section ("sections")."""
+    as a fraction of L and its E A and E I relative to the root section ("sections"); a damped
+    body its alpha, beta, the index of its rho and, from finite-element data, each element's
+    rho A relative to the root's ("damping"; None: undamped)."""
     qindex = {s: i for i, s in enumerate(der.q)}
     pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
     out = []
@@ -209,7 +271,14 @@ def ef_elements(der: SystemDerivation) -> list[dict]:
         sections = [] if part.body is None else [
             (c_double(float(f[k + 1] - f[k])), c_double(float(ea)), c_double(float(ei)))
             for k, (_, ea, ei) in enumerate(part.ratios)]
+        damping = None
+        if part.beam.name in der.ef_damping:
+            alpha, beta = der.ef_damping[part.beam.name]
+            damping = {"alpha": c_double(float(alpha)), "beta": c_double(float(beta)),
+                       "rho": pindex[part.psyms[rho]],
+                       "mu": [] if part.body is None else [c_double(float(r[0])) for r in part.ratios]}
         out.append({"name": part.beam.name, "n": n, "params": params, "sections": sections,
+                    "damping": damping,
                     "elements": [[(i, c_double(a), c_double(b)) for i, a, b in node[k] + node[k + 1]]
                                  for k in range(n)]})
     return out
@@ -260,7 +329,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "mass_constant": mass_constant, "initial": initial,
         "outputs_use_acceleration": der.outputs_use_acceleration,
         "outputs_use_drive": der.outputs_use_drive,
-        "ef_bodies": ef_elements(der),
+        "ef_bodies": ef_elements(der), "ef_damped": bool(der.ef_damping),
     }
     env = _environment()
     files = {
@@ -283,6 +352,9 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
                          for b, term, wrt, _, _ in der.terms],
         "outputs": dict(zip(der.outputs, (o.quantity for o in system.outputs))),
+    } | ({"damping": {b: ("ef elements: ef_damping kernel, alpha and beta in system.c"
+                          if b in der.ef_damping else "modal: -dD/dq' in force")
+                      for b in der.dissipation}} if der.dissipation else {}) | {
         "length_scale": scale, "mass_constant": mass_constant,
         "left_out": der.dropped,
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
@@ -308,6 +380,8 @@ def describe(system: System) -> str:
     for t_ in m["energy_terms"]:
         where = f"body {t_['body']}: " if t_["body"] else ""
         lines.append(f"{where}{t_['term']} acts on {', '.join(t_['differentiated_wrt'])}")
+    for body, how in m.get("damping", {}).items():
+        lines.append(f"body {body}: structural damping on its elastic coordinates ({how})")
     for name, k in m["kernels"].items():
         lines.append(f"kernel {k['c_name']}: {k['total_ops']} operations")
     return "\n".join(lines) + "\n"

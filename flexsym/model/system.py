@@ -31,7 +31,7 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam", "sigma": "beam",
 }
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
-OUTPUT_SCALARS = ("T", "V", "momentum", "violation")
+OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation")
 REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
 _OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
 
@@ -92,6 +92,70 @@ class Section:
 
 
 @dataclass(frozen=True)
+class Damping:
+    """Structural damping of a flexible beam (a property of its material and section; none
+    by default, and all zero adds nothing to the equations). Acts on the beam's elastic
+    coordinates only (rigid-body motion is never damped), through a dissipation function D
+    (generalised force -dD/dq'):
+
+    beta (s): stiffness-proportional, the strain-rate (Kelvin-Voigt) form
+        D = beta/2 int (EA eps'^2 + EI kappa'^2) dx with the model's own strain measures
+        (modal: eps = u_x of the axial modes, kappa = v_xx, i.e. beta K q'; ef: the Green
+        strain and material curvature of the element, i.e. beta dQ_el/dq q' at small strain);
+    alpha (1/s): mass-proportional, D = alpha/2 q_e'^T M_ee q_e' (M_ee: the undeformed mass
+        matrix of the elastic coordinates, their motion relative to the floating frame);
+    zeta: modal damping ratios, one number for every mode or a list with one per coordinate
+        of the model (in its order: axial modes, then bending): a dashpot 2 zeta_i omega_i m_i
+        on coordinate i, omega_i = sqrt(k_ii / m_ii) of the undeformed modal stiffness and
+        mass (exact for natural modes, e.g. cf1, cf2; an approximation for a basis whose
+        modes couple, e.g. static + cp1). Modal models only: ef has no modes (refused)."""
+
+    zeta: object = 0.0  # a number or a tuple of numbers
+    alpha: float = 0.0
+    beta: float = 0.0
+
+    @property
+    def active(self) -> bool:
+        return bool(self.alpha or self.beta or any(self.zetas(1)))
+
+    def zetas(self, n: int) -> tuple[float, ...]:
+        """The ratio of each of n coordinates."""
+        if isinstance(self.zeta, (tuple, list)):
+            return tuple(float(z) for z in self.zeta)
+        return (float(self.zeta),) * n
+
+    def check(self, where: str, model) -> None:
+        """The one place damping values are checked: finite numbers >= 0, zeta a number or
+        one per coordinate of a modal model."""
+        for key in ("alpha", "beta"):
+            v = getattr(self, key)
+            if not _finite(v) or v < 0:
+                raise SpecError(f"{where}: damping {key} = {v!r} must be a finite number >= 0")
+        zs = self.zeta if isinstance(self.zeta, (tuple, list)) else (self.zeta,)
+        for z in zs:
+            if not _finite(z) or z < 0:
+                raise SpecError(f"{where}: damping zeta = {_show(self.zeta)} must be a finite "
+                                "number >= 0 or a list of them")
+        modal = getattr(model, "kind", None) == "modal"
+        if modal and isinstance(self.zeta, (tuple, list)) and len(self.zeta) != len(model.coordinates):
+            coords = tuple(model.coordinates)
+            raise SpecError(f"{where}: damping zeta has {len(self.zeta)} values, model "
+                            f"'{model.name}' has {len(coords)} coordinates ({', '.join(coords)}): "
+                            "give one per coordinate, or one number for all")
+        if not any(zs):
+            return
+        if not modal:
+            raise SpecError(f"{where}: damping zeta applies to modal models (a ratio per mode); "
+                            "ef has no modes: give beta (and alpha), e.g. beta = 2 zeta / omega "
+                            "for the ratio zeta at omega (docs/howto/mechanisms.md, Structural "
+                            "damping)")
+
+
+def _show(v) -> str:
+    return repr(list(v)) if isinstance(v, (tuple, list)) else repr(v)
+
+
+@dataclass(frozen=True)
 class Marker:
     """A named point, in body-local coordinates (on a beam: x along the undeformed axis, y = 0)."""
 
@@ -137,13 +201,15 @@ class FlexibleBeam:
 
     model: the deformation model, a spec.VariantSpec (mode set + strain model) or a fe.FESpec
     ('ef' elements); only its deformation fields are used (its manoeuvre and outputs are not).
-    Markers 'root' (x = 0) and 'tip' (x = length) always exist."""
+    Markers 'root' (x = 0) and 'tip' (x = length) always exist. damping: a Damping or None
+    (undamped)."""
 
     name: str
     length: float
     section: Section
     model: object
     markers: tuple[Marker, ...] = ()
+    damping: Damping | None = None
     flexible = True
 
     def __post_init__(self):
@@ -155,6 +221,10 @@ class FlexibleBeam:
             object.__setattr__(self, "model", replace(
                 model, **{k: "equilibrium" for k in ("axial_force", "moment")
                           if getattr(model, k) == "auto"}))
+
+    @property
+    def damped(self) -> bool:
+        return self.damping is not None and self.damping.active
 
     @property
     def all_markers(self) -> tuple[Marker, ...]:
@@ -173,6 +243,10 @@ class FlexibleBeam:
         self.section.check(where)
         if getattr(self.model, "kind", None) not in ("modal", "fe"):
             raise SpecError(f"{where}: model must be a modal variant or 'ef' (got {self.model!r})")
+        if self.damping is not None:
+            if not isinstance(self.damping, Damping):
+                raise SpecError(f"{where}: damping must be a Damping(zeta, alpha, beta) or None")
+            self.damping.check(where, self.model)
         _check_markers(where, self.markers)
         for m in self.markers:
             if m.y != 0:
@@ -543,11 +617,17 @@ class System:
 
 def system_to_dict(system: System) -> dict:
     """Canonical content of a system (what generated code depends on): every field, a flexible
-    body's model as its variant's to_dict()."""
+    body's model as its variant's to_dict(); a beam's damping only when given (an undamped
+    system's content is what it was before damping existed)."""
     def item(x):
         out = {"type": type(x).__name__}
         for f in fields(x):
             v = getattr(x, f.name)
+            if f.name == "damping":
+                if v is not None:
+                    out[f.name] = {"zeta": list(v.zeta) if isinstance(v.zeta, (tuple, list)) else v.zeta,
+                                   "alpha": v.alpha, "beta": v.beta}
+                continue
             if f.name == "model":
                 v = v.to_dict()
             elif isinstance(v, Section):
@@ -688,7 +768,7 @@ def output_unit(system: System, quantity: str) -> str:
     if fn == "reaction":
         return "N m" if args[1] == "moment" else "N"
     return {"x": "m", "y": "m", "v": "m", "u": "m", "w": "m", "N": "N", "M": "N m", "sigma": "Pa", "T": "J",
-            "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)"}[fn]
+            "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)", "dissipation": "W"}[fn]
 
 
 def beam_station(system: System, beam: FlexibleBeam, text: str, where: str) -> float:

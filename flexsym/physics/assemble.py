@@ -13,6 +13,15 @@ joint's coordinate; a flexible beam's frame is its root's tangent frame. Energie
   ef beam      the same per ANCF element (efbody.py); its kinetic and elastic energies are
                differentiated by casadi AD in sysgen.py (der.T, M and f here leave them out;
                outputs read them through the placeholders EF_T and ef_guided_force).
+Structural damping of a beam (system.Damping; none: nothing added): a dissipation function D
+in the elastic rates relative to the frame, Q -= dD/dq' (rigid-body motion is not damped):
+  modal beam   D = beta/2 int (EA u_x'^2 + EI v_xx'^2) dx  (the strain rate of the axial modes'
+               stretch and the curvature: beta K q') + alpha/2 q'^T M_ee q' + sum_i c_i q_i'^2/2,
+               c_i = 2 zeta_i sqrt(K_ii M_ii) (K, M_ee: undeformed, of the elastic coordinates)
+  ef beam      efbody.generic_dissipation per element (Kelvin-Voigt on the Green strain and the
+               material curvature; alpha on the element mass matrix), summed in casadi by
+               sysgen (der.ef_damping); a body's point masses' alpha part here
+The output `dissipation` is the power 2 D = q'^T dD/dq' (W) of every damped body.
 Loads: gravity, motors, point forces, torques, spring-dampers. Cut joints give constraint rows
 Phi(q, theta) (cut_joint_rows); sysgen.py differentiates them.
 Lagrange with guided coordinates theta_k (p = dT/dq'), by lagrange.equations_of_motion:
@@ -118,6 +127,10 @@ class EfKinetic:
 EF_T = sp.Symbol("T_ef_", real=True)
 
 
+# ... and the ef bodies' element dissipation D_ef (the output `dissipation` reads 2 D)
+EF_D = sp.Symbol("D_ef_", real=True)
+
+
 def ef_guided_force(joint: str) -> sp.Symbol:
     return sp.Symbol(f"Q_ef_{joint}_", real=True)
 
@@ -154,6 +167,10 @@ class SystemDerivation:
     first_moment: dict = field(default_factory=dict)
     body_momentum: dict = field(default_factory=dict)
     dropped: list[dict] = field(default_factory=list)
+    # structural damping: per damped body its dissipation function D (sympy, in q'; an ef
+    # body's point masses only), and per damped ef body (alpha, beta) of its elements (sysgen)
+    dissipation: dict = field(default_factory=dict)
+    ef_damping: dict = field(default_factory=dict)
 
     @property
     def drive_symbols(self) -> list[sp.Symbol]:
@@ -405,6 +422,10 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
                          H_.xreplace(actual))
             der.elastic.append(part)
             der.terms.append((b.name, "ancf_elastic", ("node",), None, None))
+            if b.damped:
+                alpha, beta = (_exact_number(getattr(b.damping, k)) for k in ("alpha", "beta"))
+                der.ef_damping[b.name] = (alpha, beta)
+                der.dissipation[b.name] = part.point_mass_dissipation(alpha)
             continue
         frame = FrameMotion(ph[0], ph[1], ph[2])
         tab, fl = part.table, part.fields
@@ -430,6 +451,10 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
             der.terms.append((b.name, term_name, wrt, V, Qk))
             der.V += V
             Q += Qk
+        if b.damped:
+            der.dissipation[b.name] = _modal_dissipation(b, part, body_expr)
+    for D in der.dissipation.values():
+        Q -= sp.Matrix([sp.diff(D, xd) for xd in qd])
     der.V += V_grav
     der.V_grav = V_grav
     Q += sp.Matrix([-sp.diff(V_grav, x) for x in q])
@@ -447,6 +472,30 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
     return der
+
+
+def _exact_number(x) -> sp.Rational:
+    """A damping value as the exact rational of its decimal representation."""
+    return sp.Rational(repr(float(x)))
+
+
+def _modal_dissipation(b: FlexibleBeam, part: FlexPart, body_expr) -> sp.Expr:
+    """D of a damped modal beam (module doc): the strain-rate and relative kinetic energies of
+    the undeformed beam's elastic rates (the fields linear in the rates: no foreshortening)."""
+    spec, tab = b.model, part.table
+    rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in part.coords}
+    rf = build_fields([part.modes[r.coordinate] for r in spec.axial],
+                      [part.modes[r.coordinate] for r in spec.bending], rate, rate, tab, False)
+    K2 = body_expr(tab.integrate(ENERGY_TERMS["axial"].density(rf) + ENERGY_TERMS["bending"].density(rf)))
+    M2 = body_expr(tab.integrate(kinetic_density(rf, FrameMotion(sp.Integer(0)))))
+    d = b.damping
+    D = _exact_number(d.beta) * K2 + _exact_number(d.alpha) * M2
+    for n, z in zip(part.coords, d.zetas(len(part.coords))):
+        if z:
+            qd = rate[n]
+            c = 2 * _exact_number(z) * sp.sqrt(sp.diff(K2, qd, 2) * sp.diff(M2, qd, 2))
+            D += c * qd**2 / 2
+    return sp.expand(D)
 
 
 def _record_body(der, name, mass, pose, A_, local_moment, H) -> None:
@@ -614,6 +663,8 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
         return der.V + sp.Add(*[part.elastic_energy() for part in der.elastic])
     if fn == "momentum":
         return der.momentum
+    if fn == "dissipation":
+        return 2 * (sp.Add(*der.dissipation.values()) + (EF_D if der.ef_damping else 0))
     if fn == "torque":
         return motor_torque(der, next(d for d in system.drivers if d.name == args[0]))
     if fn == "reaction":

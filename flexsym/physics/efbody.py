@@ -16,6 +16,13 @@ and point masses at nodes, which add m/2 |V + r' + omega k x r|^2, -m g.r and th
 T^e is not summed in sympy either: sysgen instantiates the generic T^e per element in casadi
 with the frame's actual (omega, V) and takes the body's Lagrange terms by casadi AD (expanding
 and differentiating the summed T in sympy took most of an ef system's build).
+Structural damping (system.Damping, a damped body only) is a dissipation function per element,
+in the rates e' of its nodal coordinates relative to the frame (rigid-body motion is not damped):
+    D^e = beta int [EA eps'^2/2 + EI kappa'^2/2] dx    (strain rate, Kelvin-Voigt: the same
+          Gauss points, Green strain and material curvature as V^e; eps' = r_x . r_x')
+        + alpha int rho A |r'|^2 / 2 dx                 (exact: the element's mass matrix)
+sysgen instantiates it per element in casadi like T^e (force -dD/de'); a body's point masses
+add alpha m |r'_k|^2 / 2 (point_mass_dissipation, sympy).
 """
 from __future__ import annotations
 
@@ -30,6 +37,8 @@ from flexsym.physics.fe import elastic_element, hermite, le, xi
 _E = sp.Matrix(sp.symbols("x1 y1 dx1 dy1 x2 y2 dx2 dy2", real=True))
 _ED = sp.Matrix([sp.Symbol(str(c) + "_d", real=True) for c in _E])
 OM, VX, VY, RX, RY, GX, GY = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
+# an element's section in its damping: rho A, E A, E I (a body's elements scale them apart)
+RA, EA, EI = sp.symbols("rhoA_ EA_ EI_", positive=True)
 
 
 def _shape(e):
@@ -56,6 +65,27 @@ def generic_element():
     H = sp.expand(le * _integral01(rho * A * ((RX + rx) * ay - (RY + ry) * ax)))
     eps, kappa, stretch, V = elastic_element(rx, ry)
     return T, Vg, H, V, eps, kappa, stretch
+
+
+@lru_cache(maxsize=None)
+def generic_dissipation():
+    """(D_beta, D_alpha) of one element in the generic symbols (e, e', l) and its section (RA,
+    EA, EI): D^e = beta D_beta + alpha D_alpha. D_beta is the strain-rate form of the elastic
+    energy (Kelvin-Voigt: eps' and kappa' at V^e's Gauss points, linear in e' through the
+    derivatives of fe.elastic_element's eps and kappa); D_alpha = int rho A |r'|^2 / 2 dx."""
+    from flexsym.model.variant import QUAD_POINTS
+    from flexsym.physics.integrals import gauss_legendre
+
+    _, _, _, _, eps, kappa, _ = generic_element()
+    rate = lambda f: sp.Add(*[sp.diff(f, c) * cd for c, cd in zip(_E, _ED)])
+    eps_d, kappa_d = rate(eps), rate(kappa)
+    D_beta = sp.Integer(0)
+    for xg, wg in zip(*gauss_legendre(QUAD_POINTS)):
+        at = {xi: sp.Float(xg, 30)}
+        D_beta += sp.Float(wg, 30) * le * (EA / 2 * eps_d.xreplace(at)**2 + EI / 2 * kappa_d.xreplace(at)**2)
+    vx, vy = _shape(_ED)
+    D_alpha = sp.expand(le * _integral01(RA / 2 * (vx**2 + vy**2)))
+    return D_beta, D_alpha
 
 
 def _exact(x: float) -> sp.Rational:
@@ -161,6 +191,14 @@ class EfPart:
         T = sum((m * (ax**2 + ay**2) / 2 for m, _, (ax, ay) in self._point_mass_motion()),
                 sp.Integer(0))
         return sp.expand(T).xreplace(self.psyms)
+
+    def point_mass_dissipation(self, alpha) -> sp.Expr:
+        """alpha sum m |r'_k|^2 / 2 of the point masses (their motion relative to the frame;
+        0 for a uniform beam): the mass-proportional damping of a body's point masses."""
+        rel = {OM: 0, VX: 0, VY: 0}
+        T = sum((m * (ax.xreplace(rel)**2 + ay.xreplace(rel)**2) / 2
+                 for m, _, (ax, ay) in self._point_mass_motion()), sp.Integer(0))
+        return (alpha * sp.expand(T)).xreplace(self.psyms)
 
     def elastic_energy(self):
         """The summed elastic energy (the V output and tests; the kernels use the element's)."""

@@ -9,7 +9,9 @@ scene (flexsym/scenes/scene.py), unchanged.
                 markers = { name = [x, y] }                             (body frame, m)
                 name, kind = "beam": length, density, youngs_modulus, area, inertia,
                 model = "m3" | { variant = "ef", elements = 8 } | { strain, axial, bending },
-                markers = { name = x }   (x along the beam, m; root and tip always exist);
+                markers = { name = x }   (x along the beam, m; root and tip always exist),
+                damping = { zeta = z | [z1, ...], alpha = a, beta = b } (structural damping,
+                system.py's Damping; none by default);
                 or, for a beam from finite-element data, instead of length ... inertia:
                 segments + point_masses, or folder (relative to the scene file), with
                 elements and ef_elements: the one-beam scene's [body] keys, read by the same
@@ -30,7 +32,7 @@ scene (flexsym/scenes/scene.py), unchanged.
     [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
                 grammar: angle(J), rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
-                M(B, x), reaction(J), torque(D), T, V, momentum, violation)
+                M(B, x), reaction(J), torque(D), T, V, momentum, violation, dissipation)
 
 Checks, each one line naming the file and the item, before anything is derived or written:
 the TOML's types and keys here; names, references, masses, the spanning tree, drivers,
@@ -55,7 +57,7 @@ from flexsym.scenes.assembly import Assembly, assemble, poses, theta0
 from flexsym.model.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
-from flexsym.model.system import (GROUND, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
+from flexsym.model.system import (GROUND, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
                      parse_output)
 
@@ -68,7 +70,7 @@ EF_ELEMENTS = 32  # ef elements of a body from finite-element data (scene.py's [
 KEYS = {
     "system": {"name", "description"},
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
-    "beam": {"name", "kind", "model", "markers", *UNIFORM_KEYS, *FE_KEYS},
+    "beam": {"name", "kind", "model", "markers", "damping", *UNIFORM_KEYS, *FE_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
@@ -237,6 +239,7 @@ def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path):
     spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
                   "--model" if model is not None else None)
     markers = _markers(r, where, tab, True)
+    damping = _damping(r, where, tab)
     if "segments" not in tab and "folder" not in tab:
         extra = [key for key in FE_KEYS if key in tab]
         if extra:
@@ -244,7 +247,8 @@ def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path):
                    "segments or folder instead of length, density, youngs_modulus, area, inertia)")
         section = Section(*(r.number(where, tab, key, positive=True)
                             for key in ("density", "youngs_modulus", "area", "inertia")))
-        return FlexibleBeam(name, r.number(where, tab, "length", positive=True), section, spec, markers)
+        return FlexibleBeam(name, r.number(where, tab, "length", positive=True), section, spec, markers,
+                            damping)
     uniform = [key for key in UNIFORM_KEYS if key in tab]
     if uniform:
         r.fail(f"{where} {uniform[0]}", "give either length, density, youngs_modulus, area, "
@@ -263,7 +267,21 @@ def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path):
         spec.validate()
     except SpecError as exc:
         r.fail(f"{where} model", str(exc))
-    return FlexibleBeam(name, body.length, Section(ref.rho, ref.E, ref.A, ref.I), spec, markers)
+    return FlexibleBeam(name, body.length, Section(ref.rho, ref.E, ref.A, ref.I), spec, markers,
+                        damping)
+
+
+def _damping(r: _Items, where: str, tab: dict) -> Damping | None:
+    """damping = { zeta, alpha, beta } as a Damping (its values are checked in one place,
+    Damping.check, with the system); none given: None (undamped)."""
+    given = tab.get("damping")
+    if given is None:
+        return None
+    at = f"{where} damping"
+    r.table(at, given, {"zeta", "alpha", "beta"})
+    zeta = given.get("zeta", 0.0)
+    return Damping(tuple(zeta) if isinstance(zeta, list) else zeta, given.get("alpha", 0.0),
+                   given.get("beta", 0.0))
 
 
 class _BodyData:
@@ -593,6 +611,11 @@ def summary(system: System) -> str:
             if getattr(b.model, "body", None) is not None:
                 what = what.replace(", rho", ", root section rho").replace(
                     "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
+            if b.damped:
+                d = b.damping
+                zeta = (", ".join(f"{z:g}" for z in d.zeta) if isinstance(d.zeta, (tuple, list))
+                        else f"{d.zeta:g}")
+                what += f"; damping zeta {zeta}, alpha {d.alpha:g} 1/s, beta {d.beta:g} s"
         else:
             what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
         lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")
