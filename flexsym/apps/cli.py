@@ -498,6 +498,28 @@ def cmd_paper(args) -> int:
 MAX_BENDING = 5
 
 
+def _select_system(args, scene, tol: float, repeat: int) -> int:
+    from flexsym.analysis.system_select import select_system, table
+
+    if args.exact or args.max_bending is not None:
+        flag = "--exact" if args.exact else "--max-bending"
+        raise SpecError(f"{args.scene}: {flag} applies to one-beam scenes; a mechanism's candidates "
+                        "are the built-in models m1, m2, m3 and prestress at 1, 2 and 4 times its step")
+    print(f"{scene.path}: candidates on outputs {', '.join(scene.columns)}, tolerance {tol:g}")
+    results, best, ref_error = select_system(scene, tol, repeat=repeat)
+    print()
+    print(table(results, best, tol))
+    if ref_error > tol / 3:
+        print(f"\nnote: the reference's own step error {ref_error:.1e} is not well under the tolerance; "
+              "a smaller [solver] dt gives a better one")
+    if best is None:
+        print(f"\nno candidate is within {tol:g}; ef is the model to use (`flexsym run {scene.path} --model ef`)")
+        return 1
+    print(f"\nchosen: model = \"{best.model}\" at dt = {best.dt:g} s ({best.cost * 1e3:.3f} ms, error "
+          f"{best.error:.2e}): `flexsym run {scene.path} --model {best.model} --dt {best.dt:g}`")
+    return 0
+
+
 def cmd_select(args) -> int:
     from flexsym.scenes.scene import load_scene
     from flexsym.analysis.model_select import select, table
@@ -508,16 +530,14 @@ def cmd_select(args) -> int:
         raise SpecError(f"--tol: '{args.tol}' is not a number") from None
     if not 0 < tol < 1:
         raise SpecError(f"--tol: must be > 0 and < 1, relative to each output's peak (got {args.tol})")
-    if args.max_bending not in [str(k) for k in range(1, MAX_BENDING + 1)]:
+    if args.max_bending is not None and args.max_bending not in [str(k) for k in range(1, MAX_BENDING + 1)]:
         raise SpecError(f"--max-bending: must be one of 1..{MAX_BENDING} (got {args.max_bending})")
     repeat = validate(given_options(args, ("repeat",)), CLI).repeat
     scene = load_scene(args.scene)
     if not hasattr(scene, "spec"):  # a mechanism (system scene)
-        raise SpecError(f"{args.scene}: select chooses among one-beam variants; for a mechanism, "
-                        "compare models with `flexsym run SCENE --model m2|m3|ef` (select for "
-                        "mechanisms is not available yet)")
+        return _select_system(args, scene, tol, repeat)
     print(f"{scene.path}: candidates on outputs {', '.join(scene.spec.outputs)}, tolerance {tol:g}")
-    results, best = select(scene, tol, max_bending=int(args.max_bending), repeat=repeat,
+    results, best = select(scene, tol, max_bending=int(args.max_bending or 4), repeat=repeat,
                            exact=args.exact)
     print()
     print(table(results, best, tol))
@@ -747,7 +767,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="scene file (.toml)")
     p.add_argument("--tol", required=True,
                    help="largest allowed error, relative to each output's peak (e.g. 0.01)")
-    p.add_argument("--max-bending", default="4", help="largest bending set tried (1..5, default 4)")
+    p.add_argument("--max-bending", default=None, help="largest bending set tried (1..5, default 4; "
+                   "one-beam scenes)")
     add_arguments(p, ("repeat",), defaults={"repeat": "3"})
     p.add_argument("--exact", action="store_true", help="also try the exact-kinematics model "
                    "(strain exact, bending cf1..cfK; opt-in: each takes tens of seconds to compile)")
