@@ -374,11 +374,46 @@ def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int,
     return list(zip(range(start, start + len(b)), buf.getvalue().splitlines(keepends=True)))
 
 
-def _init_local_worker(spec) -> None:
+def _init_local_worker(spec, parent: int, inherited=()) -> None:
+    """A local worker: it ends with the sweep (SIGKILL of the parent included: the pool's pipes
+    would keep it waiting, or running its chunks, as an orphan), dies on SIGTERM and SIGHUP (the
+    CLI's handlers, inherited by fork, would turn them into an exception its task loop catches),
+    ignores Ctrl-C (the parent handles it and keeps the finished runs), and closes the
+    descriptors it inherited from the parent (the partial file and its lock)."""
     import signal
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and keeps the finished runs
+    _die_with_parent(parent)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+    for fd in inherited:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
     _model(spec)
+
+
+def _die_with_parent(parent: int) -> None:
+    """SIGKILL when the parent ends (Linux: PR_SET_PDEATHSIG, as the driver does, see driver.c;
+    elsewhere a thread that watches the parent's pid); at once when it already has."""
+    import signal
+
+    try:
+        import ctypes
+
+        PR_SET_PDEATHSIG = 1
+        if ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) != 0:
+            raise OSError
+    except (OSError, AttributeError):
+        def watch():
+            while os.getppid() == parent:
+                time.sleep(0.5)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
+    if os.getppid() != parent:  # the parent ended before the watch began
+        os._exit(1)
 
 
 def _local_results(plan, chunks, workers, inherited=()):
@@ -387,7 +422,7 @@ def _local_results(plan, chunks, workers, inherited=()):
 
     ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
     pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_local_worker,
-                                  initargs=(plan.spec,))
+                                  initargs=(plan.spec, os.getpid(), tuple(inherited)))
     finished = False
     try:
         futures = [pool.submit(run_chunk, plan.spec, plan.settings, plan.base_params, plan.names, s,
