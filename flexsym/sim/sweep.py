@@ -724,7 +724,7 @@ def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int 
                 fh.writelines(done[i] for i in range(len(plan)))
         except OutputError as exc:
             if done:
-                raise OutputError(f"{exc}; the {len(done)} finished runs are kept in {partial.path}: "
+                raise OutputError(f"{exc}; the runs finished so far are kept in {partial.path}: "
                                   "make room, then run the same command with --resume") from None
             raise
         partial.finish()
