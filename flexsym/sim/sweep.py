@@ -497,12 +497,27 @@ class Partial:
     line 2 holds the table's columns and "check", then one line per finished run: its table
     row and a check value (_check_value). done: run -> its table line (newline included)."""
 
-    def __init__(self, path: Path, fd: int, key: str, done: dict):
-        from flexsym.core.files import _fdopen
+    def __init__(self, path: Path, fd: int, key: str, done: dict, head: str = ""):
+        """fd: the locked file at its end, owned from here; head: written first (a partial file
+        without rows: new, or its head cut off)."""
+        from flexsym.core.files import _discard, _fdopen, writing
 
         self.path, self.key, self.done = path, key, done
-        self.fh = _fdopen(fd, "a")
+        try:
+            self.fh = _fdopen(fd, "a")
+        except BaseException:
+            os.close(fd)
+            raise
         self.finished = False
+        if head:
+            try:
+                with writing(path):
+                    self.fh.write(head)
+                    self.fh.flush()
+            except BaseException:
+                _discard(self.fh)
+                path.unlink(missing_ok=True)  # no row in it: nothing lost
+                raise
 
     def fileno(self) -> int:
         return self.fh.fileno()
@@ -596,14 +611,12 @@ def claim_partial(plan: SweepPlan, out: Path, resume: bool) -> Partial:
             try:
                 os.ftruncate(fd, keep)
                 os.lseek(fd, 0, os.SEEK_END)
-                if keep == 0:
-                    os.write(fd, _partial_head(plan, key).encode())
             except OSError as exc:
                 raise output_error(exc, part) from None
-            return Partial(part, fd, key, done)
         except BaseException:
             os.close(fd)
             raise
+        return Partial(part, fd, key, done, _partial_head(plan, key) if keep == 0 else "")  # owns fd
     raise SpecError(f"{part}: replaced again and again while being opened: is another sweep "
                     "starting on the same table?")
 
