@@ -517,3 +517,42 @@ def test_no_worker_outlives_a_killed_sweep(held_sweep, tmp_path, capsys, how):
     assert _gone(workers) == []
     assert main(cmd[3:] + ["--resume"]) == 0, capsys.readouterr().err  # no survivor holds the lock
     assert len(out.read_text().splitlines()) == 401
+
+
+def test_no_dask_local_cluster_worker_outlives_a_killed_sweep(isolated_cache, tmp_path):
+    """A sweep on a Dask LocalCluster of its own process (worker processes, as sweep_bench has
+    them), that process killed with SIGKILL: the cluster's nannies end their workers."""
+    pytest.importorskip("distributed")
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "t.csv"
+    script = ("import sys\nfrom distributed import LocalCluster\nfrom flexsym.apps import api\n"
+              "if __name__ == '__main__':\n"
+              "    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host='127.0.0.1',\n"
+              "                      dashboard_address=':0') as c:\n"
+              f"        api.sweep('m3', ['ws=2:8:400'], {str(out)!r}, dask=c.scheduler_address, **{FAST!r})\n")
+    (tmp_path / "run.py").write_text(script)
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # this checkout's flexsym
+    env = dict(os.environ, FLEXSYM_TEST_HOLD_SWEEP_AFTER="20",
+               PYTHONPATH=os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])]))
+    proc = subprocess.Popen([sys.executable, str(tmp_path / "run.py")], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    part = tmp_path / "t.csv.partial"
+    workers = []
+    try:
+        deadline = time.time() + 900
+        while not (part.exists() and len(part.read_text().splitlines()) >= 22):
+            assert proc.poll() is None and time.time() < deadline, proc.communicate()
+            time.sleep(0.05)
+        workers = _children(proc.pid)
+        assert len(workers) >= 2, workers
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.communicate(timeout=120)
+        assert _gone(workers) == []
+    finally:
+        for pid in [proc.pid, *workers]:
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
