@@ -116,6 +116,26 @@ def test_fe_export_with_room_gives_the_folder(tmp_path, capsys, full_disk):
     assert sorted(p.name for p in out.iterdir()) == ["K.mtx", "KG.mtx", "M.mtx", "body.toml"]
 
 
+@pytest.mark.parametrize("where,message", [
+    ("existing", "already exists (choose a new folder)"),
+    ("under-a-file", "is not a writable directory"),
+    ("link", "already exists"),
+], ids=["existing", "under-a-file", "link"])
+def test_fe_export_refuses_an_output_it_could_not_create_before_any_work(tmp_path, capsys, where, message):
+    """One line and exit 2 before the scene is read (a path under a file was a traceback)."""
+    (tmp_path / "existing").mkdir()
+    (tmp_path / "existing" / "keep").write_text("mine")
+    (tmp_path / "file").write_text("a file")
+    (tmp_path / "link").symlink_to(tmp_path / "gone")
+    out = {"existing": tmp_path / "existing", "under-a-file": tmp_path / "file" / "blade",
+           "link": tmp_path / "link"}[where]
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    assert main(["fe-export", str(ROOT / "scenes" / "stepped_blade.toml"), "--out", str(out)]) == 2
+    err = _one_line(capsys)
+    assert f"--out {out}" in err and message in err, err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+
+
 # ------------------------------------------------------------------------------- sweep
 
 def _sweep(out, *extra):

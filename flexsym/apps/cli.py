@@ -353,12 +353,17 @@ def cmd_bench_fmu(args) -> int:
 def cmd_fe_export(args) -> int:
     from flexsym.scenes.feimport import write_folder
     from flexsym.scenes.scene import load_scene
+    from flexsym.toolchain.run import check_output_dir
 
+    out = Path(args.out)
+    if out.exists() or out.is_symlink():
+        raise SpecError(f"--out {out}: already exists (choose a new folder)")
+    check_output_dir(out, "--out")
     scene = load_scene(args.scene)
     body = getattr(scene.spec, "body", None)
     if body is None:
         raise SpecError(f"{args.scene}: has no [body] table to export")
-    folder = write_folder(body, Path(args.out))
+    folder = write_folder(body, out)
     print(f"{body.summary()}: written to {folder} (body.toml, M.mtx, K.mtx, KG.mtx)")
     return 0
 

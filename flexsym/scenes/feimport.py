@@ -225,12 +225,13 @@ def write_folder(body: BeamBody, folder) -> Path:
     """Export a body (its element table and assembled matrices) as a new folder, filled in a
     temporary sibling and renamed: a failure (the disk full: OutputError, one line naming the
     file) leaves nothing half-written."""
-    from flexsym.core.files import atomic_folder, write_new
+    from flexsym.core.files import atomic_folder, write_new, writing
 
     folder = Path(folder)
     if folder.exists():
         raise SpecError(f"{folder}: already exists (choose a new folder)")
-    folder.parent.mkdir(parents=True, exist_ok=True)
+    with writing(folder):
+        folder.parent.mkdir(parents=True, exist_ok=True)
     with atomic_folder(folder) as tmp:
         write_new(tmp / "body.toml", body_toml(body), folder / "body.toml")
         for name, mat in zip(("M", "K", "KG"), body.assembled):
