@@ -20,8 +20,10 @@ Summaries are over the rows of the output grid (the scene's interval, else every
 
 Executors: local processes (all cores by default), or --dask ADDRESS, an existing
 dask.distributed cluster; every worker loads (building if needed) the model once, by its
-fingerprint. Finished runs go to TABLE.csv.partial as they arrive; the table is written
-atomically at the end; --resume continues an interrupted sweep from the partial file.
+fingerprint. Finished runs go to TABLE.csv.partial as they arrive, each row with a check value
+(Partial); the table is written atomically at the end; --resume continues an interrupted sweep
+from the partial file, whose rows are checked against the plan first (claim_partial), and which
+a running sweep locks. Workers end with the sweep (_init_local_worker).
 """
 from __future__ import annotations
 
@@ -179,7 +181,6 @@ def fingerprint_of(spec) -> str:
     from flexsym.codegen.generate import fingerprint
 
     return spec.fingerprint if isinstance(spec, SystemTarget) else fingerprint(spec)
-
 
 
 def sweepable(spec) -> list[str]:
