@@ -310,3 +310,97 @@ def test_retuning_between_steps(exported):
         fmu.doStep(currentCommunicationPoint=0.5, communicationStepSize=0.01)
     assert "exceeds the stability limit" in messages[-1]
     fmu.freeInstance()
+
+
+# ------------------------------------------------------------------ stop time (FMI 3.0 stopTimeDefined)
+
+def _v_tips(fmu, vr, t0: float, n: int, h: float = 0.01) -> np.ndarray:
+    """v_tip after each of n steps of h from t0."""
+    out = np.empty(n)
+    for k in range(n):
+        fmu.doStep(currentCommunicationPoint=t0 + k * h, communicationStepSize=h)
+        out[k] = fmu.getFloat64([vr["v_tip"]])[0]
+    return out
+
+
+def test_without_a_stop_time_the_fmu_runs_until_the_importer_stops(exported):
+    """stopTimeDefined = false means no stop time: ExitInitializationMode refused it (a 1e6 s
+    horizon of 1e9 steps). Now the run goes on past the exported t_end (20 s), its rows those of
+    `flexsym run` up to there and those of a run given stopTime = 25 after."""
+    fmu_path, csv = exported["m3"]
+    columns, rows = read_csv(csv)
+    runs = []
+    for stop in (None, 25.0):
+        messages: list = []
+        fmu, vr = _slave(fmu_path, messages)
+        fmu.enterInitializationMode(startTime=0.0, stopTime=stop)
+        fmu.exitInitializationMode()
+        runs.append(_v_tips(fmu, vr, 0.0, 2500))
+        fmu.terminate()
+        fmu.freeInstance()
+        assert messages == []
+    free, stopped = runs
+    np.testing.assert_array_equal(free, stopped)  # bit for bit, 20 s to 25 s included
+    ref = rows[1:, columns.index("v_tip")]
+    assert np.max(np.abs(free[:2000] - ref)) <= 1e-12 * np.max(np.abs(ref))
+    assert np.isfinite(free).all() and free[-1] != free[1999]
+
+
+def test_a_step_past_a_defined_stop_time_is_refused_at_do_step(exported):
+    messages: list = []
+    fmu, vr = _slave(exported["m3"][0], messages)
+    fmu.enterInitializationMode(startTime=0.0, stopTime=1.0)
+    fmu.exitInitializationMode()
+    last = _v_tips(fmu, vr, 0.0, 100)[-1]
+    with pytest.raises(FMICallException):
+        fmu.doStep(currentCommunicationPoint=1.0, communicationStepSize=0.01)
+    assert len(messages) == 1 and "\n" not in messages[0], messages
+    assert "fmi3DoStep: t = 1.01 s is past stopTime = 1 s, set in fmi3EnterInitializationMode" in messages[0]
+    assert fmu.getFloat64([vr["v_tip"]])[0] == last  # refused, not half done: the run is at 1 s
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+@pytest.mark.parametrize("stop,message", [
+    (2.0e5, "stopTime = 200000 s is 2e+08 steps of dt = 0.001 s, more than this FMU's limit of 100000000 steps"),
+    (float("inf"), "stopTime = inf s must be > 0"),
+    (float("nan"), "stopTime = nan s must be > 0"),
+    (-1.0, "stopTime = -1 s must be > 0"),
+], ids=["beyond-the-step-limit", "inf", "nan", "negative"])
+def test_a_stop_time_the_fmu_cannot_reach_is_refused_at_initialization(exported, stop, message):
+    """Refused where it is given (it was refused at ExitInitializationMode, by the runtime's
+    limit, as a number of steps); the instance stays usable."""
+    messages: list = []
+    fmu, vr = _slave(exported["m3"][0], messages)
+    with pytest.raises(FMICallException):
+        fmu.enterInitializationMode(startTime=0.0, stopTime=stop)
+    assert len(messages) == 1 and message in messages[0], messages
+    fmu.enterInitializationMode(startTime=0.0, stopTime=1.0)
+    fmu.exitInitializationMode()
+    assert np.isfinite(_v_tips(fmu, vr, 0.0, 10)).all()
+    fmu.freeInstance()
+
+
+def test_a_long_stop_time_is_bounded_by_steps_not_by_rows(exported):
+    """stopTime = 2e4 s is 2e7 steps of 1 ms: within the runtime's step limit, and the FMU keeps
+    one row, but the all-rows limit (1e7) refused it at ExitInitializationMode."""
+    messages: list = []
+    fmu, vr = _slave(exported["m3"][0], messages)
+    fmu.enterInitializationMode(startTime=0.0, stopTime=2.0e4)
+    fmu.exitInitializationMode()
+    assert np.isfinite(_v_tips(fmu, vr, 0.0, 50)).all() and messages == []
+    fmu.freeInstance()
+
+
+def test_an_importers_stop_time_beyond_the_exported_one_is_the_run_to_that_time(exported, tmp_path):
+    """The exported t_end is DefaultExperiment's suggestion; an importer asking for more gets
+    `flexsym run` with that t_end (m3-rk4 was exported with --t-end 5)."""
+    fmu_path = exported["m3-rk4"][0]
+    assert float(read_model_description(str(fmu_path)).defaultExperiment.stopTime) == 5.0
+    csv = tmp_path / "six.csv"
+    assert main(["run", "m3", "--integrator", "rk4", "--dt", "0.005", "--t-end", "6", "--out", str(csv)]) == 0
+    columns, rows = read_csv(csv)
+    res = fmpy.simulate_fmu(str(fmu_path), stop_time=6.0, output_interval=0.01)
+    assert len(res) == len(rows) and res["time"][-1] == 6.0
+    ref = rows[:, columns.index("v_tip")]
+    assert np.max(np.abs(res["v_tip"] - ref)) <= 1e-12 * np.max(np.abs(ref))

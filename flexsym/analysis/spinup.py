@@ -90,19 +90,13 @@ def plot(summaries: list[Summary], path: Path, title: str) -> None:
 
 
 def _save_atomically(fig, path: Path) -> None:
-    """Into a temporary file next to path, then renamed: an existing plot is replaced by a
-    complete one or not at all. The directory must exist (it is not created)."""
-    import os
-    import tempfile
+    """Into a temporary file next to path, then renamed (core/files.atomic_write): an existing
+    plot is replaced by a complete one or not at all. The directory must exist (it is not
+    created)."""
+    from flexsym.core.files import atomic_write
 
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=120, format=path.suffix.lstrip(".").lower() or "png")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    with atomic_write(path, "wb") as fh:
+        fig.savefig(fh, dpi=120, format=path.suffix.lstrip(".").lower() or "png")
 
 
 def describe(r: RunResult, outputs, status: str | None = None, units: dict | None = None) -> str:

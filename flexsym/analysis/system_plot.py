@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -130,6 +131,11 @@ def plot_system(system: System, geometry: dict, columns: dict, path, instants: i
                  else "mechanism", fontsize=9)
     fig.suptitle(title or system.name)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    from flexsym.core.files import atomic_write
+
+    try:
+        with atomic_write(path, "wb") as fh:  # complete or absent, an earlier plot kept until then
+            fig.savefig(fh, dpi=110, format=Path(path).suffix.lstrip(".").lower() or "png")
+    finally:
+        plt.close(fig)
     return factor

@@ -159,7 +159,8 @@ def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), r
     params={...}, t_end, dt, integrator, tol, step, interval, ...; the option table). dask: a
     scheduler address or a distributed.Client. Writes the table to out and returns it as
     column -> numpy array (see flexsym.sim.sweep)."""
-    from flexsym.sim.sweep import check_partial, make_plan, prepare_plan, read_table, run_sweep, settings_of
+    from flexsym.sim.sweep import claim_partial, fingerprint_of, make_plan, prepare_plan, read_table, run_sweep, \
+        settings_of
 
     if isinstance(vary, dict):
         vary = [f"{k}={v}" if isinstance(v, str) else f"{k}={','.join(repr(float(x)) for x in v)}"
@@ -184,7 +185,8 @@ def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), r
     plan = make_plan(spec, settings_of(o, keep_interval), o.params, list(vary), samples=samples, seed=seed,
                      sampling=sampling, at=at)
     out = check_output_path(out, "out")
-    check_partial(out, resume)
-    prepare_plan(plan)
-    run_sweep(plan, out, resume=resume, workers=workers, dask=dask, progress=progress, on_chunk=on_chunk)
+    plan.fingerprint = fingerprint_of(plan.spec)  # the partial file is checked before any build
+    with claim_partial(plan, out, resume) as partial:
+        prepare_plan(plan)
+        run_sweep(plan, out, workers=workers, dask=dask, progress=progress, on_chunk=on_chunk, partial=partial)
     return read_table(out)

@@ -397,12 +397,17 @@ def cmd_bench_fmu(args) -> int:
 def cmd_fe_export(args) -> int:
     from flexsym.scenes.feimport import write_folder
     from flexsym.scenes.scene import load_scene
+    from flexsym.toolchain.run import check_output_dir
 
+    out = Path(args.out)
+    if out.exists() or out.is_symlink():
+        raise SpecError(f"--out {out}: already exists (choose a new folder)")
+    check_output_dir(out, "--out")
     scene = load_scene(args.scene)
     body = getattr(scene.spec, "body", None)
     if body is None:
         raise SpecError(f"{args.scene}: has no [body] table to export")
-    folder = write_folder(body, Path(args.out))
+    folder = write_folder(body, out)
     print(f"{body.summary()}: written to {folder} (body.toml, M.mtx, K.mtx, KG.mtx)")
     return 0
 
@@ -572,8 +577,8 @@ def cmd_sweep(args) -> int:
     import numpy as np
 
     from flexsym.toolchain.run import check_output_path
-    from flexsym.sim.sweep import check_partial, make_plan, partial_path, plot, prepare_plan, read_table, run_sweep, \
-        settings_of
+    from flexsym.sim.sweep import (claim_partial, fingerprint_of, make_plan, partial_path, plot, prepare_plan,
+                                   read_table, run_sweep, settings_of)
 
     spec, scene = resolve(args, systems=True)
     o = _run_options(args, spec, scene)
@@ -607,18 +612,20 @@ def cmd_sweep(args) -> int:
         raise SpecError(f"--plot-y {plot_y}: not a column of the table ({', '.join(plan.header())})")
     out = check_output_path(args.out, "--out")
     plot_path = check_output_path(args.plot, "--plot", PLOT_TYPES) if args.plot else None
-    check_partial(out, args.resume)
-    prepare_plan(plan)
-    runs_on = f"dask at {args.dask}" if args.dask else f"{args.workers or os.cpu_count()} local processes"
-    print(f"sweep {spec.name}: {len(plan)} runs ({plan.sampling}"
-          + (f", seed {plan.seed}" if plan.seed is not None else "") + f") on {runs_on}")
-    try:
-        run_sweep(plan, out, resume=args.resume, workers=args.workers, dask=args.dask,
-                  progress=True if args.progress else None)
-    except KeyboardInterrupt:
-        print(f"flexsym: sweep interrupted; finished runs kept in {partial_path(out)}: "
-              "run the same command with --resume to continue", file=sys.stderr)
-        return 130
+    plan.fingerprint = fingerprint_of(plan.spec)  # the partial file is checked before any build
+    with claim_partial(plan, out, args.resume) as partial:
+        prepare_plan(plan)
+        runs_on = f"dask at {args.dask}" if args.dask else f"{args.workers or os.cpu_count()} local processes"
+        print(f"sweep {spec.name}: {len(plan)} runs ({plan.sampling}"
+              + (f", seed {plan.seed}" if plan.seed is not None else "") + f") on {runs_on}"
+              + (f"; {len(partial.done)} finished runs kept from {partial.path}" if partial.done else ""))
+        try:
+            run_sweep(plan, out, workers=args.workers, dask=args.dask,
+                      progress=True if args.progress else None, partial=partial)
+        except KeyboardInterrupt:
+            print(f"flexsym: sweep interrupted; finished runs kept in {partial_path(out)}: "
+                  "run the same command with --resume to continue", file=sys.stderr)
+            return 130
     table = read_table(out)
     status = table["status"]
     ok = int(np.sum(status == "ok"))

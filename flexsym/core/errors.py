@@ -17,6 +17,13 @@ class ToolchainError(FlexsymError):
     exit_code = 5
 
 
+class OutputError(FlexsymError):
+    """An output could not be written (no space left on device, an I/O error): the machine, not
+    the input, as for ToolchainError (exit 5). Nothing is left half-written (core/files.py)."""
+
+    exit_code = 5
+
+
 class SimulationError(FlexsymError):
     """The integrator stopped: divergence, Newton failure, instability."""
 

@@ -197,13 +197,13 @@ def _check(path: Path, key: str, mat: np.ndarray, ref: np.ndarray) -> None:
 
 # ----- writing -----------------------------------------------------------------------------
 
-def _write_mtx(path: Path, mat: np.ndarray) -> None:
+def _mtx(mat: np.ndarray) -> str:
     """Symmetric coordinate Matrix Market, lower triangle, every double as repr (exact)."""
     n = mat.shape[0]
     rows = [(i, j, mat[i, j]) for j in range(n) for i in range(j, n) if mat[i, j] != 0.0]
     lines = ["%%MatrixMarket matrix coordinate real symmetric", f"{n} {n} {len(rows)}"]
     lines += [f"{i + 1} {j + 1} {float(v)!r}" for i, j, v in rows]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return "\n".join(lines) + "\n"
 
 
 def body_toml(body: BeamBody) -> str:
@@ -222,25 +222,20 @@ def body_toml(body: BeamBody) -> str:
 
 
 def write_folder(body: BeamBody, folder) -> Path:
-    """Export a body (its element table and assembled matrices) as a folder; written to a
-    temporary sibling and renamed, so a failure leaves nothing half-written."""
-    import os
-    import shutil
-    import tempfile
+    """Export a body (its element table and assembled matrices) as a new folder, filled in a
+    temporary sibling and renamed: a failure (the disk full: OutputError, one line naming the
+    file) leaves nothing half-written."""
+    from flexsym.core.files import atomic_folder, write_new, writing
 
     folder = Path(folder)
     if folder.exists():
         raise SpecError(f"{folder}: already exists (choose a new folder)")
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.tmp-", dir=folder.parent))
-    try:
-        (tmp / "body.toml").write_text(body_toml(body), encoding="utf-8")
+    with writing(folder):
+        folder.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_folder(folder) as tmp:
+        write_new(tmp / "body.toml", body_toml(body), folder / "body.toml")
         for name, mat in zip(("M", "K", "KG"), body.assembled):
-            _write_mtx(tmp / f"{name}.mtx", mat)
-        os.rename(tmp, folder)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+            write_new(tmp / f"{name}.mtx", _mtx(mat), folder / f"{name}.mtx")
     return folder
 
 

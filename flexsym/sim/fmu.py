@@ -243,21 +243,18 @@ def build_binary(gen_dir: Path, manifest: dict, opts: FmuOptions, work: Path) ->
 
 
 def export_fmu(gen_dir: Path, opts: FmuOptions, out: Path) -> Path:
-    """Write out (atomically: a complete FMU or none)."""
+    """Write out (atomically: a complete FMU or none; an earlier file is kept until then, and kept
+    when writing fails, e.g. with the disk full: OutputError, one line naming out)."""
+    from flexsym.core.files import atomic_write
+
     gen_dir = Path(gen_dir).resolve()
     manifest = read_manifest(gen_dir)
     ident = model_identifier(manifest["spec"]["name"])
     with tempfile.TemporaryDirectory(prefix="flexsym-fmu-") as tmp:
         so = build_binary(gen_dir, manifest, opts, Path(tmp))
-        part = Path(tempfile.mkstemp(prefix=f".{out.name}.", dir=out.parent)[1])
-        try:
-            with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
-                z.writestr("modelDescription.xml", model_description(manifest, opts))
-                z.write(so, f"binaries/{PLATFORM}/{ident}.so")
-            os.replace(part, out)
-        finally:
-            if part.exists():
-                part.unlink()
+        with atomic_write(out, "wb") as fh, zipfile.ZipFile(fh, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", model_description(manifest, opts))
+            z.write(so, f"binaries/{PLATFORM}/{ident}.so")
     return out
 
 

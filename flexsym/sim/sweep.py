@@ -20,12 +20,15 @@ Summaries are over the rows of the output grid (the scene's interval, else every
 
 Executors: local processes (all cores by default), or --dask ADDRESS, an existing
 dask.distributed cluster; every worker loads (building if needed) the model once, by its
-fingerprint. Finished runs go to TABLE.csv.partial as they arrive; the table is written
-atomically at the end; --resume continues an interrupted sweep from the partial file.
+fingerprint. Finished runs go to TABLE.csv.partial as they arrive, each row with a check value
+(Partial); the table is written atomically at the end; --resume continues an interrupted sweep
+from the partial file, whose rows are checked against the plan first (claim_partial), and which
+a running sweep locks. Workers end with the sweep (_init_local_worker).
 """
 from __future__ import annotations
 
 import csv
+import errno
 import hashlib
 import io
 import itertools
@@ -173,7 +176,8 @@ def system_target(system) -> SystemTarget:
                         tuple(m.params) + tuple(m.maneuver_params), key)
 
 
-def _fingerprint(spec) -> str:
+def fingerprint_of(spec) -> str:
+    """The model's fingerprint (a variant's without generating or building it)."""
     from flexsym.codegen.generate import fingerprint
 
     return spec.fingerprint if isinstance(spec, SystemTarget) else fingerprint(spec)
@@ -322,7 +326,7 @@ _models_lock = threading.Lock()
 
 def _model(spec):
     """The worker's loaded model for spec (built here if needed), once per process."""
-    key = _fingerprint(spec)
+    key = fingerprint_of(spec)
     with _models_lock:
         if key not in _models:
             from flexsym.sim.inprocess import load, load_system
@@ -357,7 +361,8 @@ def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int,
     runs |= {k: table[:, j] for j, k in enumerate(names)}
     options = {k: v for k, v in settings.items() if k not in runs}
     b = model.batch(runs, at=at, **options)
-    cols = [np.arange(start, start + len(b)), *table.T, b.status, b.valid, b.validity_notes]
+    notes = [n.replace("\r", " ").replace("\n", " ") for n in b.validity_notes]  # a row is one line
+    cols = [np.arange(start, start + len(b)), *table.T, b.status, b.valid, notes]
     for o in outputs:
         cols += [b.summary(o, f) for f in ("min", "max", "final", "t_peak")]
         cols += [b.summary(o, f"at:{t!r}") for t in at]
@@ -370,20 +375,55 @@ def run_chunk(spec, settings: dict, base_params: dict, names: tuple, start: int,
     return list(zip(range(start, start + len(b)), buf.getvalue().splitlines(keepends=True)))
 
 
-def _init_local_worker(spec) -> None:
+def _init_local_worker(spec, parent: int, inherited=()) -> None:
+    """A local worker: it ends with the sweep (SIGKILL of the parent included: the pool's pipes
+    would keep it waiting, or running its chunks, as an orphan), dies on SIGTERM and SIGHUP (the
+    CLI's handlers, inherited by fork, would turn them into an exception its task loop catches),
+    ignores Ctrl-C (the parent handles it and keeps the finished runs), and closes the
+    descriptors it inherited from the parent (the partial file and its lock)."""
     import signal
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and keeps the finished runs
+    _die_with_parent(parent)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+    for fd in inherited:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
     _model(spec)
 
 
-def _local_results(plan, chunks, workers):
+def _die_with_parent(parent: int) -> None:
+    """SIGKILL when the parent ends (Linux: PR_SET_PDEATHSIG, as the driver does, see driver.c;
+    elsewhere a thread that watches the parent's pid); at once when it already has."""
+    import signal
+
+    try:
+        import ctypes
+
+        PR_SET_PDEATHSIG = 1
+        if ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) != 0:
+            raise OSError
+    except (OSError, AttributeError):
+        def watch():
+            while os.getppid() == parent:
+                time.sleep(0.5)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
+    if os.getppid() != parent:  # the parent ended before the watch began
+        os._exit(1)
+
+
+def _local_results(plan, chunks, workers, inherited=()):
     import concurrent.futures as cf
     import multiprocessing as mp
 
     ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
     pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_local_worker,
-                                  initargs=(plan.spec,))
+                                  initargs=(plan.spec, os.getpid(), tuple(inherited)))
     finished = False
     try:
         futures = [pool.submit(run_chunk, plan.spec, plan.settings, plan.base_params, plan.names, s,
@@ -441,69 +481,267 @@ def partial_path(out: Path) -> Path:
     return out.with_name(out.name + ".partial")
 
 
-def check_partial(out: Path, resume: bool) -> None:
-    """Never start over on top of finished runs without being asked."""
+PARTIAL_FORMAT = 2  # rows end in a check cell
+
+
+def _check_value(key: str, row: str) -> str:
+    """A row's check cell: a digest of the sweep's key and the row as the table has it (no
+    newline), so that a row edited, cut or copied from another sweep is seen."""
+    return hashlib.blake2b(f"{key}\n{row}".encode(), digest_size=8).hexdigest()
+
+
+class Partial:
+    """TABLE.csv.partial of a sweep, checked and then locked by this process (flock) until the
+    sweep ends: a second sweep on the same table is refused while this one runs.
+
+    Line 1 identifies the sweep ("# flexsym sweep 2 KEY": model fingerprint, options, runs),
+    line 2 holds the table's columns and "check", then one line per finished run: its table
+    row and a check value (_check_value). done: run -> its table line (newline included)."""
+
+    def __init__(self, path: Path, fd: int, key: str, done: dict, head: str = ""):
+        """fd: the locked file at its end, owned from here; head: written first (a partial file
+        without rows: new, or its head cut off)."""
+        from flexsym.core.files import _discard, _fdopen, writing
+
+        self.path, self.key, self.done = path, key, done
+        try:
+            self.fh = _fdopen(fd, "a")
+        except BaseException:
+            os.close(fd)
+            raise
+        self.finished = False
+        if head:
+            try:
+                with writing(path):
+                    self.fh.write(head)
+                    self.fh.flush()
+            except BaseException:
+                _discard(self.fh)
+                path.unlink(missing_ok=True)  # no row in it: nothing lost
+                raise
+
+    def fileno(self) -> int:
+        return self.fh.fileno()
+
+    def append(self, rows) -> None:
+        """rows: [(run, table line)], written with their check values and flushed."""
+        from flexsym.core.files import writing
+
+        text = "".join(f"{line[:-1]},{_check_value(self.key, line[:-1])}\n" for _, line in rows)
+        with writing(self.path):
+            self.fh.write(text)
+            self.fh.flush()
+        self.done.update(rows)
+
+    def finish(self) -> None:
+        """The table is written: the partial file goes."""
+        self.path.unlink(missing_ok=True)
+        self.finished = True
+        self.close()
+
+    def close(self) -> None:
+        """Release the lock; a partial file without a finished run is removed (nothing to keep)."""
+        if self.fh.closed:
+            return
+        if not self.done and not self.finished:
+            self.path.unlink(missing_ok=True)
+        from flexsym.core.files import _discard
+
+        _discard(self.fh)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def claim_partial(plan: SweepPlan, out: Path, resume: bool) -> Partial:
+    """Check the partial file of out against the plan and lock it, before any work (one line,
+    SpecError, naming the file and the line): in use by a running sweep; not a regular file;
+    another sweep's; finished runs without resume; a row that is not one this sweep wrote for
+    one of its runs (wrong cell count, not a number, a run out of range, inputs other than the
+    plan's, a check value that does not match, a run twice with different values). A last line
+    without its newline was cut off by an interruption: it is dropped (said on stderr) and its
+    run is run again. Without a partial file: one is started. plan.fingerprint must be set."""
+    import fcntl
+    import stat
+    import sys
+
+    from flexsym.core.files import output_error
+
     part = partial_path(Path(out))
-    if part.exists() and not resume:
-        raise SpecError(f"{part} holds finished runs of an interrupted sweep: pass --resume to "
-                        "continue it, or delete it")
+    key = plan.key()
+    for _ in range(100):  # again when a finishing sweep removed the file between open and lock
+        try:
+            fd = os.open(part, os.O_RDWR | os.O_CREAT | os.O_NONBLOCK | os.O_CLOEXEC, 0o666)
+        except IsADirectoryError:
+            raise SpecError(f"{part}: not a regular file (a sweep's partial file; a directory is in "
+                            "its place): move it away") from None
+        except OSError as exc:
+            if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EROFS):
+                raise output_error(exc, part) from None
+            raise SpecError(f"{part}: cannot open: {exc.strerror}") from None
+        try:
+            st = os.fstat(fd)
+            if not stat.S_ISREG(st.st_mode):
+                raise SpecError(f"{part}: not a regular file (a sweep's partial file; a device, FIFO "
+                                "or socket is in its place): move it away")
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                raise SpecError(f"{part}: in use by a sweep still running on {out}: wait for it to "
+                                "end, or stop it (Ctrl-C keeps its finished runs) and run this "
+                                "command with --resume") from None
+            try:
+                now = os.stat(part)
+            except FileNotFoundError:
+                now = None
+            if now is None or (now.st_dev, now.st_ino) != (st.st_dev, st.st_ino):
+                os.close(fd)
+                continue
+            data = _read_fd(fd)
+            done, keep, cut = _check_rows(data, part, plan, key)
+            if done and not resume:
+                raise SpecError(f"{part} holds {len(done)} finished runs of this sweep, which was "
+                                "interrupted: pass --resume to continue it, or delete the file to "
+                                "start over")
+            if cut is not None:
+                print(f"flexsym: {part}: line {cut} was cut off by an interruption (no newline at "
+                      "its end): it is dropped and its run is run again", file=sys.stderr)
+            try:
+                os.ftruncate(fd, keep)
+                os.lseek(fd, 0, os.SEEK_END)
+            except OSError as exc:
+                raise output_error(exc, part) from None
+        except BaseException:
+            os.close(fd)
+            raise
+        return Partial(part, fd, key, done, _partial_head(plan, key) if keep == 0 else "")  # owns fd
+    raise SpecError(f"{part}: replaced again and again while being opened: is another sweep "
+                    "starting on the same table?")
 
 
-def _read_partial(path: Path, plan: SweepPlan) -> dict[int, str]:
-    """Finished rows of an interrupted sweep (a truncated last line is dropped)."""
-    text = path.read_text(encoding="utf-8")
-    lines = text.splitlines(keepends=True)
-    if not lines or lines[0].strip() != f"# flexsym sweep {plan.key()}":
-        raise SpecError(f"{path}: belongs to a different sweep (model, options or runs changed); "
-                        "delete it to start again")
-    header = plan.header()
-    done = {}
-    for line in lines[2:]:
-        row = next(csv.reader([line]), [])
-        if line.endswith("\n") and len(row) == len(header):
-            done[int(row[0])] = line
-    return done
+def _read_fd(fd: int) -> bytes:
+    chunks = []
+    while chunk := os.read(fd, 1 << 20):
+        chunks.append(chunk)
+    return b"".join(chunks)
+
+
+def _partial_head(plan: SweepPlan, key: str) -> str:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerow([*plan.header(), "check"])
+    return f"# flexsym sweep {PARTIAL_FORMAT} {key}\n" + buf.getvalue()
+
+
+def _check_rows(data: bytes, part: Path, plan: SweepPlan, key: str) -> tuple[dict, int, int | None]:
+    """(done, bytes to keep, number of a cut last line or None) of a partial file's bytes; a
+    SpecError naming the line for anything but rows this sweep wrote."""
+    head = _partial_head(plan, key).encode()
+    lines = data.split(b"\n")
+    tail = lines.pop()  # after the last newline: b"", or a line cut off
+    keep = len(data) - len(tail)
+    cut = len(lines) + 1 if tail else None
+    if len(lines) < 2:  # no row yet; a head cut off by an interruption is written again
+        if head.startswith(data):
+            return {}, 0, None
+    if not data.startswith(head[:head.index(b"\n") + 1]):
+        first = lines[0] if lines else tail
+        what = ("belongs to a different sweep (its model, options or runs differ) or another flexsym "
+                "version" if first.startswith(b"# flexsym sweep ") else "is not a sweep's partial file")
+        raise SpecError(f"{part}: line 1: {what}: it cannot be resumed; delete it (or choose another "
+                        "--out) to start over")
+    if len(lines) < 2 or lines[1] + b"\n" != head[head.index(b"\n") + 1:]:
+        raise SpecError(f"{part}: line 2: not this sweep's columns (edited?): delete the file to "
+                        "start over")
+    ncells = len(plan.header()) + 1
+    done, where = {}, {}
+    for k, raw in enumerate(lines[2:], start=3):
+        def bad(what: str):
+            return SpecError(f"{part}: line {k}: {what}: delete that line to run its run again, or the "
+                             "file to start over")
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError:
+            raise bad("not UTF-8 text") from None
+        try:
+            cells = next(csv.reader([text], strict=True), [])
+        except csv.Error as exc:
+            raise bad(f"not a row of the table ({exc})") from None
+        if len(cells) != ncells:
+            raise bad(f"{len(cells)} cells, where a row of this sweep has {ncells} (its columns and "
+                      "a check value)")
+        if not re.fullmatch(r"\d{1,12}", cells[0]):
+            raise bad(f"run '{cells[0][:40]}' is not a run number")
+        run = int(cells[0])
+        if run >= len(plan):
+            raise bad(f"run {run} is not a run of this sweep (runs 0 to {len(plan) - 1})")
+        for j, name in enumerate(plan.names):
+            cell, want = cells[1 + j], float(plan.table[run, j])
+            try:
+                got = float(cell)
+            except ValueError:
+                raise bad(f"{name} = '{cell[:40]}' is not a number") from None
+            if got != want:
+                raise bad(f"run {run} with {name} = {cell[:40]}, but run {run} of this sweep has "
+                          f"{name} = {want!r}")
+        row = text[:text.rindex(",")]
+        if cells[-1] != _check_value(key, row):
+            raise bad(f"the row of run {run} is not the one the sweep wrote (its check value does not "
+                      "match: edited, or copied from another sweep)")
+        if run in done:
+            if done[run] != row + "\n":
+                raise bad(f"run {run} again, with other values than on line {where[run]}")
+            continue
+        done[run], where[run] = row + "\n", k
+    return done, keep, cut
 
 
 def run_sweep(plan: SweepPlan, out: Path, *, resume: bool = False, workers: int | None = None,
-              dask=None, progress: bool | None = None, on_chunk=None, chunk: int | None = None) -> Path:
-    """Run every run of the plan not already in the partial file and write the table to out.
-    on_chunk(done, total) is called after each finished chunk (e.g. to stop it in tests)."""
+              dask=None, progress: bool | None = None, on_chunk=None, chunk: int | None = None,
+              partial: Partial | None = None) -> Path:
+    """Run every run of the plan not already in the partial file and write the table to out
+    (atomically). partial: from claim_partial (checked before the model was built), else
+    claimed here. on_chunk(done, total) is called after each finished chunk (e.g. to stop it in
+    tests). The disk full (OutputError): the finished runs stay in the partial file."""
+    from flexsym.core.errors import OutputError
+    from flexsym.core.files import atomic_write
+
     out = Path(out)
-    part = partial_path(out)
-    check_partial(out, resume)
-    hold = os.environ.get("FLEXSYM_TEST_HOLD_SWEEP_AFTER")
-    if hold and on_chunk is None:  # tests: a sweep that cannot finish before their signal
-        on_chunk = _hold_after(int(hold))
-    done = _read_partial(part, plan) if part.exists() else {}
-    header = plan.header()
-    todo = [i for i in range(len(plan)) if i not in done]
-    client = own = None
-    if dask is not None:
-        client, own = dask_client(dask)
-        workers = sum(client.nthreads().values()) or 1
-    workers = workers or os.cpu_count() or 1
-    size = chunk or max(1, min(256, math.ceil(len(todo) / (8 * workers))))
-    chunks = []  # consecutive runs still to do, at most `size` per chunk
-    for _, grp in itertools.groupby(enumerate(todo), key=lambda p: p[1] - p[0]):
-        idx = [i for _, i in grp]
-        chunks += [(idx[k], idx[min(k + size, len(idx)) - 1] + 1) for k in range(0, len(idx), size)]
-    if client is not None:
-        results = _dask_results(plan, chunks, client, own)
-    else:
-        results = _local_results(plan, chunks, workers)
-    try:
-        _collect(plan, part, done, results, progress, on_chunk)
-    except BaseException:
-        if not done:  # nothing finished: leave no partial file behind
-            part.unlink(missing_ok=True)
-        raise
-    tmp = out.with_name(f".{out.name}.tmp.{os.getpid()}")
-    with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        csv.writer(fh, lineterminator="\n").writerow(header)
-        fh.writelines(done[i] for i in range(len(plan)))
-    os.replace(tmp, out)
-    part.unlink()
+    if partial is None:
+        plan.fingerprint = plan.fingerprint or fingerprint_of(plan.spec)
+        partial = claim_partial(plan, out, resume)
+    with partial:
+        hold = os.environ.get("FLEXSYM_TEST_HOLD_SWEEP_AFTER")
+        if hold and on_chunk is None:  # tests: a sweep that cannot finish before their signal
+            on_chunk = _hold_after(int(hold))
+        done = partial.done
+        todo = [i for i in range(len(plan)) if i not in done]
+        client = own = None
+        if dask is not None and todo:
+            client, own = dask_client(dask)
+            workers = sum(client.nthreads().values()) or 1
+        workers = workers or os.cpu_count() or 1
+        size = chunk or max(1, min(256, math.ceil(len(todo) / (8 * workers))))
+        chunks = []  # consecutive runs still to do, at most `size` per chunk
+        for _, grp in itertools.groupby(enumerate(todo), key=lambda p: p[1] - p[0]):
+            idx = [i for _, i in grp]
+            chunks += [(idx[k], idx[min(k + size, len(idx)) - 1] + 1) for k in range(0, len(idx), size)]
+        try:
+            if chunks:
+                results = (_dask_results(plan, chunks, client, own) if client is not None else
+                           _local_results(plan, chunks, workers, (partial.fileno(),)))
+                _collect(plan, partial, results, progress, on_chunk)
+            with atomic_write(out) as fh:
+                csv.writer(fh, lineterminator="\n").writerow(plan.header())
+                fh.writelines(done[i] for i in range(len(plan)))
+        except OutputError as exc:
+            if done:
+                raise OutputError(f"{exc}; the runs finished so far are kept in {partial.path}: "
+                                  "make room, then run the same command with --resume") from None
+            raise
+        partial.finish()
     return out
 
 
@@ -516,33 +754,18 @@ def _hold_after(rows: int):
     return hold
 
 
-def _collect(plan: SweepPlan, part: Path, done: dict, results, progress, on_chunk) -> None:
-    """Append finished rows to the partial file (and to done) as the chunks arrive."""
-    with open(part, "a" if done else "w", encoding="utf-8", newline="") as fh:
-        if not done:
-            fh.write(f"# flexsym sweep {plan.key()}\n")
-            csv.writer(fh, lineterminator="\n").writerow(plan.header())
-        else:
-            _drop_truncated_tail(fh, part)
-        with Progress(len(plan), f"sweep {plan.spec.name}", progress) as bar:
-            bar.update(len(done))
-            try:
-                for rows in results:
-                    fh.writelines(line for _, line in rows)
-                    done.update(rows)
-                    fh.flush()
-                    bar.update(len(rows))
-                    if on_chunk:
-                        on_chunk(len(done), len(plan))
-            finally:
-                results.close()
-
-
-def _drop_truncated_tail(fh, path: Path) -> None:
-    """An interrupted write may leave a last line without its newline: cut it off."""
-    data = path.read_bytes()
-    if data and not data.endswith(b"\n"):
-        fh.truncate(data.rfind(b"\n") + 1)
+def _collect(plan: SweepPlan, partial: Partial, results, progress, on_chunk) -> None:
+    """Append finished rows to the partial file (and to its done) as the chunks arrive."""
+    with Progress(len(plan), f"sweep {plan.spec.name}", progress) as bar:
+        bar.update(len(partial.done))
+        try:
+            for rows in results:
+                partial.append(rows)
+                bar.update(len(rows))
+                if on_chunk:
+                    on_chunk(len(partial.done), len(plan))
+        finally:
+            results.close()
 
 
 def read_table(path) -> dict[str, np.ndarray]:
@@ -563,7 +786,7 @@ def read_table(path) -> dict[str, np.ndarray]:
 def prepare_plan(plan: SweepPlan) -> SweepPlan:
     """Build (or find) and load the model; note its fingerprint."""
     _model(plan.spec)
-    plan.fingerprint = _fingerprint(plan.spec)
+    plan.fingerprint = fingerprint_of(plan.spec)
     return plan
 
 
@@ -617,6 +840,11 @@ def plot(table: dict, x: list[str], y: str, out: Path, title: str = "", others=(
     fig.tight_layout()
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=120)
-    plt.close(fig)
+    from flexsym.core.files import atomic_write
+
+    try:
+        with atomic_write(out, "wb") as fh:  # complete or absent; an earlier plot kept until then
+            fig.savefig(fh, dpi=120, format=out.suffix[1:].lower() or "png")
+    finally:
+        plt.close(fig)
     return out

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "fmi3.h"
+#include "flexsym/limits.h"
 #include "flexsym/runtime.h"
 #include "flexsym/system.h"
 #include "flexsym_fmu_config.h"
@@ -22,8 +23,6 @@
  * coordinates as one block of the row */
 typedef char fsu_vr_layout_check[FSU_VR_Q == FSU_VR_Y + FSU_NY ? 1 : -1];
 
-/* Without a stop time the step grid runs to this horizon [s]. */
-#define HORIZON 1.0e6
 
 typedef enum { INSTANTIATED, INITIALIZATION, STEP, TERMINATED, FAILED } fsu_state;
 
@@ -34,7 +33,8 @@ typedef struct {
     fsu_state state;
     const fsm_system* m;  /* the model as a struct (a one-beam model through model_adapter.c) */
     double p[FSU_NP > 0 ? FSU_NP : 1], mp[FSU_NMP > 0 ? FSU_NMP : 1], drive[2];
-    double t_end;
+    double t_end;      /* the defined stopTime, else horizon() */
+    int stop_defined;
     fsr_options o;
     fsr_stepper* run;
     int stale;   /* a value changed in initialization mode: start the run again */
@@ -62,6 +62,18 @@ static fmi3Status unsupported(fmi3Instance instance, const char* what)
                "fixed internal step, no event mode, no FMU state)", what);
 }
 
+/* Without a stop time (stopTimeDefined = false, FMI 3.0: none) the run goes on until the importer
+ * stops calling fmi3DoStep, up to the runtime's limit of FSR_MAX_STEPS steps of dt (1e5 s at
+ * 1 ms): the grid point of that many steps, rounded down so that the runtime counts exactly
+ * FSR_MAX_STEPS steps. The stepper keeps one row, so a long run costs no memory. */
+static double horizon(void)
+{
+    const double dt = FSU_DT, n = (double)FSR_MAX_STEPS;
+    double t = n * dt;
+    while (t / dt > n || ceil(t / dt - 1e-9) > n) t = nextafter(t, 0.0);
+    return t;
+}
+
 static void defaults(fsu* c)
 {
     static const double p0[] = FSU_P_START, mp0[] = FSU_MP_START;
@@ -77,7 +89,8 @@ static void defaults(fsu* c)
     c->o.out_every = 1;
     c->o.p = c->p;
     c->o.mp = c->mp;
-    c->t_end = HORIZON;
+    c->t_end = horizon();
+    c->stop_defined = 0;
     fsr_stepper_free(c->run);
     c->run = NULL;
     c->stale = c->retune = 0;
@@ -187,9 +200,14 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     if (startTime != 0.0)
         return say(c, fmi3Error, "%s: startTime = %g s; this FMU starts at t = 0 (its manoeuvre and "
                    "its step grid do)", c->name, startTime);
-    if (stopTimeDefined && !(stopTime > 0.0 && stopTime <= HORIZON))
-        return say(c, fmi3Error, "%s: stopTime = %g s must be in (0, %g]", c->name, stopTime, HORIZON);
-    c->t_end = stopTimeDefined ? stopTime : HORIZON;
+    if (stopTimeDefined && !(stopTime > 0.0 && isfinite(stopTime)))
+        return say(c, fmi3Error, "%s: stopTime = %g s must be > 0", c->name, stopTime);
+    if (stopTimeDefined && !(stopTime <= horizon()))
+        return say(c, fmi3Error, "%s: stopTime = %g s is %.3g steps of dt = %g s, more than this FMU's "
+                   "limit of %ld steps (stopTime <= %.17g s; without a stop time it runs up to there)",
+                   c->name, stopTime, stopTime / FSU_DT, FSU_DT, FSR_MAX_STEPS, horizon());
+    c->stop_defined = stopTimeDefined ? 1 : 0;
+    c->t_end = stopTimeDefined ? stopTime : horizon();
     c->o.t_end = c->t_end;
     c->state = INITIALIZATION;
     c->stale = 1;
@@ -369,6 +387,15 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     if (!(fabs(currentCommunicationPoint - now) <= 1e-9 * (dt > fabs(now) ? dt : fabs(now))))
         return say(c, fmi3Error, "%s: fmi3DoStep: currentCommunicationPoint = %.17g s, but the FMU is at "
                    "%.17g s", c->name, currentCommunicationPoint, now);
+    double target = currentCommunicationPoint + communicationStepSize;
+    if (target > c->t_end + 1e-9 * (dt > c->t_end ? dt : c->t_end)) {
+        if (c->stop_defined)
+            return say(c, fmi3Error, "%s: fmi3DoStep: t = %.17g s is past stopTime = %.17g s, set in "
+                       "fmi3EnterInitializationMode (FMI 3.0: no step beyond a defined stop time; give a "
+                       "later one, or none)", c->name, target, c->t_end);
+        return say(c, fmi3Error, "%s: fmi3DoStep: t = %.17g s is past the %ld steps of dt = %g s this "
+                   "FMU can take (t <= %.17g s)", c->name, target, FSR_MAX_STEPS, dt, c->t_end);
+    }
     if (c->retune) {
         c->retune = 0;
         if (fsr_stepper_retune(c->run) != FSR_OK) {
@@ -376,7 +403,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
             return say(c, fmi3Error, "%s: %s", c->name, fsr_stepper_result(c->run)->message);
         }
     }
-    fsr_status st = fsr_stepper_advance(c->run, currentCommunicationPoint + communicationStepSize);
+    fsr_status st = fsr_stepper_advance(c->run, target);
     const fsr_result* r = fsr_stepper_result(c->run);
     if (st == FSR_BAD_OPTIONS)  /* the request was refused; the run is unchanged */
         return say(c, fmi3Error, "%s: fmi3DoStep: %s; the communication points must lie on the "

@@ -78,7 +78,7 @@ fsr_alpha fsr_alpha_coefficients(double rho_inf)
 }
 
 /* Counts are checked as doubles before any conversion to long (no overflow, no UB). */
-fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r)
+fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r, long capacity)
 {
     const int n = m->nq;
     for (int i = 0; o->y0 && i < 2 * n; ++i)
@@ -91,7 +91,7 @@ fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* 
                         grid > radau ? grid : radau, FSR_MAX_STEPS);
     if (o->max_steps > FSR_MAX_STEPS)
         return fsr_fail(r, FSR_BAD_OPTIONS, "max_steps %ld exceeds the limit of %ld", o->max_steps, FSR_MAX_STEPS);
-    double rows = floor(grid / o->out_every) + 2.0;
+    double rows = capacity > 0 ? (double)capacity : floor(grid / o->out_every) + 2.0;
     if (rows > (double)FSR_MAX_ROWS || rows * r->ncols * 8.0 > (double)FSR_MAX_ROW_BYTES)
         return fsr_fail(r, FSR_BAD_OPTIONS, "%.3g output rows of %d columns exceed the limits (%ld rows, "
                         "%ld bytes)", rows, r->ncols, FSR_MAX_ROWS, FSR_MAX_ROW_BYTES);
@@ -121,7 +121,8 @@ static fsr_status check_steps(const fsr_options* o, fsr_result* r)
     return FSR_OK;
 }
 
-fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_result* r, const char* method)
+fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_result* r, const char* method,
+                                 long capacity)
 {
     if (check_steps(o, r)) return r->status;
     if (o->method == FSR_NEWMARK && !(o->nm_gamma >= 0.5 && o->nm_beta > 0.0))
@@ -135,7 +136,7 @@ fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_
         return fsr_fail(r, FSR_BAD_OPTIONS, "step must be >= 0 (got %g; 0 = steps of dt)", o->step);
     if (o->step > 0.0 && o->method != FSR_RADAU5)
         return fsr_fail(r, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)", method);
-    if (fsr_check_run(o, m, r)) return r->status;
+    if (fsr_check_run(o, m, r, capacity)) return r->status;
     for (int i = 0; i < m->np; ++i)
         if (!(o->p[i] > 0.0) || !isfinite(o->p[i]))
             return fsr_fail(r, FSR_BAD_OPTIONS, "beam parameter %s must be a positive number (got %g)",
@@ -148,13 +149,13 @@ fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_
 }
 
 fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system* m, fsr_result* r,
-                                         const char* method)
+                                         const char* method, long capacity)
 {
     if (check_steps(o, r)) return r->status;
     if (!(o->penalty > 0.0) || !isfinite(o->penalty))
         return fsr_fail(r, FSR_BAD_OPTIONS, "penalty must be > 0 (got %g)", o->penalty);
     if (o->step != 0.0) return fsr_fail(r, FSR_BAD_OPTIONS, "step is for radau5 (%s steps at dt)", method);
-    if (fsr_check_run(o, m, r)) return r->status;
+    if (fsr_check_run(o, m, r, capacity)) return r->status;
     if (!m->drive || !m->mass || !m->force || !m->residual_jac || !m->outputs
         || (m->nc > 0 && (!m->constraints || !m->constraint_jac || !m->constraint_rate
                           || !m->constraint_acc || !m->constraint_names)))

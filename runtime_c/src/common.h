@@ -18,14 +18,17 @@ fsr_status fsr_fail(fsr_result* r, fsr_status st, const char* fmt, ...);
 fsr_status fsr_check_step_limit(fsr_result* r, const char* name, double dt, double stability,
                                 double omega, const char* where, const char* instead);
 
-/* What every run checks: a finite o->y0 and the run-size limits of limits.h (r->ncols set). */
-fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r);
+/* What every run checks: a finite o->y0 and the run-size limits of limits.h (r->ncols set): the
+ * steps, and the rows when the run stores all of them (capacity 0; a stepper keeps one row, so
+ * its length is bounded by the steps only). */
+fsr_status fsr_check_run(const fsr_options* o, const fsm_system* m, fsr_result* r, long capacity);
 /* The options of a run of M q'' = f by integrator `method` (rk4 ... radau5), with
  * fsr_check_run; FSR_OK or FSR_BAD_OPTIONS with the message in r. */
-fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_result* r, const char* method);
+fsr_status fsr_check_ode_options(const fsr_options* o, const fsm_system* m, fsr_result* r, const char* method,
+                                 long capacity);
 /* The same for a constrained run (ali3p, genalpha3), and the kernels the model's sizes need. */
 fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system* m, fsr_result* r,
-                                         const char* method);
+                                         const char* method, long capacity);
 
 /* The model's length scale (system.h): p[length_param] when the model has one (a one-beam
  * model's L, so that it follows --param L=...), else length_scale. Newton tolerances

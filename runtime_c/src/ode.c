@@ -165,7 +165,7 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_
     s->r = r;
     s->n = m->nq;
     r->ncols = 1 + m->ny + m->nq + (o->energy ? 3 : 0);
-    fsr_status st = fsr_check_ode_options(o, m, r, it->name);
+    fsr_status st = fsr_check_ode_options(o, m, r, it->name, capacity);
     if (!st && m->nc > 0)
         st = sim_fail(s, FSR_BAD_OPTIONS, "%s: this model has %d constraint equations: use ali3p, genalpha3 or rk4p",
                       it->name, m->nc);
@@ -225,7 +225,7 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_
 
 fsr_status sim_retune(sim* s, const fsr_integrator* it)
 {
-    fsr_status st = fsr_check_ode_options(s->o, s->m, s->r, it->name);
+    fsr_status st = fsr_check_ode_options(s->o, s->m, s->r, it->name, s->capacity);
     if (st) return st;
     s->L = fsr_length_scale(s->m, s->o->p);
     s->mass_have = s->mass_factored = 0;        /* M(p) again, factored */
