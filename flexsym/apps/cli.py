@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import re
+import signal
 import sys
 import threading
 from dataclasses import replace
@@ -334,14 +334,12 @@ FMU_OPTIONS = tuple(n for n in RUN_OPTIONS if n not in ("repeat", "energy"))  # 
 
 def _fmu_request(args, out: Path | None):
     """(spec, FmuOptions) for export-fmu and bench-fmu, checked before any work (one table)."""
-    from flexsym.sim.fmu import FmuOptions, check_request
-
-    from flexsym.sim.fmu import tuning_of
+    from flexsym.sim.fmu import FmuOptions, check_request, tuning_of
 
     spec, scene = resolve(args, systems=True)
     o = _run_options(args, spec, scene, overrides=True)  # as `flexsym run` takes them
-    if o.energy:
-        raise SpecError(f"{scene.path}: [output] energy: the FMU's outputs are the scene's columns; "
+    if o.energy:  # only a scene can ask for it (export-fmu has no --energy)
+        raise SpecError(f"{getattr(scene, 'path', 'energy')}: [output] energy: the FMU's outputs are the scene's columns; "
                         "energy columns are not exported")
     opts = FmuOptions(integrator=o.integrator, dt=o.dt, step=o.step, tol=o.tol, t_end=o.t_end,
                       interval=o.out_every * o.dt, params=o.params,
@@ -509,14 +507,14 @@ def _select_system(args, scene, tol: float, repeat: int) -> int:
     if args.exact or args.max_bending is not None:
         flag = "--exact" if args.exact else "--max-bending"
         raise SpecError(f"{args.scene}: {flag} applies to one-beam scenes; a mechanism's candidates "
-                        "are the built-in models m1, m2, m3 and prestress at 1, 2 and 4 times its step")
+                        "are the built-in models m1, m2, m3 and prestress at 1, 2, 4 and 5 times its step")
     print(f"{scene.path}: candidates on outputs {', '.join(scene.columns)}, tolerance {tol:g}")
     results, best, ref_error = select_system(scene, tol, repeat=repeat)
     print()
     print(table(results, best, tol))
     if ref_error > tol / 3:
-        print(f"\nnote: the reference's own step error {ref_error:.1e} is not well under the tolerance; "
-              "a smaller [solver] dt gives a better one")
+        print(f"\nnote: the reference's own error {ref_error:.1e} (its step or its elements, above) is "
+              "not well under the tolerance: the errors below are partly the reference's")
     if best is None:
         print(f"\nno candidate is within {tol:g}; ef is the model to use (`flexsym run {scene.path} --model ef`)")
         return 1

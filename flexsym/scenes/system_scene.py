@@ -608,6 +608,8 @@ def summary(system: System) -> str:
             s = b.section
             what = (f"beam L = {b.length:g} m, rho {s.rho:g}, E {s.E:g}, A {s.A:g}, I {s.I:g}; "
                     f"model {b.model.name}")
+            if b.model.kind == "modal":
+                what += f" (N {b.model.axial_force}, M {b.model.moment})"
             if getattr(b.model, "body", None) is not None:
                 what = what.replace(", rho", ", root section rho").replace(
                     "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
