@@ -131,6 +131,22 @@ def test_checked_in_code_is_current(spec):
                                     f"run `flexsym generate {spec.name}`"
 
 
+@pytest.mark.parametrize("name", ["hub", "slider_crank", "pendulum"])
+def test_checked_in_system_folders_are_current(name):
+    """generated/systems/ holds S1-S3's generated folders, so a change of the derivation or
+    the system templates shows as a diff (regenerate with `flexsym generate all`)."""
+    from flexsym.codegen.sysgen import generate_system_files
+    from flexsym.toolchain.pipeline import golden_system_folder, golden_systems
+
+    folder = golden_system_folder(name)
+    files = generate_system_files(golden_systems()[name])
+    on_disk = {p.name: p.read_text(encoding="utf-8") for p in folder.iterdir() if p.is_file()}
+    stale = sorted(n for n in files if on_disk.get(n) != files[n])
+    extra = sorted(set(on_disk) - set(files))
+    assert not stale and not extra, f"system {name}: stale {stale}, unexpected {extra}; run `flexsym generate all`"
+    assert set(golden_systems()) == {"hub", "slider_crank", "pendulum"}
+
+
 def test_stale_or_edited_folders_are_detected(tmp_path):
     spec = builtin("m1")
     copy = tmp_path / spec.name

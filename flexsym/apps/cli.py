@@ -126,10 +126,17 @@ def cmd_generate(args) -> int:
     from flexsym.toolchain.pipeline import cache_folder, checked_in_folder, is_builtin
     from flexsym.model.variant import BUILTIN
 
-    if args.variant == "all":  # every built-in variant into generated/
+    if args.variant == "all":  # every built-in variant and the mechanisms S1-S3 into generated/
+        from flexsym.codegen.generate import write_folder
+        from flexsym.codegen.sysgen import generate_system_files
+        from flexsym.toolchain.pipeline import golden_system_folder, golden_systems
+
         for spec in BUILTIN:
             generate(spec, checked_in_folder(spec))
             print(f"generated '{spec.name}' in {checked_in_folder(spec)}")
+        for name, system in golden_systems().items():
+            write_folder(generate_system_files(system), golden_system_folder(name))
+            print(f"generated system '{name}' in {golden_system_folder(name)}")
         return 0
     spec = resolve_spec(args)
     if args.out is not None:

@@ -98,6 +98,21 @@ def compiled(spec: VariantSpec, log=None):
     return CompiledModel(build(folder), folder)
 
 
+def golden_systems() -> dict:
+    """The mechanisms S1-S3 with the model their scenes name, whose generated folders are kept
+    in generated/systems/ (written by `flexsym generate all`, checked by the tests), so that a
+    change of the derivation or of the templates shows as a diff."""
+    from flexsym.model.library import hub_system, pendulum_system, slider_crank_system
+    from flexsym.model.variant import builtin
+
+    return {s.name: s for s in (hub_system(builtin("m3")), slider_crank_system(builtin("m2")),
+                                pendulum_system(builtin("m3")))}
+
+
+def golden_system_folder(name: str) -> Path:
+    return generated_dir() / "systems" / name
+
+
 def system_folder(system: System) -> Path:
     return cache_dir() / "systems" / f"{system.name}-{system_fingerprint(system)[:12]}"
 
