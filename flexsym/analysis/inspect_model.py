@@ -152,7 +152,7 @@ class Report:
                      "elastic forces derive from a potential")
         else:
             self.add("NOT a potential force: some term is not differentiated w.r.t. all the "
-                     "coordinates it depends on (paper eq. 18-19; see benchmark.md section 3)")
+                     "coordinates it depends on (paper eq. 18-19; see docs/theory/benchmark.md, section 3)")
         self.add("")
         self.add("kinetic energy T =")
         self.add(self.fmt(d.T))

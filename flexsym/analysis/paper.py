@@ -117,7 +117,7 @@ def _report(entries, ref, ref_spec, ref_dt, ws, ts, t_end, dt) -> str:
         f"Manoeuvre (39): omega_s = {ws:g} rad/s, T_s = {ts:g} s; simulated to {t_end:g} s. Modal models "
         f"and ef: generalized-alpha (rho_inf = 0.9), dt = {dt:g} s. Reference: ef with "
         f"{ref_spec.elements} elements, dt = {ref_dt:g} s (with 32 elements and dt = 5e-4 s its own "
-        "mesh and step errors on v_tip are below 1e-6 m: see the README's convergence study).", "",
+        "mesh and step errors on v_tip are below 1e-6 m: see the convergence study in docs/theory/ef-reference.md).", "",
         "Figures: [fig7.png](fig7.png) tip deflection, [fig8.png](fig8.png) axial force at A, B, C, "
         "[fig9.png](fig9.png) bending moment at A, B, C.", "",
         f"## Table 1: CPU time for {min(15.0, t_end):g} s of motion", "",

@@ -1,4 +1,4 @@
-"""Speed of in-process runs and sweeps (the targets of README "In-process runs and sweeps").
+"""Speed of in-process runs and sweeps (docs/howto/inprocess-and-sweeps.md).
 
     python -m flexsym.analysis.sweep_bench [--runs 10000] [--batch 2000] [--subprocess-runs 50]
 

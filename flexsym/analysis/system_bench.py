@@ -74,13 +74,13 @@ SYSTEMS = {
                             + (Case("dopri5", 1e-3, (("tol", 1e-5),)),)
                             + tuple(Case("newmark", dt, FOX_GOODWIN) for dt in (5e-4, 1e-3 / 3, 2.5e-4))),
 }
-# The ef reference of each system: (elements, integrator, step); see README's convergence study.
+# The ef reference of each system: (elements, integrator, step); see docs/validation/ef-systems.md.
 EF_REFERENCE = {"hub": (16, "genalpha", 5e-4), "slider_crank": (16, "ali3p", 5e-6),
                 "pendulum": (16, "genalpha", 1.25e-5)}
 # Columns of an ef reference read from equilibrium rather than from the element curvature:
 # S1's root moment is minus the clamp's reaction moment (the beam's momentum balance), which
 # converges at the rate of the motion (0.2 % of the peak with 4 elements where the root
-# curvature is 3 % off; README "`ef` in systems").
+# curvature is 3 % off; docs/validation/ef-systems.md).
 EF_EQUILIBRIUM = {"hub": {"M_A": ("reaction(clamp, moment)", -1.0)}}
 QUICK = {"pendulum": SystemCases(("m3",), (Case("genalpha", 1e-3), Case("genalpha", 5e-4),
                                            Case("newmark", 5e-4, FOX_GOODWIN)))}
@@ -132,7 +132,7 @@ def ef_reference(name: str, log=print, quick=False):
 
 
 def ef_convergence(name: str, cases, reference, log=print) -> list[dict]:
-    """The `ef` convergence study of a system scene (README "`ef` in systems"): each case
+    """The `ef` convergence study of a system scene (docs/validation/ef-systems.md): each case
     (elements, integrator, step) against `reference` (the same), on the scene's rows. Per case:
     the integration CPU (median of 3) and, per output (the scene's columns and the equilibrium
     ones, <column>_eq), max |y - y_ref| / peak |y_ref| and the error of the peak |y|

@@ -1,4 +1,4 @@
-"""The benchmark mechanisms S0-S3 as System data (docs: README "Mechanisms (systems)").
+"""The benchmark mechanisms S0-S3 as System data (docs/theory/mechanisms.md).
 
 S0 is today's one-beam spin-up: a beam whose root revolute joint to ground is guided by the
 variant's manoeuvre. S1-S3 follow the benchmark definitions (parameters in SI)."""

@@ -40,7 +40,7 @@ STRAIN_MODELS: dict[str, StrainModel] = {m.name: m for m in (
                 "eq. (18)-(19): K_G(eta) y acts on the bending coordinates only; the axial "
                 "equations see K_L alone (variants #1, #2)"),
     StrainModel("cubic_energy", False, _BASE + (("cubic", ("axial", "bending")),), True,
-                "full gradient of the truncated energy (5): the trap of benchmark.md section 3, "
+                "full gradient of the truncated energy (5): the trap of docs/theory/benchmark.md, section 3, "
                 "unbounded below; offered only to show that it collapses"),
     StrainModel("von_karman", False,
                 _BASE + (("cubic", ("axial", "bending")), ("quartic", ("axial", "bending"))),
