@@ -113,7 +113,8 @@ def assess(spec, result, params: dict | None = None) -> Assessment:
                            "use ef")
     if not result.ok:
         a.valid = False
-        hint = diagnose(spec, result)
+        # why a model collapses, for a run that went some way (not for a step refused up front)
+        hint = diagnose(spec, result) if len(result.t) > 1 else ""
         a.notes.append(result.message + (f" -- {hint}" if hint else ""))
     return a
 
