@@ -310,6 +310,9 @@ def _run_system(args, scene) -> int:
     shown = [o.column for o in scene.system.outputs]  # the user's, not the plot's columns
     units = {o.column: output_unit(scene.system, o.quantity) for o in scene.system.outputs}
     header = [_units_line(units)] + _options_header(args, scene, options)
+    if system.start == "static":
+        header.insert(0, "start: the flexible bodies in static equilibrium under the loads at t = 0 "
+                         "(joints held; elastic coordinates solved by Newton to 1e-12 of the size)")
     moved = scene.assembly.line(options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
     if moved:
         print(f"flexsym: {scene.path}: {moved}", file=sys.stderr)

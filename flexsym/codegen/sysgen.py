@@ -330,6 +330,8 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "outputs_use_acceleration": der.outputs_use_acceleration,
         "outputs_use_drive": der.outputs_use_drive,
         "ef_bodies": ef_elements(der), "ef_damped": bool(der.ef_damping),
+        "static_start": system.start == "static",
+        "elastic": [i for i, c in enumerate(der.coords) if c.group != "joint"],
     }
     env = _environment()
     files = {

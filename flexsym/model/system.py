@@ -24,6 +24,7 @@ from flexsym.model.variant import NAME_RE  # one name rule for variants and syst
 
 GROUND = "ground"
 JOINT_KINDS = ("revolute", "prismatic", "clamp")
+STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
 DRIVER_KINDS = ("guided", "motor")
 OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "angle": "joint", "rate": "joint", "reaction": "joint", "torque": "driver",
@@ -379,6 +380,7 @@ class System:
     outputs: tuple[Output, ...] = ()
     params: tuple[tuple[str, float], ...] = ()
     description: str = field(default="", compare=False)
+    start: str = "undeformed"  # or "static": elastic coordinates in equilibrium at t = 0
 
     # ----- lookups ----------------------------------------------------------------------
     def body(self, name: str):
@@ -482,6 +484,16 @@ class System:
         for p in self.params:
             if len(p) != 2 or not NAME_RE.match(str(p[0])) or not _finite(p[1]):
                 raise SpecError(f"{where}: parameter {p!r} must be (name, finite number)")
+        if self.start not in STARTS:
+            raise SpecError(f"{where}: start {self.start!r} must be one of {', '.join(STARTS)}")
+        if self.start == "static":
+            if not any(b.flexible for b in self.bodies):
+                raise SpecError(f"{where}: start = \"static\" puts the flexible bodies in equilibrium, "
+                                "and there is none")
+            if tree.cut:
+                raise SpecError(f"{where}: start = \"static\" is derived for open chains only (with the "
+                                f"cut joint(s) {', '.join(tree.cut)}, the loop would have to move with the "
+                                "deformation)")
         return self
 
     def _check_magnitudes(self) -> None:
@@ -639,6 +651,8 @@ def system_to_dict(system: System) -> dict:
         return out
     d = item(system)
     d.pop("description", None)
+    if d.get("start") == "undeformed":  # the default: the same content as before it existed
+        d.pop("start")
     return d
 
 

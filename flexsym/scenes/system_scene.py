@@ -68,7 +68,7 @@ UNIFORM_KEYS = ("length", "density", "youngs_modulus", "area", "inertia")
 FE_KEYS = ("segments", "point_masses", "elements", "ef_elements", "folder")  # scene.py's [body]
 EF_ELEMENTS = 32  # ef elements of a body from finite-element data (scene.py's [body] default)
 KEYS = {
-    "system": {"name", "description"},
+    "system": {"name", "description", "start"},
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
     "beam": {"name", "kind", "model", "markers", "damping", *UNIFORM_KEYS, *FE_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial"},
@@ -182,6 +182,7 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     system_tab = data.get("system", {})
     name = r.string("[system]", system_tab, "name", default=name)
     description = r.string("[system]", system_tab, "description", default="")
+    start = r.string("[system]", system_tab, "start", default="undeformed")
     for key, limit in (("body", MAX_BODIES), ("joint", MAX_JOINTS)):
         if len(_entries(r, data, key)) > limit:  # before anything is read (system.py's limit)
             r.fail(f"[[{key}]]", f"{len(data[key])} entries, more than the limit of {limit} (the "
@@ -208,7 +209,7 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     outputs = tuple(Output(c, q) for c, q in columns.items())
     output_file = r.string("[output]", out, "file", default="") or None
     given = {opt: data.get(key.split(".")[0], {}).get(key.split(".")[1]) for key, opt in _RUN_KEYS.items()}
-    system = System(name, bodies, joints, drivers, loads, outputs, description=description)
+    system = System(name, bodies, joints, drivers, loads, outputs, description=description, start=start)
     return system, given, output_file
 
 
