@@ -145,3 +145,20 @@ def test_output_piped_into_head_ends_quietly(tmp_path):
     proc = subprocess.run(f"{sys.executable} -m flexsym.apps.cli variants | head -1", shell=True,
                           capture_output=True, text=True, cwd=tmp_path, timeout=120)
     assert proc.stdout.count("\n") == 1 and "Traceback" not in proc.stderr and proc.stderr == ""
+
+
+def test_fe_export_of_a_mechanism_and_elements_beside_a_folder_are_refused(capsys, tmp_path):
+    """fe-export on a system scene was a traceback; `elements` next to an imported `folder`
+    was silently ignored (the folder's mesh was used whatever it said)."""
+    code, _, err = run_cli(capsys, "fe-export", SCENES / "stepped_hub.toml", "--out", tmp_path / "fe")
+    assert code == 2 and err.count("\n") == 1 and "a system scene" in err
+    assert not (tmp_path / "fe").exists()
+    assert run_cli(capsys, "fe-export", SCENES / "stepped_blade.toml", "--out", tmp_path / "fe")[0] == 0
+    text = (SCENES / "stepped_blade.toml").read_text()
+    start = text.index("[body]")
+    end = text.index("\n[", start + 1)
+    scene = tmp_path / "imported.toml"
+    scene.write_text(text[:start] + '[body]\nfolder = "fe"\nelements = 20\n' + text[end:])
+    code, _, err = run_cli(capsys, "run", scene, "--out", tmp_path / "r.csv")
+    assert code == 2 and err.count("\n") == 1 and "drop segments, point_masses and elements" in err
+    assert not (tmp_path / "r.csv").exists()

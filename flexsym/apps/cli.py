@@ -412,6 +412,10 @@ def cmd_fe_export(args) -> int:
         raise SpecError(f"--out {out}: already exists (choose a new folder)")
     check_output_dir(out, "--out")
     scene = load_scene(args.scene)
+    if getattr(scene, "system", None) is not None:  # a mechanism: its beams are [[body]] entries
+        raise SpecError(f"{args.scene}: a system scene; fe-export writes the [body] of a one-beam "
+                        "scene (give a beam's segments in a one-beam scene, such as "
+                        "scenes/stepped_blade.toml, and export that)")
     body = getattr(scene.spec, "body", None)
     if body is None:
         raise SpecError(f"{args.scene}: has no [body] table to export")
@@ -524,7 +528,7 @@ def _select_system(args, scene, tol: float, repeat: int) -> int:
     print(table(results, best, tol))
     if ref_error > tol / 3:
         print(f"\nnote: the reference's own error {ref_error:.1e} (its step or its elements, above) is "
-              "not well under the tolerance: the errors below are partly the reference's")
+              "not well under the tolerance: the errors above are partly the reference's")
     if best is None:
         print(f"\nno candidate is within {tol:g}; ef is the model to use (`flexsym run {scene.path} --model ef`)")
         return 1

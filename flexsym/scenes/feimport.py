@@ -243,7 +243,7 @@ def scene_folder(r) -> BeamBody:
     """The [body] table of a scene that names an imported folder (r: scene._Reader)."""
     tab = r.data["body"]
     check_mesh_keys(r)
-    if "segments" in tab or "point_masses" in tab:
+    if "segments" in tab or "point_masses" in tab or "elements" in tab:
         r.fail("[body] folder", "an imported body brings its own elements and masses: "
-               "drop segments and point_masses")
+               "drop segments, point_masses and elements (its mesh is the folder's)")
     return read_folder(r.path.parent / r.string("body", "folder"))
