@@ -432,7 +432,7 @@ def page_commands(text: str) -> list[tuple[str, bool]]:
         if lang not in ("bash", "sh", "console"):
             continue
         refused = i + 1 < len(lines) and lines[i + 1].startswith("# flexsym: error")
-        for part in re.split(r"&&|;", line.split("#")[0]):
+        for part in re.split(r"&&|\|\|?|;", line.split("#")[0]):  # a shell list's commands, a pipe's
             if part.strip().startswith("flexsym "):
                 cmds.append((part.strip(), refused))
     return cmds
