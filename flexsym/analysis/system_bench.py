@@ -88,7 +88,8 @@ QUICK = {"pendulum": SystemCases(("m3",), (Case("genalpha", 1e-3), Case("genalph
 QUICK_EF_REFERENCE = {"pendulum": (4, "genalpha", 1e-4)}
 
 
-def _run(built, scene, integrator, dt, repeat=1, options=()):
+def run_rows(built, scene, integrator, dt, repeat=1, options=()):
+    """A built system on a scene's rows (t_end, row interval) with integrator at step dt."""
     given = {"integrator": integrator, "dt": dt, "t_end": scene.options.t_end,
              "interval": scene.options.out_every * scene.options.dt, "repeat": repeat} | dict(options)
     return run_built(built, validate(given, Where("api")))
@@ -109,7 +110,7 @@ def _ef_run(name: str, scene, case, repeat=1):
     extra = EF_EQUILIBRIUM.get(name, {})
     system = replace(system, outputs=system.outputs + tuple(
         Output(f"{c}_eq", quantity) for c, (quantity, _) in extra.items()))
-    r = _run(prepare_system(system), scene, integrator, dt, repeat)
+    r = run_rows(prepare_system(system), scene, integrator, dt, repeat)
     if not r.ok:
         raise RuntimeError(f"{name} ef {case}: the run stopped: {r.message}")
     if extra:
@@ -156,7 +157,8 @@ def ef_convergence(name: str, cases, reference, log=print) -> list[dict]:
     return rows
 
 
-def _errors(r, ref, columns, prefix):
+def column_errors(r, ref, columns, prefix):
+    """prefix_<column>: max |y - y_ref| / peak |y_ref| (nan for a failed or short run); prefix_max."""
     out = {}
     for c in columns:
         peak = float(np.max(np.abs(ref[c]))) or 1.0
@@ -180,18 +182,18 @@ def run_system_bench(out: Path | None = None, systems=None, models=None, quick=F
             columns = list(scene.columns)
             ref_dt = min(case.dt for case in spec.cases) / REF_DIVISOR
             ref_integrator = "rk4" if not scene.system.tree().cut else scene.options.integrator
-            ref = _run(built, scene, ref_integrator, ref_dt)
+            ref = run_rows(built, scene, ref_integrator, ref_dt)
             if not ref.ok:
                 raise RuntimeError(f"{name} {model}: the reference run stopped: {ref.message}")
             log(f"{name}, {model}: reference {ref_integrator} dt = {ref_dt:g} s")
             for case in spec.cases:
                 integrator, dt = case.label, case.dt
-                r = _run(built, scene, case.integrator, dt, repeat, case.options)
+                r = run_rows(built, scene, case.integrator, dt, repeat, case.options)
                 row = {"system": name, "model": model, "integrator": integrator, "dt": dt,
                        "cpu_s": r.summary["cpu_median"], "status": "ok" if r.ok else r.message}
-                row |= _errors(r, ref, columns, "err")
+                row |= column_errors(r, ref, columns, "err")
                 if ef is not None:
-                    row |= _errors(r, ef, columns, "ef")
+                    row |= column_errors(r, ef, columns, "ef")
                 rows.append(row)
                 log(f"  {integrator:9s} dt = {dt:<8.4g} {row['cpu_s'] * 1e3:8.3f} ms  max error "
                     f"{row['err_max']:.2e} of the peak"

@@ -2,12 +2,12 @@
 error against the geometrically exact `ef` stays under TOL in every output the scene names.
 
 Candidates: every flexible body of the scene given the same built-in modal model (m1, m2, m3,
-prestress; a body from finite-element data keeps its data), each at the scene's step and at 2
-and 4 times it (the steps that divide the row interval), with the scene's integrator; a model
-the mechanism refuses (prestress on a beam held beyond its root, N from a model without axial
-modes, ...) is listed with its reason. Reference: every flexible body as REFERENCE_ELEMENTS ANCF
-elements at half the scene's step; the same at the scene's step estimates the reference's own
-step error, printed next to it (it should be well under TOL).
+prestress; a body from finite-element data keeps its data), each at STEP_FACTORS times the
+scene's step (those that divide the row interval), with the scene's integrator and its
+settings; a model the mechanism refuses (prestress on a beam held beyond its root, ...) is
+listed with its reason. Reference: every flexible body as REFERENCE_ELEMENTS ANCF elements at
+half the scene's step; its own error is estimated by halving its step and its elements, and
+printed (it should be well under TOL).
 Error of a candidate: the largest over the scene's columns of max_t |y - y_ef| / max_t |y_ef|.
 Cost: CPU time of the integration (median of --repeat runs); costs within the timing noise
 band of the cheapest passing candidate (model_select.NOISE_FLOOR at least) count as equal, and
@@ -19,17 +19,13 @@ import json
 import math
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from flexsym.analysis.model_select import NOISE_FLOOR
-from flexsym.analysis.system_bench import ef_system
+from flexsym.analysis.system_bench import column_errors, ef_system, run_rows
 from flexsym.core.errors import SpecError
-from flexsym.model.options import Where, validate
 from flexsym.model.variant import builtin
 from flexsym.scenes.system_scene import checked_system
 from flexsym.codegen.generate import MANIFEST
 from flexsym.toolchain.pipeline import prepare_system, system_folder
-from flexsym.toolchain.run import run_built
 
 MODELS = ("m1", "m2", "m3", "prestress")
 STEP_FACTORS = (1, 2, 4, 5)
@@ -56,14 +52,14 @@ def with_model(system, name: str):
                 else base) if b.flexible else b for b in system.bodies))
 
 
+TUNING = ("newton_tol", "rho_inf", "penalty", "newmark_beta", "newmark_gamma")
+
+
 def _run(system, scene, dt: float, repeat: int = 1):
+    """system_bench's run of a scene's rows, at step dt, with the scene's integrator settings."""
     o = scene.options
-    interval = o.out_every * o.dt
-    given = {"integrator": o.integrator, "dt": dt, "t_end": o.t_end, "interval": interval,
-             "repeat": repeat} | {k: getattr(o, k) for k in ("newton_tol", "rho_inf", "penalty",
-                                                               "newmark_beta", "newmark_gamma")
-                                  if getattr(o, k) is not None}
-    return run_built(prepare_system(system), validate(given, Where("api")))
+    tuning = tuple((k, getattr(o, k)) for k in TUNING if getattr(o, k) is not None)
+    return run_rows(prepare_system(system), scene, o.integrator, dt, repeat, tuning)
 
 
 def coordinates(system) -> int:
@@ -72,12 +68,10 @@ def coordinates(system) -> int:
 
 
 def errors(r, ref, columns) -> tuple[float, str]:
-    worst, name = 0.0, ""
-    for c in columns:
-        e = float(np.max(np.abs(r[c] - ref[c]))) / (float(np.max(np.abs(ref[c]))) or 1.0)
-        if e > worst:
-            worst, name = e, c
-    return worst, name
+    """(largest error, its column): system_bench's per-column max |y - y_ref| / peak |y_ref|."""
+    per = column_errors(r, ref, columns, "e")
+    worst = max(columns, key=lambda c: per[f"e_{c}"])
+    return per[f"e_{worst}"], worst
 
 
 def select_system(scene, tol: float, repeat: int = 3, log=print):
@@ -107,6 +101,7 @@ def select_system(scene, tol: float, repeat: int = 3, log=print):
             results.append(SystemCandidate(name, o.dt, status="refused: " + str(exc).split(": ", 2)[-1]))
             log(f"  {name}: refused")
             continue
+        size = coordinates(system)
         for dt in steps:
             c = SystemCandidate(name, dt)
             r = _run(system, scene, dt)
@@ -116,7 +111,7 @@ def select_system(scene, tol: float, repeat: int = 3, log=print):
                 timed = _run(system, scene, dt, repeat).summary
                 c.cost, c.spread = timed["cpu_median"], timed["cpu_max"] / max(timed["cpu_min"], 1e-300) - 1
                 c.error, c.worst = errors(r, ref, columns)
-                c.coordinates = coordinates(system)
+                c.coordinates = size
             results.append(c)
             log(f"  {name} dt = {dt:g} s: {c.cost * 1e3:.3f} ms, error {c.error:.2e} ({c.worst or c.status})")
     return results, choose(results, tol), ref_error

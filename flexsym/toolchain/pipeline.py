@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -27,11 +26,12 @@ def save_variant(name: str, base: str, overrides: dict) -> Path:
     """Remember how `flexsym generate BASE --name NAME ...` made a variant, so that
     `flexsym run NAME` (build, inspect, ...) finds it again: the base and its overrides,
     which rebuild the same spec (and so the same fingerprint and cached code)."""
+    from flexsym.core.files import atomic_write
+
     path = saved_variant_file(name)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}")
-    tmp.write_text(json.dumps({"base": base, "overrides": overrides}, indent=1) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    with atomic_write(path) as fh:
+        fh.write(json.dumps({"base": base, "overrides": overrides}, indent=1) + "\n")
     return path
 
 
