@@ -3,7 +3,6 @@ S1 (hub) and S3 (pendulum), generated C against casadi against sympy."""
 import random
 
 import pytest
-import sympy as sp
 
 from flexsym.physics.assemble import derive_system
 from flexsym.codegen.derive import derive
@@ -159,39 +158,13 @@ def test_s3_rigid_limit_is_the_compound_pendulum(pendulum_built):
     assert period == pytest.approx(reference, rel=1e-6)
 
 
-def test_system_kernels_c_casadi_sympy(hub_built):
+def test_system_kernels_c_casadi_sympy(hub_built, system_kernels_agree):
     """S1's generated C kernels against their casadi functions against the sympy expressions."""
-    import ctypes
-
     from flexsym.physics.assemble import derive_system
-    from flexsym.codegen.sysgen import build_system_kernels
 
     system = hub_system(builtin("m3"))
     system = replace(system, outputs=system.outputs + (Output("H", "momentum"),))
-    der = derive_system(system)
-    kernels = {k.name: k.function for k in build_system_kernels(der)}
-    lib = ctypes.CDLL(str(hub_built.library))
-    rnd = np.random.default_rng(3)
-    n = len(der.q)
-    q, qd, qdd = rnd.uniform(-0.3, 0.3, n), rnd.uniform(-0.5, 0.5, n), rnd.uniform(-1, 1, n)
-    d = np.array([1.7])  # no guided joint: d = [t]
-    p = np.array([v for _, _, v in der.params])
-    sym = dict(zip(der.q, q)) | dict(zip(der.qd, qd)) | dict(zip(der.qdd, qdd))
-    sym |= {s_: v for (_, s_, v) in der.params} | {der.drive_symbols[0]: d[0]}
-    ptr = ctypes.POINTER(ctypes.c_double)
-    lam = np.zeros(0)  # no cut joints
-    for name, args, expr in (("mass", (q, d, p), der.M), ("force", (q, qd, d, p), der.f),
-                             ("outputs", (q, qd, qdd, lam, d, p), sp.Matrix(list(der.outputs.values())))):
-        ref = np.array(expr.xreplace(sym).evalf(30), dtype=float).reshape(-1)
-        cas = np.array(kernels[name](*args)).reshape(-1)  # a dense matrix, read row by row
-        out = np.zeros(ref.size)
-        arrays = [np.ascontiguousarray(a, dtype=float) for a in args]
-        fn = getattr(lib, f"fsm_{name}")
-        fn.restype = None
-        fn(*[a.ctypes.data_as(ptr) for a in arrays], out.ctypes.data_as(ptr))
-        scale = np.abs(ref).max()
-        assert np.abs(cas - ref).max() <= 1e-12 * scale, name
-        assert np.abs(out - ref).max() <= 1e-12 * scale, name
+    system_kernels_agree(derive_system(system), hub_built, t=1.7, seed=3)
 
 
 # ----- S2 slider-crank: a cut joint (the rod's tip pinned to the slider), ali3p and genalpha3

@@ -1,6 +1,7 @@
 """The plot of a system run: every output against time, and the mechanism at a few instants
 with each beam's deflection from its chord (root to tip) scaled and labelled as such.
 
+A spatial system is drawn as seen from above (its x-y projection; a 3D view is to come).
 The picture is drawn from output columns only: `with_plot_outputs` adds the ground positions
 x(B.m), y(B.m) of every marker of every body and of STATIONS evenly spaced stations along each
 beam (markers plot1, plot2, ...) as extra columns (px_..., py_...), so it needs nothing from
@@ -121,14 +122,15 @@ def plot_system(system: System, geometry: dict, columns: dict, path, instants: i
         ax.plot([], [], color=c, label=f"t = {t[k]:.4g} s")
     for j in system.joints:
         if j.parent == "ground":
-            ax.plot(*j.point, "k^", ms=8)
+            ax.plot(*j.point[:2], "k^", ms=8)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    ax.set_title(f"mechanism; beam deflection from its chord scaled x{factor:g}" if flex
-                 else "mechanism", fontsize=9)
+    view = "mechanism" if system.dimension == 2 else "mechanism seen from above (its x-y projection)"
+    ax.set_title(f"{view}; beam deflection from its chord scaled x{factor:g}" if flex
+                 else view, fontsize=9)
     fig.suptitle(title or system.name)
     fig.tight_layout()
     from flexsym.core.files import atomic_write

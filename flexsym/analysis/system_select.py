@@ -74,8 +74,16 @@ def errors(r, ref, columns) -> tuple[float, str]:
     return per[f"e_{worst}"], worst
 
 
+def check_selectable(scene) -> None:
+    """Refuse, before any line is printed or any work done, what select cannot score."""
+    if scene.system.dimension == 3:
+        raise SpecError(f"{scene.path}: select scores candidates against ef, and the spatial ef "
+                        "reference is not available yet")
+
+
 def select_system(scene, tol: float, repeat: int = 3, log=print):
     """(candidates, chosen or None, reference's own step error)."""
+    check_selectable(scene)
     columns = list(scene.columns)
     o = scene.options
     steps = [o.dt * k for k in STEP_FACTORS if o.out_every % k == 0]

@@ -516,12 +516,13 @@ MAX_BENDING = 5
 
 
 def _select_system(args, scene, tol: float, repeat: int) -> int:
-    from flexsym.analysis.system_select import select_system, table
+    from flexsym.analysis.system_select import check_selectable, select_system, table
 
     if args.exact or args.max_bending is not None:
         flag = "--exact" if args.exact else "--max-bending"
         raise SpecError(f"{args.scene}: {flag} applies to one-beam scenes; a mechanism's candidates "
                         "are the built-in models m1, m2, m3 and prestress at 1, 2, 4 and 5 times its step")
+    check_selectable(scene)
     print(f"{scene.path}: candidates on outputs {', '.join(scene.columns)}, tolerance {tol:g}")
     results, best, ref_error = select_system(scene, tol, repeat=repeat)
     print()

@@ -30,6 +30,7 @@ import sympy as sp
 
 from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, derive_system, ef_guided_force,
                                       length_param)
+from flexsym.physics.spatial import derive_spatial
 from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
 from flexsym.physics.energy import A, E, I, L, rho
@@ -43,7 +44,7 @@ from flexsym.model.system import System, length_scale, system_to_dict
 from flexsym.core.versions import generator_hash, tool_versions
 
 C_PREFIX = "fsm_"
-_OWN = ("physics.assemble", "physics.efbody", "model.system", "codegen.sysgen")
+_OWN = ("physics.assemble", "physics.spatial", "physics.efbody", "model.system", "codegen.sysgen")
 
 
 def fingerprint(system: System) -> str:
@@ -297,7 +298,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     long derivation (ef bodies: 10-45 s) is not silent."""
     log = log or (lambda msg: None)
     start = time.perf_counter()
-    der = derive_system(system)
+    der = derive_spatial(system) if system.dimension == 3 else derive_system(system)
     log(f"derived ({len(der.q)} coordinates, {len(der.constraints)} constraint rows) in "
         f"{time.perf_counter() - start:.1f} s; building the C kernels (casadi)")
     start = time.perf_counter()

@@ -18,7 +18,7 @@ GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "mode
                      "model.library", "physics.assemble", "physics.efbody", "physics.outputs",
                      "model.variant", "physics.lagrange", "physics.modal", "codegen.derive",
                      "emit.kernels", "emit.cemit", "codegen.generate", "physics.fe", "model.fedata",
-                     "physics.exact", "model.beam_element")
+                     "physics.exact", "model.beam_element", "physics.spatial")
 
 
 def tool_versions() -> dict[str, str]:

@@ -13,6 +13,7 @@ are clamped at the root), so joints elsewhere on a flexible body are never tree 
 """
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections import deque
@@ -20,17 +21,27 @@ from dataclasses import dataclass, field, fields, replace
 
 from flexsym.core.errors import SpecError
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
+from flexsym.model.modes import ModeRef
 from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
 JOINT_KINDS = ("revolute", "prismatic", "clamp")
+DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
+SPATIAL_JOINT_KINDS = ("revolute", "clamp")  # derived in 3D so far (physics/spatial.py)
+TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
+SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
 STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
 DRIVER_KINDS = ("guided", "motor")
 OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "angle": "joint", "rate": "joint", "reaction": "joint", "torque": "driver",
     "x": "marker", "y": "marker",
     "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam", "sigma": "beam",
+    # spatial systems only: the marker's ground z, the deflection along the beam frame's z, and
+    # the section moments about the section's own x (torsion), y and z axes
+    "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam",
 }
+SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz")
+PLANAR_ONLY = ("M", "sigma", "reaction", "torque", "momentum", "dissipation")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation")
 REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
@@ -77,19 +88,34 @@ def _name(what: str, name) -> None:
 
 @dataclass(frozen=True)
 class Section:
-    """A uniform beam section and material (SI)."""
+    """A uniform beam section and material (SI). I resists bending in the beam frame's x-y
+    plane (deflection along y: the planar I, the spatial I_z); a spatial beam adds Iy (bending
+    along z), J (St Venant torsion constant) and G (shear modulus)."""
 
     rho: float
     E: float
     A: float
     I: float
+    Iy: float | None = None
+    J: float | None = None
+    G: float | None = None
 
-    def check(self, where: str) -> None:
-        for key in ("rho", "E", "A", "I"):
+    SPATIAL = ("Iy", "J", "G")
+
+    def check(self, where: str, dimension: int = 2) -> None:
+        for key in ("rho", "E", "A", "I") + (self.SPATIAL if dimension == 3 else ()):
             v = getattr(self, key)
+            if v is None:
+                raise SpecError(f"{where}: section {key} is missing (a spatial beam needs Iy, J "
+                                "and G besides rho, E, A and I = Iz)")
             if not _finite(v) or v <= 0:
                 raise SpecError(f"{where}: section {key} = {v!r} must be a finite number > 0")
             check_positive(v, f"{where}: section {key}")
+        if dimension == 2:
+            given = [k for k in self.SPATIAL if getattr(self, k) is not None]
+            if given:
+                raise SpecError(f"{where}: section {given[0]} applies to spatial systems "
+                                "(dimension = 3) only")
 
 
 @dataclass(frozen=True)
@@ -158,21 +184,25 @@ def _show(v) -> str:
 
 @dataclass(frozen=True)
 class Marker:
-    """A named point, in body-local coordinates (on a beam: x along the undeformed axis, y = 0)."""
+    """A named point, in body-local coordinates (on a beam: x along the undeformed axis,
+    y = z = 0; z: spatial systems only)."""
 
     name: str
     x: float
     y: float = 0.0
+    z: float = 0.0
 
 
 @dataclass(frozen=True)
 class RigidBody:
-    """mass (kg), inertia about the centre of mass (kg m^2), com and markers in the body frame."""
+    """mass (kg), inertia about the centre of mass (kg m^2), com and markers in the body frame.
+    Spatial: inertia = (Ixx, Iyy, Izz), the principal moments along the body frame's axes, and
+    com = (x, y, z)."""
 
     name: str
     mass: float
-    inertia: float
-    com: tuple[float, float] = (0.0, 0.0)
+    inertia: object  # a number (planar) or three (spatial)
+    com: tuple = (0.0, 0.0)
     markers: tuple[Marker, ...] = ()
     flexible = False
 
@@ -180,17 +210,24 @@ class RigidBody:
     def all_markers(self) -> tuple[Marker, ...]:
         return self.markers
 
-    def check(self) -> None:
+    def check(self, dimension: int = 2) -> None:
         where = f"body '{self.name}'"
         if not _finite(self.mass) or self.mass <= 0:
             raise SpecError(f"{where}: mass {self.mass!r} must be a finite number > 0")
-        if not _finite(self.inertia) or self.inertia <= 0:
-            raise SpecError(f"{where}: inertia {self.inertia!r} must be a finite number > 0")
         check_positive(self.mass, f"{where}: mass")
-        check_positive(self.inertia, f"{where}: inertia")
-        if len(self.com) != 2 or not all(_finite(c) for c in self.com):
-            raise SpecError(f"{where}: com {self.com!r} must be two finite numbers")
-        _check_markers(where, self.markers)
+        moments = self.inertia if dimension == 3 else (self.inertia,)
+        if (not isinstance(moments, (tuple, list)) or len(moments) != (3 if dimension == 3 else 1)
+                or not all(_finite(v) and v > 0 for v in moments)):
+            what = "three finite numbers > 0 (Ixx, Iyy, Izz)" if dimension == 3 else "a finite number > 0"
+            raise SpecError(f"{where}: inertia {self.inertia!r} must be {what}")
+        for v in moments:
+            check_positive(v, f"{where}: inertia")
+        if dimension == 3 and any(a + b < c for a, b, c in itertools.permutations(moments)):
+            raise SpecError(f"{where}: inertia {list(moments)} breaks the triangle inequality "
+                            "(each principal moment <= the sum of the other two)")
+        if len(self.com) != dimension or not all(_finite(c) for c in self.com):
+            raise SpecError(f"{where}: com {self.com!r} must be {dimension} finite numbers")
+        _check_markers(where, self.markers, dimension)
 
 
 @dataclass(frozen=True)
@@ -234,25 +271,25 @@ class FlexibleBeam:
                         if m.name not in given)
         return implied + self.markers
 
-    def check(self) -> None:
+    def check(self, dimension: int = 2) -> None:
         where = f"body '{self.name}'"
         if not _finite(self.length) or self.length <= 0:
             raise SpecError(f"{where}: length {self.length!r} must be a finite number > 0")
         check_positive(self.length, f"{where}: length")
         if not isinstance(self.section, Section):
             raise SpecError(f"{where}: section must be a Section(rho, E, A, I)")
-        self.section.check(where)
+        self.section.check(where, dimension)
         if getattr(self.model, "kind", None) not in ("modal", "fe"):
             raise SpecError(f"{where}: model must be a modal variant or 'ef' (got {self.model!r})")
         if self.damping is not None:
             if not isinstance(self.damping, Damping):
                 raise SpecError(f"{where}: damping must be a Damping(zeta, alpha, beta) or None")
             self.damping.check(where, self.model)
-        _check_markers(where, self.markers)
+        _check_markers(where, self.markers, dimension)
         for m in self.markers:
-            if m.y != 0:
-                raise SpecError(f"{where}: marker '{m.name}' has y = {m.y}; markers on a beam lie "
-                                "on its axis (y = 0)")
+            if m.y != 0 or m.z != 0:
+                raise SpecError(f"{where}: marker '{m.name}' has y = {m.y}, z = {m.z}; markers on a "
+                                "beam lie on its axis (y = z = 0)")
             if not 0 <= m.x <= self.length:
                 raise SpecError(f"{where}: marker '{m.name}' at x = {m.x} is outside the beam "
                                 f"(0 <= x <= {self.length})")
@@ -261,7 +298,18 @@ class FlexibleBeam:
                                 "x = length)")
 
 
-def _check_markers(where, markers):
+def beam_coordinates(beam: FlexibleBeam) -> list[tuple[str, str, ModeRef]]:
+    """(coordinate name, group, mode) of a spatial modal beam: axial u_*, bending v_* (its
+    frame's x-y plane) and vz_* (x-z plane) on the model's bending modes, torsion phi_*."""
+    spec = beam.model
+    out = [(r.coordinate, "axial", r) for r in spec.axial]
+    out += [(r.coordinate, "bending", r) for r in spec.bending]
+    out += [("vz_" + r.token, "bending", r) for r in spec.bending]
+    out += [("phi_" + r.token, "torsion", r) for r in TORSION_MODES]
+    return out
+
+
+def _check_markers(where, markers, dimension: int = 2):
     seen = set()
     for m in markers:
         if not isinstance(m, Marker):
@@ -270,8 +318,11 @@ def _check_markers(where, markers):
         if m.name in seen:
             raise SpecError(f"{where}: duplicate marker '{m.name}'")
         seen.add(m.name)
-        if not (_finite(m.x) and _finite(m.y)):
+        if not (_finite(m.x) and _finite(m.y) and _finite(m.z)):
             raise SpecError(f"{where}: marker '{m.name}' position must be finite numbers")
+        if dimension == 2 and m.z != 0:
+            raise SpecError(f"{where}: marker '{m.name}' has z = {m.z}: a planar system's markers "
+                            "lie in the x-y plane")
 
 
 @dataclass(frozen=True)
@@ -327,6 +378,7 @@ class PointForce:
     fy: float
     frame: str = "ground"  # or "body": components in the body's frame
     name: str = ""
+    fz: float = 0.0  # spatial systems
 
 
 @dataclass(frozen=True)
@@ -381,6 +433,7 @@ class System:
     params: tuple[tuple[str, float], ...] = ()
     description: str = field(default="", compare=False)
     start: str = "undeformed"  # or "static": elastic coordinates in equilibrium at t = 0
+    dimension: int = 2  # 3: a spatial system (physics/spatial.py)
 
     # ----- lookups ----------------------------------------------------------------------
     def body(self, name: str):
@@ -414,8 +467,10 @@ class System:
         taken |= {j.name: f"joint '{j.name}'" for j in self.joints if isinstance(j, Joint)}
         for b in self.bodies:
             if getattr(b, "flexible", False):
-                taken |= {f"{b.name}_{c}": f"an elastic coordinate of '{b.name}'"
-                          for c in getattr(b.model, "coordinates", ())}
+                names = (getattr(b.model, "coordinates", ()) if self.dimension == 2 or
+                         getattr(b.model, "kind", None) != "modal" else
+                         [n for n, _, _ in beam_coordinates(b)])
+                taken |= {f"{b.name}_{c}": f"an elastic coordinate of '{b.name}'" for c in names}
         return taken
 
     def tree(self) -> Tree:
@@ -438,6 +493,9 @@ class System:
                 raise SpecError(f"{where}: {len(items)} {what}, more than the limit of {limit} (the "
                                 "derivation's cost grows quickly with the number of bodies)")
         self._check_magnitudes()
+        if self.dimension not in DIMENSIONS or isinstance(self.dimension, bool):
+            raise SpecError(f"{where}: dimension {self.dimension!r} must be 2 (planar) or 3 (spatial)")
+        n = self.dimension
         names: dict[str, str] = {}
         for what, items in (("body", self.bodies), ("joint", self.joints),
                             ("driver", self.drivers)):
@@ -450,7 +508,9 @@ class System:
         for b in self.bodies:
             if not isinstance(b, (RigidBody, FlexibleBeam)):
                 raise SpecError(f"{where}: body {b!r} is not a RigidBody or FlexibleBeam")
-            b.check()
+            b.check(n)
+        if n == 3:
+            self._check_spatial()
         for j in self.joints:
             self._check_joint(j)
         connected = {r.partition(".")[0] for j in self.joints for r in (j.parent, j.child)}
@@ -459,6 +519,9 @@ class System:
                 raise SpecError(f"{where}: body '{b.name}' is connected to nothing (no joint "
                                 "names it)")
         tree = spanning_tree(self)
+        if n == 3 and tree.cut:
+            raise SpecError(f"{where}: joint(s) {', '.join(tree.cut)} close a loop: closed loops are "
+                            "not derived for spatial systems yet (a tree is)")
         guided = set()
         for d in self.drivers:
             self._check_driver(d, tree, guided)
@@ -480,7 +543,14 @@ class System:
                 raise SpecError(f"{where}: output column '{o.column}' is already the name of "
                                 f"{taken[o.column]} in the results (choose another name)")
             columns.add(o.column)
-            parse_output(self, o.quantity)
+            fn, _ = parse_output(self, o.quantity)
+            if n == 2 and fn in SPATIAL_ONLY:
+                raise SpecError(f"{where}: output '{o.quantity}': {fn} applies to spatial systems "
+                                "(dimension = 3) only")
+            if n == 3 and fn in PLANAR_ONLY:
+                hint = " (use Mx, My or Mz: the torsion and bending moments)" if fn == "M" else ""
+                raise SpecError(f"{where}: output '{o.quantity}': {fn} is not derived for spatial "
+                                f"systems yet{hint}")
         for p in self.params:
             if len(p) != 2 or not NAME_RE.match(str(p[0])) or not _finite(p[1]):
                 raise SpecError(f"{where}: parameter {p!r} must be (name, finite number)")
@@ -495,6 +565,32 @@ class System:
                                 f"cut joint(s) {', '.join(tree.cut)}, the loop would have to move with the "
                                 "deformation)")
         return self
+
+    def _check_spatial(self) -> None:
+        """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
+        before any work: revolute and clamp joints in a tree, uniform modal beams undamped."""
+        where = f"system '{self.name}'"
+        for j in self.joints:
+            if j.kind not in SPATIAL_JOINT_KINDS:
+                raise SpecError(f"{where}: joint '{j.name}': a {j.kind} joint is not derived for "
+                                f"spatial systems yet (derived: {', '.join(SPATIAL_JOINT_KINDS)})")
+        for b in self.bodies:
+            if not b.flexible:
+                continue
+            if getattr(b.model, "kind", None) != "modal":
+                raise SpecError(f"{where}: body '{b.name}': the spatial geometrically exact "
+                                "reference ef is not available yet; use a modal model (m0-m3, "
+                                "prestress)")
+            if b.model.body is not None:
+                raise SpecError(f"{where}: body '{b.name}': a beam from finite-element data is "
+                                "planar only so far")
+            if b.model.strain not in SPATIAL_STRAINS:
+                raise SpecError(f"{where}: body '{b.name}': strain model '{b.model.strain}' is not "
+                                f"derived in 3D (derived: {', '.join(SPATIAL_STRAINS)})")
+            if b.damping is not None and b.damping.active:
+                raise SpecError(f"{where}: body '{b.name}': structural damping is planar only so far")
+            if b.model.axial_force == "equilibrium" or b.model.moment == "equilibrium":
+                pass  # N and the moments from equilibrium are derived in 3D
 
     def _check_magnitudes(self) -> None:
         """Every number of the system: a real number (not bool, complex, str, None), finite and
@@ -536,16 +632,21 @@ class System:
             bodies.append(body)
         if bodies[0] == bodies[1]:
             raise SpecError(f"{where}: joins body '{bodies[0]}' to itself")
-        if j.kind == "prismatic":
-            ax = j.axis
-            if ax is None or len(ax) != 2 or not all(_finite(a) for a in ax) or ax[0] == ax[1] == 0:
-                raise SpecError(f"{where}: a prismatic joint needs an axis (two finite numbers, "
-                                "not both 0) in the parent's frame")
+        n = self.dimension
+        if j.kind == "prismatic" or (n == 3 and j.kind == "revolute" and j.axis is not None):
+            ax, count = j.axis, ("two", "three")[n - 2]
+            if ax is None or len(ax) != n or not all(_finite(a) for a in ax) or not any(ax):
+                raise SpecError(f"{where}: a {j.kind} joint needs an axis ({count} finite numbers, "
+                                "not all 0) in the parent's frame")
             if math.hypot(*ax) < MIN_AXIS:
                 raise SpecError(f"{where}: axis {list(ax)} is shorter than {MIN_AXIS:g} (it is a "
-                                "direction, normalised: write e.g. [1, 0])")
+                                f"direction, normalised: write e.g. {[1] + [0] * (n - 1)})")
         elif j.axis is not None:
-            raise SpecError(f"{where}: axis applies to prismatic joints only")
+            raise SpecError(f"{where}: axis applies to prismatic joints only" if n == 2 else
+                            f"{where}: axis applies to revolute and prismatic joints only")
+        if n == 3 and j.offset != 0:
+            raise SpecError(f"{where}: offset (a planar angle) does not apply to spatial joints: "
+                            "the child's frame starts parallel to the parent's")
         for key in ("offset", "initial"):
             if not _finite(getattr(j, key)):
                 raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
@@ -558,8 +659,8 @@ class System:
         if j.kind == "clamp" and j.initial != 0:
             raise SpecError(f"{where}: initial applies to revolute and prismatic joints only (a "
                             "clamp has no coordinate; use offset for its angle)")
-        if len(j.point) != 2 or not all(_finite(c) for c in j.point):
-            raise SpecError(f"{where}: point {j.point!r} must be two finite numbers")
+        if (j.parent == GROUND or any(j.point)) and (len(j.point) != n or not all(_finite(c) for c in j.point)):
+            raise SpecError(f"{where}: point {j.point!r} must be {('two', 'three')[n - 2]} finite numbers")
 
     def _check_driver(self, d: Driver, tree: Tree, guided: set) -> None:
         where = f"system '{self.name}': driver '{d.name}'"
@@ -594,13 +695,19 @@ class System:
 
     def _check_load(self, load) -> None:
         where = f"system '{self.name}': load {getattr(load, 'name', '') or type(load).__name__}"
+        n = self.dimension
+        if n == 3 and not isinstance(load, (Gravity, PointForce)):
+            raise SpecError(f"{where}: a {type(load).__name__} is not derived for spatial systems "
+                            "yet (gravity and point forces are)")
         if isinstance(load, Gravity):
-            if len(load.g) != 2 or not all(_finite(c) for c in load.g):
-                raise SpecError(f"{where}: g {load.g!r} must be two finite numbers")
+            if len(load.g) != n or not all(_finite(c) for c in load.g):
+                raise SpecError(f"{where}: g {load.g!r} must be {('two', 'three')[n - 2]} finite numbers")
         elif isinstance(load, PointForce):
             self._ref(where, load.marker)
-            if not (_finite(load.fx) and _finite(load.fy)):
-                raise SpecError(f"{where}: fx, fy must be finite numbers")
+            if not (_finite(load.fx) and _finite(load.fy) and _finite(load.fz)):
+                raise SpecError(f"{where}: fx, fy, fz must be finite numbers")
+            if n == 2 and load.fz != 0:
+                raise SpecError(f"{where}: fz applies to spatial systems (dimension = 3) only")
             if load.frame not in ("ground", "body"):
                 raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body'")
         elif isinstance(load, Torque):
@@ -627,6 +734,9 @@ class System:
             raise SpecError(f"{where}: {str(exc).split(': ', 1)[1]}") from None
 
 
+_SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2}
+
+
 def system_to_dict(system: System) -> dict:
     """Canonical content of a system (what generated code depends on): every field, a flexible
     body's model as its variant's to_dict(); a beam's damping only when given (an undamped
@@ -635,6 +745,8 @@ def system_to_dict(system: System) -> dict:
         out = {"type": type(x).__name__}
         for f in fields(x):
             v = getattr(x, f.name)
+            if f.name in _SPATIAL_DEFAULTS and v == _SPATIAL_DEFAULTS[f.name]:
+                continue  # a planar system's content is what it was before 3D existed
             if f.name == "damping":
                 if v is not None:
                     out[f.name] = {"zeta": list(v.zeta) if isinstance(v.zeta, (tuple, list)) else v.zeta,
@@ -781,7 +893,8 @@ def output_unit(system: System, quantity: str) -> str:
         return {"angle": ("rad", "m"), "rate": ("rad/s", "m/s"), "torque": ("N m", "N")}[fn][linear]
     if fn == "reaction":
         return "N m" if args[1] == "moment" else "N"
-    return {"x": "m", "y": "m", "v": "m", "u": "m", "w": "m", "N": "N", "M": "N m", "sigma": "Pa", "T": "J",
+    return {"x": "m", "y": "m", "z": "m", "v": "m", "vz": "m", "u": "m", "w": "m", "N": "N", "M": "N m",
+            "Mx": "N m", "My": "N m", "Mz": "N m", "sigma": "Pa", "T": "J",
             "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)", "dissipation": "W"}[fn]
 
 
@@ -804,6 +917,14 @@ def length_scale(system: System) -> float:
     origin, or ground joint point distance from the origin (tolerances, blow-up and the
     violation output use it)."""
     sizes = [b.length for b in system.bodies if b.flexible]
-    sizes += [abs(complex(m.x, m.y)) for b in system.bodies if not b.flexible for m in b.markers]
-    sizes += [abs(complex(*j.point)) for j in system.joints if j.parent == "ground"]
+    sizes += [_norm((m.x, m.y, m.z)) for b in system.bodies if not b.flexible for m in b.markers]
+    sizes += [_norm(j.point) for j in system.joints if j.parent == "ground"]
     return max([x for x in sizes if x > 0] or [1.0])
+
+
+def _norm(v) -> float:
+    """|v|: a planar vector as it always was (abs of a complex: the scales of generated planar
+    code stay bit for bit), a spatial one by hypot."""
+    if len(v) == 2 or not v[2]:
+        return abs(complex(v[0], v[1]))
+    return math.hypot(*v)

@@ -57,7 +57,7 @@ from flexsym.scenes.assembly import Assembly, assemble, poses, theta0
 from flexsym.model.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
-from flexsym.model.system import (GROUND, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
+from flexsym.model.system import (GROUND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
                      parse_output)
 
@@ -65,17 +65,21 @@ SYSTEM_TABLES = ("system", "body", "joint", "driver", "gravity", "load", "solver
 _ARRAYS = ("body", "joint", "driver", "load")
 _RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene and o.maneuvers is None}
 UNIFORM_KEYS = ("length", "density", "youngs_modulus", "area", "inertia")
+# a spatial beam's section: inertia_z is the planar inertia (bending in the frame's x-y plane)
+SPATIAL_KEYS = ("length", "density", "youngs_modulus", "area", "inertia_z", "inertia_y",
+                "torsion_constant", "shear_modulus")
 FE_KEYS = ("segments", "point_masses", "elements", "ef_elements", "folder")  # scene.py's [body]
 EF_ELEMENTS = 32  # ef elements of a body from finite-element data (scene.py's [body] default)
 KEYS = {
-    "system": {"name", "description", "start"},
+    "system": {"name", "description", "start", "dimension"},
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
     "beam": {"name", "kind", "model", "markers", "damping", *UNIFORM_KEYS, *FE_KEYS},
+    "beam3": {"name", "kind", "model", "markers", *SPATIAL_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
     "gravity": {"g"},
-    "force": {"kind", "name", "marker", "fx", "fy", "frame"},
+    "force": {"kind", "name", "marker", "fx", "fy", "fz", "frame"},
     "torque": {"kind", "name", "body", "torque"},
     "spring": {"kind", "name", "a", "b", "k", "c", "l0"},
     "solver": {k.split(".")[1] for k in _RUN_KEYS if k.startswith("solver.")},
@@ -142,15 +146,17 @@ class _Items:
             self.fail(f"{where} {key}", f"must be a string (got {val!r})")
         return val
 
-    def pair(self, where, tab, key, default=None):
+    def pair(self, where, tab, key, default=None, n: int = 2):
+        """n finite numbers (a planar pair, or a spatial triple with n = 3)."""
         val = tab.get(key, default)
         if val is None:
             return None
-        if (not isinstance(val, (list, tuple)) or len(val) != 2
+        if (not isinstance(val, (list, tuple)) or len(val) != n
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                            for v in val)):
-            self.fail(f"{where} {key}", f"must be two finite numbers [x, y] (got {val!r})")
-        return (float(val[0]), float(val[1]))
+            form = "two finite numbers [x, y]" if n == 2 else "three finite numbers [x, y, z]"
+            self.fail(f"{where} {key}", f"must be {form} (got {val!r})")
+        return tuple(float(v) for v in val)
 
 
 def _entries(r: _Items, data: dict, name: str) -> list:
@@ -183,12 +189,15 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     name = r.string("[system]", system_tab, "name", default=name)
     description = r.string("[system]", system_tab, "description", default="")
     start = r.string("[system]", system_tab, "start", default="undeformed")
+    dim = system_tab.get("dimension", 2)
+    if dim not in (2, 3) or isinstance(dim, bool):
+        r.fail("[system] dimension", f"must be 2 (planar) or 3 (spatial) (got {dim!r})")
     for key, limit in (("body", MAX_BODIES), ("joint", MAX_JOINTS)):
         if len(_entries(r, data, key)) > limit:  # before anything is read (system.py's limit)
             r.fail(f"[[{key}]]", f"{len(data[key])} entries, more than the limit of {limit} (the "
                    "derivation's cost grows quickly with the number of bodies)")
-    bodies = tuple(_body(r, k, tab, model, base) for k, tab in enumerate(_entries(r, data, "body")))
-    joints = tuple(_joint(r, k, tab) for k, tab in enumerate(_entries(r, data, "joint")))
+    bodies = tuple(_body(r, k, tab, model, base, dim) for k, tab in enumerate(_entries(r, data, "body")))
+    joints = tuple(_joint(r, k, tab, dim) for k, tab in enumerate(_entries(r, data, "joint")))
     drivers = tuple(_driver(r, k, tab) for k, tab in enumerate(_entries(r, data, "driver")))
     kinds = {j.name: j.kind for j in joints}
     for k, (d, tab) in enumerate(zip(drivers, _entries(r, data, "driver"))):
@@ -196,9 +205,11 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
         if d.kind == "motor" and law is not None and law not in tab:
             r.fail(f"{_label('driver', k, tab)}", f"a motor on the {kinds[d.joint]} joint "
                    f"'{d.joint}' gives a {law} (write {law} = \"...\")")
-    loads = tuple(_load(r, k, tab) for k, tab in enumerate(_entries(r, data, "load")))
+    loads = tuple(_load(r, k, tab, dim) for k, tab in enumerate(_entries(r, data, "load")))
     if "gravity" in data:
-        loads = (Gravity(r.pair("[gravity]", data["gravity"], "g", default=(0.0, -9.81))),) + loads
+        if dim == 3 and "g" not in data["gravity"]:
+            r.fail("[gravity] g", "missing (a spatial system has no default down: give [gx, gy, gz])")
+        loads = (Gravity(r.pair("[gravity]", data["gravity"], "g", default=(0.0, -9.81), n=dim)),) + loads
     out = data.get("output", {})
     columns = out.get("columns", {})
     if not isinstance(columns, dict) or not all(isinstance(v, str) for v in columns.values()):
@@ -209,34 +220,49 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     outputs = tuple(Output(c, q) for c, q in columns.items())
     output_file = r.string("[output]", out, "file", default="") or None
     given = {opt: data.get(key.split(".")[0], {}).get(key.split(".")[1]) for key, opt in _RUN_KEYS.items()}
-    system = System(name, bodies, joints, drivers, loads, outputs, description=description, start=start)
+    system = System(name, bodies, joints, drivers, loads, outputs, description=description, start=start,
+                    dimension=dim)
     return system, given, output_file
 
 
-def _markers(r, where, tab, beam: bool) -> tuple[Marker, ...]:
+def _markers(r, where, tab, beam: bool, dim: int = 2) -> tuple[Marker, ...]:
     given = tab.get("markers", {})
     if not isinstance(given, dict):
-        r.fail(f"{where} markers", "must be a table of name = " + ("x (m)" if beam else "[x, y] (m)"))
+        r.fail(f"{where} markers", "must be a table of name = " + (
+            "x (m)" if beam else "[x, y] (m)" if dim == 2 else "[x, y, z] (m)"))
     out = []
     for name, pos in given.items():
         if beam:
             x = r.number(f"{where} markers", given, name)
             out.append(Marker(name, x))
         else:
-            out.append(Marker(name, *r.pair(f"{where} markers", given, name)))
+            out.append(Marker(name, *r.pair(f"{where} markers", given, name, n=dim)))
     return tuple(out)
 
 
-def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path):
+def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path, dim: int = 2):
     where = _label("body", k, tab)
     kind = tab.get("kind")
     if kind not in ("rigid", "beam"):
         r.fail(f"{where} kind", f"must be \"rigid\" or \"beam\" (got {kind!r})")
-    r.table(where, tab, KEYS[kind])
+    if dim == 3 and kind == "beam" and "inertia" in tab:
+        r.fail(f"{where} inertia", "a spatial beam has inertia_z (bending in its x-y plane) and "
+               "inertia_y (x-z plane), with torsion_constant and shear_modulus")
+    r.table(where, tab, KEYS["beam3" if dim == 3 and kind == "beam" else kind])
     name = r.string(where, tab, "name")
     if kind == "rigid":
-        return RigidBody(name, r.number(where, tab, "mass"), r.number(where, tab, "inertia"),
-                         r.pair(where, tab, "com", default=(0.0, 0.0)), _markers(r, where, tab, False))
+        inertia = (r.pair(where, tab, "inertia", n=3) or r.fail(f"{where} inertia", "missing")
+                   if dim == 3 else r.number(where, tab, "inertia"))
+        return RigidBody(name, r.number(where, tab, "mass"), inertia,
+                         r.pair(where, tab, "com", default=(0.0,) * dim, n=dim),
+                         _markers(r, where, tab, False, dim))
+    if dim == 3:
+        spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
+                      "--model" if model is not None else None)
+        num = {key: r.number(where, tab, key, positive=True) for key in SPATIAL_KEYS}
+        section = Section(num["density"], num["youngs_modulus"], num["area"], num["inertia_z"],
+                          Iy=num["inertia_y"], J=num["torsion_constant"], G=num["shear_modulus"])
+        return FlexibleBeam(name, num["length"], section, spec, _markers(r, where, tab, True))
     spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
                   "--model" if model is not None else None)
     markers = _markers(r, where, tab, True)
@@ -368,14 +394,15 @@ def _model(r: _Items, where: str, given, flag: str | None):
         r.fail(where, str(exc))
 
 
-def _joint(r: _Items, k: int, tab: dict) -> Joint:
+def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
     where = _label("joint", k, tab)
     r.table(where, tab, KEYS["joint"])
     kind = r.string(where, tab, "kind")
     parent = r.string(where, tab, "parent")
-    point = r.pair(where, tab, "point")
+    point = r.pair(where, tab, "point", n=dim)
     if parent == GROUND and point is None:
-        r.fail(f"{where} point", "missing (a joint to ground needs the ground point [x, y])")
+        r.fail(f"{where} point", "missing (a joint to ground needs the ground point "
+               + ("[x, y])" if dim == 2 else "[x, y, z])"))
     if parent != GROUND and point is not None:
         r.fail(f"{where} point", "applies to a joint whose parent is \"ground\" only")
     if kind == "clamp" and "initial" in tab:
@@ -383,8 +410,8 @@ def _joint(r: _Items, k: int, tab: dict) -> Joint:
                "coordinate; use offset for its angle)")
     initial, fixed, rate = _initial(r, where, tab)
     return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
-                 axis=r.pair(where, tab, "axis"), offset=r.number(where, tab, "offset", default=0.0),
-                 point=point or (0.0, 0.0), initial=initial, fixed=fixed, rate=rate)
+                 axis=r.pair(where, tab, "axis", n=dim), offset=r.number(where, tab, "offset", default=0.0),
+                 point=point or (0.0,) * dim, initial=initial, fixed=fixed, rate=rate)
 
 
 def _initial(r: _Items, where: str, tab: dict) -> tuple[float, bool, float | None]:
@@ -435,7 +462,7 @@ def _driver(r: _Items, k: int, tab: dict) -> Driver:
     return Driver(name, kind, joint, maneuver=internal, params=params)
 
 
-def _load(r: _Items, k: int, tab: dict):
+def _load(r: _Items, k: int, tab: dict, dim: int = 2):
     where = _label("load", k, tab)
     kind = tab.get("kind")
     if kind not in ("force", "torque", "spring"):
@@ -443,8 +470,11 @@ def _load(r: _Items, k: int, tab: dict):
     r.table(where, tab, KEYS[kind])
     name = r.string(where, tab, "name", default="")
     if kind == "force":
+        if dim == 2 and "fz" in tab:
+            r.fail(f"{where} fz", "applies to spatial systems ([system] dimension = 3) only")
         return PointForce(r.string(where, tab, "marker"), r.number(where, tab, "fx"),
-                          r.number(where, tab, "fy"), r.string(where, tab, "frame", default="ground"), name)
+                          r.number(where, tab, "fy"), r.string(where, tab, "frame", default="ground"), name,
+                          r.number(where, tab, "fz", default=0.0))
     if kind == "torque":
         return Torque(r.string(where, tab, "body"), r.string(where, tab, "torque"), name)
     for end in ("a", "b"):
@@ -524,7 +554,7 @@ def _expression(text: str, names: dict, label: str) -> sp.Expr:
 def _carried(system: System, o: Output) -> None:
     """A beam output that no mode of the body's model can make non-zero is refused."""
     fn, args = parse_output(system, o.quantity)
-    if fn not in ("v", "u", "w", "N", "M"):
+    if fn not in ("v", "u", "w", "N", "M", "vz", "Mx", "My", "Mz"):
         return
     beam = system.body(args[0])
     model = beam.model
@@ -537,10 +567,15 @@ def _carried(system: System, o: Output) -> None:
     s = sp.nsimplify(x / beam.length, rational=True) if 0 < x < beam.length else sp.Integer(int(x > 0))
     from flexsym.model.output_names import axial_force_available
 
-    if fn in ("v", "w") or (fn == "M" and model.moment != "equilibrium"):
-        order = 2 if fn == "M" else 0
+    if fn == "Mx":
+        if model.moment != "equilibrium" and x == beam.length:
+            raise SpecError(f"{where}: the torsion mode's twist rate is zero at the tip, so the "
+                            "constitutive torsion moment would be identically zero")
+        return
+    if fn in ("v", "w", "vz") or (fn in ("M", "My", "Mz") and model.moment != "equilibrium"):
+        order = 2 if fn in ("M", "My", "Mz") else 0
         if all(float(model.mode(m).value_at(order, s)) == 0 for m in model.bending):
-            what = "curvature" if fn == "M" else "deflection"
+            what = "deflection" if order == 0 else "curvature"
             raise SpecError(f"{where}: no bending mode of model '{model.name}' has {what} at "
                             f"x = {x:g} m, so the output would be identically zero")
     elif fn == "N" and not axial_force_available(model):
@@ -598,6 +633,8 @@ def summary(system: System) -> str:
     """What `flexsym inspect SCENE --section system` prints: bodies, joints (tree or cut),
     coordinates, drivers, loads, outputs, the initial assembly."""
     tree = system.tree()
+    if system.dimension == 3:
+        return _summary3(system)
     poses = initial_poses(system)
     guided = {d.joint for d in system.drivers if d.kind == "guided"}
     lines = [f"system '{system.name}'" + (f": {system.description}" if system.description else ""), "",
@@ -643,6 +680,37 @@ def summary(system: System) -> str:
         f"  {d.name}: {d.kind} on {d.joint}: " + (d.expression or f"{d.maneuver} "
                                                   + ", ".join(f"{k} = {v:g}" for k, v in d.params))
         for d in system.drivers] if system.drivers else ["", "drivers: none"]
+    lines += ["", "loads: " + (", ".join(type(x).__name__ + (f" g = {x.g}" if isinstance(x, Gravity) else "")
+                                        for x in system.loads) or "none")]
+    lines += ["", "outputs:"] + [f"  {o.column} = {o.quantity}" for o in system.outputs]
+    return "\n".join(lines) + "\n"
+
+
+def _summary3(system: System) -> str:
+    """summary() of a spatial system: bodies, joints, coordinates, loads, outputs."""
+    guided = {d.joint for d in system.drivers if d.kind == "guided"}
+    lines = [f"system '{system.name}' (spatial)" + (f": {system.description}" if system.description else ""),
+             "", "bodies:"]
+    for b in system.bodies:
+        marks = ", ".join(f"{m.name} ({m.x:g}, {m.y:g}, {m.z:g})" for m in b.all_markers)
+        if b.flexible:
+            s_ = b.section
+            what = (f"beam L = {b.length:g} m, rho {s_.rho:g}, E {s_.E:g}, G {s_.G:g}, A {s_.A:g}, "
+                    f"I_z {s_.I:g}, I_y {s_.Iy:g}, J {s_.J:g}; model {b.model.name} "
+                    f"(N {b.model.axial_force}, M {b.model.moment})")
+        else:
+            what = (f"rigid m = {b.mass:g} kg, principal inertia ({', '.join(f'{v:g}' for v in b.inertia)}) "
+                    f"kg m^2, com ({', '.join(f'{c:g}' for c in b.com)})")
+        lines.append(f"  {b.name}: {what}; markers {marks}")
+    lines += ["", "joints (a tree, from ground):"]
+    for j in system.joints:
+        parent = f"ground at ({', '.join(f'{c:g}' for c in j.point)})" if j.parent == GROUND else j.parent
+        axis = f", axis ({', '.join(f'{a:g}' for a in (j.axis or (0, 0, 1)))})" if j.kind == "revolute" else ""
+        lines.append(f"  {j.name}: {j.kind} {parent} -> {j.child}{axis}"
+                     + (" [guided]" if j.name in guided else ""))
+    lines += ["", "elastic coordinates: " + "; ".join(
+        f"{b.name}: " + ", ".join(n for n, _, _ in beam_coordinates(b))
+        for b in system.bodies if b.flexible)]
     lines += ["", "loads: " + (", ".join(type(x).__name__ + (f" g = {x.g}" if isinstance(x, Gravity) else "")
                                         for x in system.loads) or "none")]
     lines += ["", "outputs:"] + [f"  {o.column} = {o.quantity}" for o in system.outputs]

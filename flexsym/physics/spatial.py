@@ -1,0 +1,408 @@
+"""Equations of motion of a spatial System (dimension = 3) in relative coordinates on its
+spanning tree (sympy): the 3D sibling of assemble.py, producing the same SystemDerivation, so
+that sysgen.py, the templates and the runtime take it unchanged.
+
+What is derived so far: a tree of rigid bodies and uniform modal beams joined by revolute
+joints (about an axis fixed in the parent's frame) and clamps, guided or motor-driven, under
+gravity and point forces. Closed loops, spherical/universal/prismatic joints, ef in 3D and
+damping are refused up front by System._check_spatial.
+
+Kinematics, composed joint by joint in each body's own frame components (no trigonometric
+identity ever has to be simplified): with Q = Rot(a, q) the joint's rotation (Rodrigues),
+m_p and m_c the joint's marker on parent and child,
+    omega_c = Q^T omega_p + a q',    V_c = Q^T (V_p + omega_p x m_p) - omega_c x m_c,
+    g_c = Q^T g_p,   A_c = A_p Q,   R_c = R_p + A_p m_p - A_c m_c     (a clamp: Q = I, q = 0).
+A beam's floating frame is its root section's; on it the beam carries, per unit s = x/L,
+    r = (L s + u, v, vz),   u = axial modes (+ u_fs = -1/2 int (v_x^2 + vz_x^2) for #3),
+    v, vz = the model's bending modes in the frame's x-y (I = I_z) and x-z (I_y) planes,
+    phi = torsion: the first fixed-free torsion mode sin(pi s / 2) (TORSION_MODES).
+Energies (uniform beam; Euler-Bernoulli, St Venant torsion, rotary inertia of bending left
+out, as the spatial benchmarks define it):
+    T = 1/2 int rho A |V + r' + omega x r|^2 dx + 1/2 int rho (I_y + I_z) (phi' + omega.t)^2 dx,
+        t = (1, v_x, vz_x) the tangent to first order;
+    V_g = -m g.R - int rho A g_c.r dx;  strain terms of the variant's strain model, generalised:
+    axial EA/2 int u_x^2, bending EI_z/2 int v_xx^2 + EI_y/2 int vz_xx^2, torsion GJ/2 int
+    phi_x^2 (always, on the torsion coordinate), cubic EA/2 int u_x (v_x^2 + vz_x^2) (#1/#2:
+    K_G in both planes from the axial modes), prestress 1/2 int N(x) (v_x^2 + vz_x^2) with
+    N = rho A (omega_y^2 + omega_z^2)(L^2 - x^2)/2 (the centrifugal load of the frame's actual
+    rotation about the axes across the beam).
+What the generalisation keeps and drops: the bending planes couple only through the frame's
+motion, the foreshortening and the cubic term (both planes in one stretch); torsion is
+linear and couples to bending only through omega.t in T (the propeller moment of a section
+needs its bending rotary inertia, left out by definition); the section's twist does not turn
+the bending planes (second order).
+Outputs: angle/rate of a joint, x/y/z of a marker, u/v/vz and w (distance from the chord) at
+a station, N, Mx (torsion), My, Mz at a station, constitutive or from equilibrium of the
+part beyond the station (the variant's axial_force / moment), in the beam frame's
+components; T, V, violation (0: a tree). Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx,
+Mx = GJ phi_x (the moment of the part beyond the station on the part before it).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from flexsym.core.errors import SpecError
+from flexsym.model.modes import mode, s
+from flexsym.model.parameters import BEAM_PARAMS
+from flexsym.model.strain_models import STRAIN_MODELS
+from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, System,
+                                  beam_coordinates, beam_station, parse_output)
+from flexsym.physics.assemble import Coordinate, SystemDerivation, _guided
+from flexsym.physics.integrals import IntegralTable
+from flexsym.physics.lagrange import equations_of_motion, generalized_force
+from flexsym.physics.outputs import field_at
+from flexsym.model.maneuver import parse_expression, t
+
+SPATIAL_PARAMS = ("Iy", "J", "G")  # after p's [rho, E, A, I, L] of each beam (I is I_z)
+
+
+def _skew(a: sp.Matrix) -> sp.Matrix:
+    return sp.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+
+
+def _cross(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
+    return sp.Matrix([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _vec(v) -> sp.Matrix:
+    return sp.Matrix([sp.nsimplify(c) for c in v])
+
+
+def rotation(axis, angle) -> sp.Matrix:
+    """Rodrigues: the rotation by angle about the unit axis (a number tuple, normalised here)."""
+    a = _vec(axis)
+    a = a / sp.sqrt(a.dot(a))
+    K = _skew(a)
+    return sp.eye(3) + sp.sin(angle) * K + (1 - sp.cos(angle)) * K * K
+
+
+@dataclass
+class Frame:
+    """A body frame: A (ground <- frame), origin R (ground), and in the frame's own components
+    its angular velocity omega, origin velocity V and the gravity g."""
+
+    A: sp.Matrix
+    R: sp.Matrix
+    omega: sp.Matrix
+    V: sp.Matrix
+    g: sp.Matrix
+
+
+def _params(system: System):
+    """p: [rho, E, A, I, L, Iy, J, G] of each flexible body (plain names for one body)."""
+    beams = [b for b in system.bodies if b.flexible]
+    params, by_body = [], {}
+    generic = [(gp.name, gp.symbol) for gp in BEAM_PARAMS] + \
+              [(n, sp.Symbol(n, positive=True)) for n in SPATIAL_PARAMS]
+    for b in beams:
+        sec = b.section
+        values = {"rho": sec.rho, "E": sec.E, "A": sec.A, "I": sec.I, "L": b.length,
+                  "Iy": sec.Iy, "J": sec.J, "G": sec.G}
+        mapping = {}
+        for name, sym in generic:
+            pname = name if len(beams) == 1 else f"{b.name}_{name}"
+            psym = sym if len(beams) == 1 else sp.Symbol(pname, positive=True)
+            params.append((pname, psym, float(values[name])))
+            mapping[name] = psym
+        by_body[b.name] = mapping
+    return params, by_body
+
+
+def _fields(b: FlexibleBeam, sym: dict, symd: dict, symdd: dict, table: IntegralTable, fs: bool):
+    """(position r, velocity r', acceleration r'' in the frame, per unit s; and the strain
+    fields) as polynomials in the table's placeholders."""
+    spec = b.model
+    L = BEAM_PARAMS[4].symbol
+    mv = table.mode_value
+
+    def field(prefix_refs, sy, order=0):
+        return sum((mv(r.coordinate, order) * sy[name] for name, r in prefix_refs), sp.Integer(0))
+
+    ax = [(r.coordinate, r) for r in spec.axial]
+    bv = [(r.coordinate, r) for r in spec.bending]
+    bz = [("vz_" + r.token, r) for r in spec.bending]
+    tq = [("phi_" + r.token, r) for r in TORSION_MODES]
+    F = {}
+    for key, sy in (("", sym), ("_d", symd), ("_dd", symdd)):
+        F["u" + key] = field(ax, sy)
+        F["v" + key] = field(bv, sy)
+        F["vz" + key] = field(bz, sy)
+        F["phi" + key] = field(tq, sy)
+    F["u_stretch_s"] = field(ax, sym, 1)
+    F["v_s"], F["v_ss"] = field(bv, sym, 1), field(bv, sym, 2)
+    F["vz_s"], F["vz_ss"] = field(bz, sym, 1), field(bz, sym, 2)
+    F["phi_s"] = field(tq, sym, 1)
+    F["v_d_s"], F["vz_d_s"] = field(bv, symd, 1), field(bz, symd, 1)
+    if fs:  # u_fs = -1/(2L) sum_ij H_ij(s) (v_i v_j + vz_i vz_j)
+        for pairs in (bv, bz):
+            for ni, ri in pairs:
+                for nj, rj in pairs:
+                    h = table.fs_value(ri.coordinate, rj.coordinate)
+                    F["u"] += -h * sym[ni] * sym[nj] / (2 * L)
+                    F["u_d"] += -h * sym[ni] * symd[nj] / L
+                    F["u_dd"] += -h * (symd[ni] * symd[nj] + sym[ni] * symdd[nj]) / L
+    return F
+
+
+def _strain_density(term: str, F: dict, P: dict, omega: sp.Matrix) -> sp.Expr:
+    """A strain-energy term per unit s (P: this body's parameter symbols)."""
+    L, E, A, Iz, Iy, G, J, rho = (P[k] for k in ("L", "E", "A", "I", "Iy", "G", "J", "rho"))
+    slope2 = F["v_s"]**2 + F["vz_s"]**2
+    if term == "axial":
+        return E * A / (2 * L) * F["u_stretch_s"]**2
+    if term == "bending":
+        return (E * Iz * F["v_ss"]**2 + E * Iy * F["vz_ss"]**2) / (2 * L**3)
+    if term == "torsion":
+        return G * J / (2 * L) * F["phi_s"]**2
+    if term == "cubic":
+        return E * A / (2 * L**2) * F["u_stretch_s"] * slope2
+    if term == "prestress":
+        return rho * A * (omega[1]**2 + omega[2]**2) * L / 4 * (1 - s**2) * slope2
+    raise SpecError(f"strain term '{term}' is not derived in 3D")
+
+
+def derive_spatial(system: System) -> SystemDerivation:
+    system.validate()
+    tree = system.tree()
+    guided = _guided(system)
+    guided_by_joint = {g.joint: g for g in guided}
+    params, psyms = _params(system)
+
+    coords: list[Coordinate] = []
+    for body in tree.order:
+        j = system.joint(tree.joint_of(body))
+        if j.has_coordinate and j.name not in guided_by_joint:
+            coords.append(Coordinate(j.name, "joint", body, j.name))
+    for b in system.bodies:
+        if b.flexible:
+            coords += [Coordinate(f"{b.name}_{n}", g, b.name) for n, g, _ in beam_coordinates(b)]
+    q = sp.Matrix([sp.Symbol(c.name, real=True) for c in coords])
+    qd = sp.Matrix([sp.Symbol(c.name + "_d", real=True) for c in coords])
+    qdd = sp.Matrix([sp.Symbol(c.name + "_dd", real=True) for c in coords])
+    joint_sym = {c.joint: (x, xd) for c, x, xd in zip(coords, q, qd) if c.group == "joint"}
+    for g in guided:
+        joint_sym[g.joint] = g.symbols[:2]
+    der = SystemDerivation(system, tree, coords, guided, q, qd, qdd, params)
+    der.spatial = {}
+
+    grav = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0))
+    frames = {GROUND: Frame(sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1), _vec(grav))}
+    for body in tree.order:
+        j = system.joint(tree.joint_of(body))
+        if j.parent == GROUND:
+            fp, m_p = frames[GROUND], _vec(j.point)
+        else:
+            pbody, pm = system.marker(j.parent)
+            if system.body(pbody).flexible:
+                raise SpecError(f"system '{system.name}': joint '{j.name}': a body hung from a "
+                                "flexible beam's marker is not derived in 3D yet")
+            fp, m_p = frames[pbody], _vec((pm.x, pm.y, pm.z))
+        cm = system.marker(j.child)[1]
+        m_c = _vec((cm.x, cm.y, cm.z))
+        if j.kind == "revolute":
+            x, xd = joint_sym[j.name]
+            axis = j.axis or (0.0, 0.0, 1.0)
+            a = _vec(axis)
+            a = a / sp.sqrt(a.dot(a))
+            Q = rotation(axis, x)
+            rel = a * xd
+        else:
+            Q, rel = sp.eye(3), sp.zeros(3, 1)
+        omega = Q.T * fp.omega + rel
+        V = Q.T * (fp.V + _cross(fp.omega, m_p)) - _cross(omega, m_c)
+        A_ = fp.A * Q
+        R = fp.R + fp.A * m_p - A_ * m_c
+        frames[body] = Frame(A_, R, omega, V, Q.T * fp.g)
+    der.spatial["frames"] = frames
+
+    V_grav, Q_ = sp.Integer(0), sp.zeros(len(coords), 1)
+    gvec = _vec(grav)
+    for b in system.bodies:
+        fr = frames[b.name]
+        if not b.flexible:
+            c = _vec(b.com)
+            m = sp.nsimplify(b.mass)
+            vG = fr.V + _cross(fr.omega, c)
+            I3 = [sp.nsimplify(v) for v in b.inertia]
+            der.T += m * vG.dot(vG) / 2 + sum(I3[k] * fr.omega[k]**2 for k in range(3)) / 2
+            V_grav += -m * (gvec.dot(fr.R) + fr.g.dot(c))
+            continue
+        P = psyms[b.name]
+        spec = b.model.validate()
+        names = beam_coordinates(b)
+        modes = {r.coordinate: mode(r) for _, _, r in names}
+        table = IntegralTable(modes)
+        strain = STRAIN_MODELS[spec.strain]
+        sym = {n: sp.Symbol(f"{b.name}_{n}", real=True) for n, _, _ in names}
+        symd = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n, _, _ in names}
+        symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n, _, _ in names}
+        F = _fields(b, sym, symd, symdd, table, strain.foreshortening)
+        L, rho, A = P["L"], P["rho"], P["A"]
+        r = sp.Matrix([L * s + F["u"], F["v"], F["vz"]])
+        rd = sp.Matrix([F["u_d"], F["v_d"], F["vz_d"]])
+        vel = fr.V + rd + _cross(fr.omega, r)
+        spin = F["phi_d"] + fr.omega[0] + (fr.omega[1] * F["v_s"] + fr.omega[2] * F["vz_s"]) / L
+
+        def integral(density, a=0, b_=1, table=table, P=P):
+            generic = {gp.symbol: P[gp.name] for gp in BEAM_PARAMS}
+            return table.integrate(sp.expand(density), a, b_).xreplace(table.substitutions()).xreplace(generic)
+
+        der.T += integral(rho * A * L / 2 * vel.dot(vel) + rho * (P["Iy"] + P["I"]) * L / 2 * spin**2)
+        V_grav += -rho * A * L * gvec.dot(fr.R) - integral(rho * A * L * fr.g.dot(r))
+        for term_name, wrt in strain.terms + (("torsion", ("torsion",)),):
+            Vt = integral(_strain_density(term_name, F, P, fr.omega))
+            Qk = generalized_force(Vt, q, [c.body == b.name and c.group in wrt for c in coords])
+            der.terms.append((b.name, term_name, wrt, Vt, Qk))
+            der.V += Vt
+            Q_ += Qk
+        der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
+                                   integral=integral)
+    der.V += V_grav
+    der.V_grav = V_grav
+    Q_ += sp.Matrix([-sp.diff(V_grav, x) for x in q])
+    Q_ += _applied(der)
+    der.Q = Q_.applyfunc(sp.expand)
+    der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
+    der.constraints = []
+    der.lam = sp.Matrix([])
+    der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
+    return der
+
+
+def _marker_point(der, ref: str) -> sp.Matrix:
+    """Ground position of 'body.marker' (on a beam: the deformed axis point)."""
+    body, m = der.system.marker(ref)
+    fr = der.spatial["frames"][body]
+    if not der.system.body(body).flexible:
+        return fr.R + fr.A * _vec((m.x, m.y, m.z))
+    return fr.R + fr.A * _at(der, body, m.x, "r")
+
+
+def _at(der, body: str, x: float, what: str):
+    """A field of a beam at station x (the table's values substituted)."""
+    d = der.spatial[body]
+    beam = der.system.body(body)
+    at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    view = _View(d["table"], d["modes"])
+    generic = {gp.symbol: d["P"][gp.name] for gp in BEAM_PARAMS}
+
+    def fa(e):  # field_at leaves s (in L s) alone: the station is s = at
+        e = field_at(view, e, at).xreplace({s: at})
+        return e.xreplace(d["table"].substitutions()).xreplace(generic)
+    if what == "r":
+        return sp.Matrix([fa(e) for e in d["r"]])
+    return fa(d["F"][what])
+
+
+@dataclass
+class _View:
+    table: IntegralTable
+    modes: dict
+
+
+def _applied(der) -> sp.Matrix:
+    """Generalised forces of point forces and motors (virtual power: F . dr/dq)."""
+    system = der.system
+    Q = sp.zeros(len(der.q), 1)
+    for load in system.loads:
+        if isinstance(load, PointForce):
+            F = _vec((load.fx, load.fy, load.fz))
+            if load.frame == "body":
+                F = der.spatial["frames"][system.marker(load.marker)[0]].A * F
+            p = _marker_point(der, load.marker)
+            Q += sp.Matrix([F.dot(sp.diff(p, x)) for x in der.q])
+    names = {"t": t}
+    for c, x, xd in zip(der.coords, der.q, der.qd):
+        if c.group == "joint":
+            names[c.joint], names[f"{c.joint}_rate"] = x, xd
+    for d in system.drivers:
+        if d.kind == "motor":
+            tau = parse_expression(d.expression, tuple(names.items()),
+                                   f"system '{system.name}': driver '{d.name}'")
+            k = next(i for i, c in enumerate(der.coords) if c.joint == d.joint)
+            Q[k] += tau
+    return Q
+
+
+def _output(der, quantity: str) -> sp.Expr:
+    system = der.system
+    fn, args = parse_output(system, quantity)
+    where = f"system '{system.name}': output '{quantity}'"
+    if fn in ("angle", "rate"):
+        for c, x, xd in zip(der.coords, der.q, der.qd):
+            if c.joint == args[0]:
+                return x if fn == "angle" else xd
+        g = next(g for g in der.guided if g.joint == args[0])
+        return g.symbols[0] if fn == "angle" else g.symbols[1]
+    if fn in ("x", "y", "z"):
+        return _marker_point(der, args[0])["xyz".index(fn)]
+    if fn == "T":
+        return der.T
+    if fn == "V":
+        return der.V
+    if fn == "violation":
+        return sp.Integer(0)
+    beam = system.body(args[0])
+    x = beam_station(system, beam, args[1], where)
+    if fn in ("u", "v", "vz"):
+        return _at(der, beam.name, x, fn)
+    if fn == "w":  # distance from the chord root-tip
+        p0, p1, px = (_at(der, beam.name, xx, "r") for xx in (0.0, beam.length, x))
+        d = p1 - p0
+        c = _cross(d, px - p0)
+        return sp.sqrt(c.dot(c) / d.dot(d))
+    return _section(der, beam, x, fn)
+
+
+def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
+    """N, Mx, My, Mz at station x (beam frame components), constitutive or from equilibrium."""
+    d = der.spatial[beam.name]
+    P, F = d["P"], d["F"]
+    source = beam.model.axial_force if fn == "N" else beam.model.moment
+    if source != "equilibrium":
+        L = P["L"]
+        if fn == "N":
+            if beam.model.strain == "prestress":
+                at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+                om = der.spatial["frames"][beam.name].omega
+                return P["rho"] * P["A"] * (om[1]**2 + om[2]**2) * L**2 * (1 - at**2) / 2
+            if not beam.model.axial:
+                raise SpecError(f"system '{der.system.name}': body '{beam.name}': strain model "
+                                f"'{beam.model.strain}' has no axial coordinate to carry N")
+            return P["E"] * P["A"] / L * _at(der, beam.name, x, "u_stretch_s")
+        return {"Mx": P["G"] * P["J"] / L * _at(der, beam.name, x, "phi_s"),
+                "My": -P["E"] * P["Iy"] / L**2 * _at(der, beam.name, x, "vz_ss"),
+                "Mz": P["E"] * P["I"] / L**2 * _at(der, beam.name, x, "v_ss")}[fn]
+    # equilibrium of the part beyond x: S = int (g - a) rho A dx + loads on its markers,
+    # M = int (r - r_x) x rho A (g - a) dx - d/dt int rho (I_y + I_z) spin dx e_x + load moments
+    fr = der.spatial["frames"][beam.name]
+    at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    vel = d["vel"]
+    acc = der.ddt(vel) + _cross(fr.omega, vel)  # d/dt in the rotating components
+    L, rho, A = P["L"], P["rho"], P["A"]
+    load = rho * A * L * (fr.g - acc)
+    if fn == "N":
+        out = d["integral"](load[0], at, 1)
+    else:
+        rx = sp.Matrix([field_at(_View(d["table"], d["modes"]), e, at).xreplace({s: at})
+                        for e in d["r"]])
+        mom = _cross(d["r"] - rx, load)
+        k = "xyz".index(fn[1])
+        out = d["integral"](mom[k], at, 1)
+        if fn == "Mx":
+            out -= der.ddt(d["integral"](rho * (P["Iy"] + P["I"]) * L * d["spin"], at, 1))
+    section = _at(der, beam.name, x, "r")
+    for ld in der.system.loads:
+        if isinstance(ld, PointForce):
+            body, m = der.system.marker(ld.marker)
+            if body != beam.name or not (m.x > x or (x >= beam.length and m.x >= beam.length)):
+                continue
+            Fv = _vec((ld.fx, ld.fy, ld.fz))
+            Floc = Fv if ld.frame == "body" else fr.A.T * Fv
+            if fn == "N":
+                out += Floc[0]
+            else:
+                out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)["xyz".index(fn[1])]
+    return out
