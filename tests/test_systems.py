@@ -186,7 +186,7 @@ def test_system_kernels_c_casadi_sympy(hub_built):
         cas = np.array(kernels[name](*args)).reshape(-1)  # a dense matrix, read row by row
         out = np.zeros(ref.size)
         arrays = [np.ascontiguousarray(a, dtype=float) for a in args]
-        fn = getattr(lib, f"fsm_{name}")
+        fn = getattr(lib, f"fsm_{system.name}_{name}")  # named after the system
         fn.restype = None
         fn(*[a.ctypes.data_as(ptr) for a in arrays], out.ctypes.data_as(ptr))
         scale = np.abs(ref).max()
