@@ -1,14 +1,22 @@
 # Included by every generated variant's CMakeLists.txt (see templates/CMakeLists.txt.j2).
-# flexsym_add_model(NAME [SYSTEM] sources...) builds, from the generated sources plus this runtime:
-#   flexsym_NAME      the command-line driver (src/driver.c)
-#   libflexsym_NAME   a shared library exposing the kernels, fsr_simulate and fsr_batch (tests, Python)
-# SYSTEM: the sources define fsm_system_model() (system.h); without it, a one-beam model is
-# wrapped into that struct by src/model_adapter.c.
+# flexsym_add_model(NAME ACCESSOR sources...) builds, from a model's sources plus this runtime:
+#   flexsym_NAME      the command-line driver (src/driver.c) of that model
+#   libflexsym_NAME   a shared library exposing ACCESSOR, the kernels, fsr_simulate and fsr_batch
+#                     (tests, Python)
+# The sources (a generated folder's, or hand-written ones) define `const fsm_system* ACCESSOR(void)`
+# (system.h; a generated folder's is fsm_NAME_model) and name every other global symbol after the
+# model, so several models link into one program: flexsym_add_model_objects(NAME sources...)
+# gives a model's objects alone (flexsym_NAME_objects), to link with flexsym_runtime and others.
 set(FLEXSYM_RUNTIME_DIR "${CMAKE_CURRENT_LIST_DIR}")
-# The run loop (simulate.c), one file per integrator (integrator.h) and what they share.
+# The run loop (simulate.c), one file per integrator of the registry (include/flexsym/
+# integrators.h: src/<name>.c for each line) and what they share.
+file(STRINGS "${FLEXSYM_RUNTIME_DIR}/include/flexsym/integrators.h" _flexsym_registry REGEX "^FSR_INTEGRATOR\\(")
 set(FLEXSYM_RUNTIME_SOURCES)
-foreach(f simulate.c batch.c rk4.c dopri5.c erk.c genalpha.c newmark.c radau5.c newton.c ode.c
-          ali3p.c genalpha3.c rk4p.c constrained.c common.c linalg.c)
+foreach(line ${_flexsym_registry})
+  string(REGEX REPLACE "^FSR_INTEGRATOR\\(([a-z0-9_]+),.*" "\\1" integrator "${line}")
+  list(APPEND FLEXSYM_RUNTIME_SOURCES "${FLEXSYM_RUNTIME_DIR}/src/${integrator}.c")
+endforeach()
+foreach(f simulate.c batch.c erk.c newton.c ode.c constrained.c common.c linalg.c)
   list(APPEND FLEXSYM_RUNTIME_SOURCES "${FLEXSYM_RUNTIME_DIR}/src/${f}")
 endforeach()
 
@@ -23,35 +31,45 @@ endif()
 set(FLEXSYM_WARNINGS -Wall -Wextra -Werror -pedantic)
 set(FLEXSYM_CODEGEN $<$<C_COMPILER_ID:GNU,Clang,AppleClang>:-fno-tree-vectorize>)
 
-# A model's sources: the given ones plus model_adapter.c (a one-beam model seen as an
-# fsm_system), or, when the first is SYSTEM, the rest alone (they define fsm_system_model()).
-function(_flexsym_model_sources out)
-  set(sources ${ARGN})
-  if(sources AND "${ARGV1}" STREQUAL "SYSTEM")
-    list(REMOVE_AT sources 0)
-  else()
-    list(APPEND sources "${FLEXSYM_RUNTIME_DIR}/src/model_adapter.c")
-  endif()
-  set(${out} ${sources} PARENT_SCOPE)
+function(_flexsym_objects target)
+  set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON C_STANDARD 99
+                        C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
+  target_include_directories(${target} PUBLIC "${FLEXSYM_RUNTIME_DIR}/include")
+  target_compile_options(${target} PUBLIC ${FLEXSYM_WARNINGS})
+  target_compile_options(${target} PRIVATE ${FLEXSYM_CODEGEN})
 endfunction()
 
-function(flexsym_add_model name)
-  set(objs flexsym_${name}_objects)
-  _flexsym_model_sources(sources ${ARGN})
-  add_library(${objs} OBJECT ${sources} ${FLEXSYM_RUNTIME_SOURCES})
-  set_target_properties(${objs} PROPERTIES POSITION_INDEPENDENT_CODE ON C_STANDARD 99
-                        C_STANDARD_REQUIRED ON C_EXTENSIONS OFF)
-  target_include_directories(${objs} PUBLIC "${FLEXSYM_RUNTIME_DIR}/include"
-                             "${CMAKE_CURRENT_SOURCE_DIR}")
-  target_compile_options(${objs} PUBLIC ${FLEXSYM_WARNINGS})
-  target_compile_options(${objs} PRIVATE ${FLEXSYM_CODEGEN})
+# The runtime, compiled once per project and linked with every model of it.
+if(NOT TARGET flexsym_runtime)
+  add_library(flexsym_runtime OBJECT ${FLEXSYM_RUNTIME_SOURCES})
+  _flexsym_objects(flexsym_runtime)
+  set_target_properties(flexsym_runtime PROPERTIES EXCLUDE_FROM_ALL ON)  # built when linked (not by an FMU)
+endif()
 
+# flexsym_NAME_objects: the model's sources, each with its own folder on the include path (a
+# generated folder's header)
+function(flexsym_add_model_objects name)
+  set(objs flexsym_${name}_objects)
+  add_library(${objs} OBJECT ${ARGN})
+  _flexsym_objects(${objs})
+  foreach(src ${ARGN})
+    get_filename_component(dir "${src}" ABSOLUTE)
+    get_filename_component(dir "${dir}" DIRECTORY)
+    target_include_directories(${objs} PRIVATE "${dir}")
+  endforeach()
+endfunction()
+
+function(flexsym_add_model name accessor)
+  flexsym_add_model_objects(${name} ${ARGN})
+  set(objs flexsym_${name}_objects)
   add_executable(flexsym_${name} "${FLEXSYM_RUNTIME_DIR}/src/driver.c")
   set_target_properties(flexsym_${name} PROPERTIES C_STANDARD 99 C_STANDARD_REQUIRED ON
                         C_EXTENSIONS OFF)
-  target_link_libraries(flexsym_${name} PRIVATE ${objs} m)
+  # the one place a driver learns its model
+  target_compile_definitions(flexsym_${name} PRIVATE FSM_MODEL=${accessor})
+  target_link_libraries(flexsym_${name} PRIVATE ${objs} flexsym_runtime m)
 
-  add_library(flexsym_${name}_shared SHARED $<TARGET_OBJECTS:${objs}>)
+  add_library(flexsym_${name}_shared SHARED $<TARGET_OBJECTS:${objs}> $<TARGET_OBJECTS:flexsym_runtime>)
   set_target_properties(flexsym_${name}_shared PROPERTIES OUTPUT_NAME flexsym_${name})
   target_link_libraries(flexsym_${name}_shared PRIVATE m)
 endfunction()
@@ -59,11 +77,10 @@ endfunction()
 # flexsym_add_fmu(ID CONFIG_DIR sources...) builds ID.so, the binary of an FMI 3.0 Co-Simulation
 # FMU (runtime_c/fmi3, flexsym/sim/fmu.py): the model's sources, this runtime and the fmi3 wrapper,
 # compiled with the flags of flexsym_add_model (so its rows equal the driver's bit for bit);
-# only the fmi3* functions are exported.
-# SYSTEM after CONFIG_DIR: as for flexsym_add_model (the sources define fsm_system_model()).
+# only the fmi3* functions are exported. The model's accessor is FSU_MODEL of CONFIG_DIR's
+# flexsym_fmu_config.h.
 function(flexsym_add_fmu id config_dir)
-  _flexsym_model_sources(sources ${ARGN})
-  add_library(${id} MODULE ${sources} ${FLEXSYM_RUNTIME_SOURCES} "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
+  add_library(${id} MODULE ${ARGN} ${FLEXSYM_RUNTIME_SOURCES} "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
   set_target_properties(${id} PROPERTIES PREFIX "" C_STANDARD 99 C_STANDARD_REQUIRED ON
                         C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden)
   target_include_directories(${id} PRIVATE "${FLEXSYM_RUNTIME_DIR}/include" "${FLEXSYM_RUNTIME_DIR}/fmi3"

@@ -102,7 +102,7 @@ def system_kernels_agree():
             cas = np.array(kernels[name](*args)).reshape(-1)  # a dense matrix, row by row
             out = np.zeros(ref.size)
             arrays = [np.ascontiguousarray(a, dtype=float) for a in args]
-            fn = getattr(lib, f"fsm_{name}")
+            fn = getattr(lib, f"fsm_{der.system.name}_{name}")  # named after the system
             fn.restype = None
             fn(*[a.ctypes.data_as(ptr) for a in arrays], out.ctypes.data_as(ptr))
             scale = np.abs(ref).max()

@@ -29,7 +29,7 @@ def test_inspect_latex_and_ops(capsys):
     code, out, _ = run_cli(capsys, "inspect", "m2", "--latex", "--section", "mass,integrals,ops")
     assert code == 0
     assert r"\int_{0}^{1}" in out and r"\rho" in out
-    assert "fsm_force" in out and "fsm_residual_jac" in out
+    assert "fsm_geometric_sine_force" in out and "fsm_geometric_sine_residual_jac" in out  # m2
 
 
 def test_custom_mode_set_runs_in_its_own_folder(capsys, isolated_cache, tmp_path):

@@ -1,7 +1,7 @@
 """Constrained integrators ali3p, genalpha3 and rk4p (runtime_c/src/ali3p.c, genalpha3.c, rk4p.c) on
 hand-written planar models in relative coordinates with cut joints (tests/c_models: a rigid
 slider-crank, a four-bar under gravity, a parallelogram with a redundant bar), built with the
-runtime's driver as models that provide fsm_system_model() themselves, and on a generated
+runtime's driver as models that define their accessor fsm_<fixture>_model() themselves, and on a generated
 one-beam model without constraints (nc = 0)."""
 from __future__ import annotations
 

@@ -80,7 +80,7 @@ def test_describe_shows_tree_coordinates_terms_and_ops():
     text = describe(pendulum_system(builtin("m1")))
     assert "tree beam <- pin" in text and "pin (joint)" in text and "beam_u_static (axial)" in text
     assert "body beam: cubic acts on bending" in text  # #1: the cubic term on bending only
-    assert "kernel fsm_force:" in text and "constraint" not in text
+    assert "kernel fsm_pendulum_force:" in text and "constraint" not in text
 
 
 def test_system_generation_is_deterministic_across_hash_seeds():

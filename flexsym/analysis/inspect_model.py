@@ -8,7 +8,7 @@ import sympy as sp
 
 from flexsym.emit.cemit import emit
 from flexsym.codegen.derive import build_kernels, derive
-from flexsym.codegen.generate import C_PREFIX, fingerprint
+from flexsym.codegen.generate import c_prefix, fingerprint
 from flexsym.physics.modal import Derivation
 from flexsym.model.variant import QUAD_POINTS, VariantSpec
 from flexsym.model.strain_models import STRAIN_MODELS
@@ -194,13 +194,13 @@ class Report:
     def _ops(self) -> None:
         self.title("Generated kernels: operation counts after CSE (add/mul/div/fun/other)")
         for k in build_kernels(self.der):
-            e = emit(k, C_PREFIX)
+            e = emit(k, c_prefix(self.spec.name))
             o = e.ops
             self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")
 
     # ----- the finite-element reference ------------------------------------------------
     def _render_fe(self, sections) -> str:
-        from flexsym.physics.fe import build_element_kernels, c_prefix, hermite, le
+        from flexsym.physics.fe import build_element_kernels, hermite, le
 
         d, s = self.der, self.spec
         self.add(f"variant {s.name}: {s.description}")
@@ -230,7 +230,7 @@ class Report:
         if "ops" in sections:
             self.title("Generated element kernels: operation counts after CSE (add/mul/div/fun/other)")
             for k in build_element_kernels(d):
-                e = emit(k, c_prefix(k.name))
+                e = emit(k, c_prefix(s.name))
                 o = e.ops
                 self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")
         return "\n".join(self.lines) + "\n"
@@ -239,10 +239,10 @@ class Report:
 def op_counts(spec) -> dict[str, int]:
     """Operations per generated kernel of a variant (after CSE)."""
     if spec.kind == "fe":
-        from flexsym.physics.fe import build_element_kernels, c_prefix, derive_element
+        from flexsym.physics.fe import build_element_kernels, derive_element
 
-        return {k.name: emit(k, c_prefix(k.name)).total_ops for k in build_element_kernels(derive_element(spec))}
-    return {k.name: emit(k, C_PREFIX).total_ops for k in build_kernels(derive(spec))}
+        return {k.name: emit(k, c_prefix(spec.name)).total_ops for k in build_element_kernels(derive_element(spec))}
+    return {k.name: emit(k, c_prefix(spec.name)).total_ops for k in build_kernels(derive(spec))}
 
 
 def savings(spec, full) -> str:

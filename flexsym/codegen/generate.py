@@ -20,7 +20,7 @@ import mpmath
 from flexsym.emit.cemit import EmittedKernel, c_double, emit
 from flexsym.codegen.derive import build_kernels, derive
 from flexsym.model.parameters import BEAM_PARAMS
-from flexsym.physics.fe import build_element_kernels, c_prefix, derive_element, output_plan
+from flexsym.physics.fe import build_element_kernels, derive_element, output_plan
 from flexsym.model.maneuver import maneuver_of
 from flexsym.model.output_names import info as output_info
 from flexsym.core.paths import templates_dir
@@ -28,7 +28,19 @@ from flexsym.model.variant import CLAMP_OUTPUTS, QUAD_POINTS, VariantSpec
 from flexsym.core.versions import generator_hash, tool_versions
 
 MANIFEST = "manifest.json"
-C_PREFIX = "fsm_"
+
+
+def c_prefix(name: str) -> str:
+    """The prefix of a model's C symbols, fsm_<name>_: kernels fsm_<name>_<kernel>, so that
+    several models link into one program or library (model names are C identifiers)."""
+    return f"fsm_{name}_"
+
+
+def model_accessor(name: str) -> str:
+    """The one function a generated folder exports for the runtime: fsm_<name>_model(), its
+    model as the struct of runtime_c/include/flexsym/system.h. The generated CMakeLists.txt
+    gives it to the driver, the manifest ("model") to the in-process library and the FMU."""
+    return c_prefix(name) + "model"
 
 
 def _versions(spec) -> dict[str, str]:
@@ -81,13 +93,14 @@ def _common_context(spec, fp: str, maneuver, emitted: list[EmittedKernel]) -> di
         "versions": versions,
         "fingerprint": fp,
         "header": f"fsm_{spec.name}.h",
+        "prefix": c_prefix(spec.name),
+        "accessor": model_accessor(spec.name),
         "params": [{"name": p.name, "unit": p.unit, "description": p.description,
                     "c_default": c_double(defaults[p.name])} for p in BEAM_PARAMS],
         "maneuver": {"name": maneuver.name},
         "maneuver_params": [{"name": p.name, "unit": p.unit, "description": p.description,
                              "c_default": c_double(p.default)} for p in maneuver.params],
         "length_param": [p.name for p in BEAM_PARAMS].index("L"),
-        "v_tip_output": list(spec.outputs).index("v_tip") if "v_tip" in spec.outputs else -1,
         "kernels": emitted,
         "element_kernels": [],
         "bandwidth": -1,
@@ -96,7 +109,7 @@ def _common_context(spec, fp: str, maneuver, emitted: list[EmittedKernel]) -> di
 
 def _modal(spec: VariantSpec, fp: str) -> tuple[dict, dict, str]:
     der = derive(spec)
-    emitted = [emit(k, C_PREFIX) for k in build_kernels(der)]
+    emitted = [emit(k, c_prefix(spec.name)) for k in build_kernels(der)]
     ctx = _common_context(spec, fp, der.maneuver, emitted) | {
         "summary": f"Strain model: {spec.strain}; axial modes: "
                    f"{', '.join(m.token for m in spec.axial) or 'none'}; bending modes: "
@@ -148,7 +161,7 @@ def _fe_body(body) -> dict | None:
 
 def _finite_elements(spec, fp: str) -> tuple[dict, dict, str]:
     der = derive_element(spec)
-    emitted = [emit(k, c_prefix(k.name)) for k in build_element_kernels(der)]
+    emitted = [emit(k, c_prefix(spec.name)) for k in build_element_kernels(der)]
     needs_clamp = any(o in CLAMP_OUTPUTS for o in spec.outputs)
     outputs = [{"name": o, "unit": "N" if o.startswith("N") else "N m",
                 "description": f"{'axial force' if o.startswith('N') else 'bending moment'} at the "
@@ -199,6 +212,7 @@ def generate_files(spec) -> dict[str, str]:
         "generator": ctx["generator"],
         "versions": ctx["versions"],
         "fingerprint": fp,
+        "model": ctx["accessor"],
         "spec": spec.to_dict(),
         "description": spec.description,
         "outputs": list(spec.outputs),

@@ -35,7 +35,7 @@ from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
 from flexsym.physics.energy import A, E, I, L, rho
 from flexsym.physics.fe import le
-from flexsym.codegen.generate import MANIFEST, _environment, write_folder
+from flexsym.codegen.generate import MANIFEST, _environment, c_prefix, model_accessor, write_folder
 from flexsym.physics.lagrange import equations_of_motion_sx
 from flexsym.emit.kernels import SympyToCasadi, group_by_parameters, make_kernels, matrix_sx
 from flexsym.model.maneuver import t as t_sym
@@ -43,7 +43,6 @@ from flexsym.core.paths import cache_dir, file_lock, module_file, templates_dir
 from flexsym.model.system import System, length_scale, system_to_dict
 from flexsym.core.versions import generator_hash, tool_versions
 
-C_PREFIX = "fsm_"
 _OWN = ("physics.assemble", "physics.spatial", "physics.efbody", "model.system", "codegen.sysgen")
 
 
@@ -304,7 +303,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     start = time.perf_counter()
     fp = fingerprint(system)
     kernels = build_system_kernels(der)
-    emitted = [emit(k, C_PREFIX) for k in kernels]
+    emitted = [emit(k, c_prefix(system.name)) for k in kernels]
     log(f"kernels emitted ({sum(k.total_ops for k in emitted)} operations) in {time.perf_counter() - start:.1f} s")
     versions = tool_versions()
     mass = next(k.function for k in kernels if k.name == "mass")
@@ -315,6 +314,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
                if c.group == "joint" else ("0.0", "0.0") for c in der.coords]
     ctx = {
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
+        "prefix": c_prefix(system.name), "accessor": model_accessor(system.name),
         "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
         "summary": f"{len(system.bodies)} bodies, {len(der.q)} coordinates, "
                    f"{len(der.guided)} guided joints, {len(der.constraints)} constraint equations.",
@@ -343,6 +343,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     }
     manifest = {
         "kind": "system", "generator": ctx["generator"], "versions": versions, "fingerprint": fp,
+        "model": ctx["accessor"],
         "spec": {"name": system.name} | system_to_dict(system),
         "tree": {"order": list(der.tree.order), "tree_joints": dict(der.tree.parent_joint),
                  "cut_joints": list(der.tree.cut)},

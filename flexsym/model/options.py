@@ -20,9 +20,13 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from flexsym.core.errors import SpecError
+from flexsym.model.integrators import names
 
-INTEGRATORS = ("rk4", "dopri5", "genalpha", "newmark", "radau5", "ali3p", "genalpha3", "rk4p")
-IMPLICIT = ("genalpha", "newmark", "radau5", "ali3p", "genalpha3")
+# the runtime's integrator registry (integrators.py): all of them, those that solve with Newton,
+# those that adapt their step to a tolerance
+INTEGRATORS = names()
+IMPLICIT = names("implicit")
+ADAPTIVE = names("adaptive")
 
 # Limits of one run: beyond them a run is refused up front (and by the runtime as a last line).
 LIMITS = {
@@ -112,10 +116,10 @@ OPTIONS: tuple[Option, ...] = (
        integrators=("radau5",)),
     _o("tol", float, None, "dopri5 error tolerance (rtol; atol = tol * L), default 1e-6; 0: fixed "
        "steps --dt", "--tol", "solver.tol", "--tol", low=0.0, high=1.0, high_open=True,
-       integrators=("dopri5",)),
+       integrators=ADAPTIVE),
     _o("max_steps", int, None, "dopri5: accepted + rejected steps before giving up (default 1e6)",
        "--max-steps", "solver.max_steps", "--max-steps", low=1, high=LIMITS["max_steps"],
-       integrators=("dopri5",)),
+       integrators=ADAPTIVE),
     _o("newton", str, None, "implicit integrators: modified (default, reuses the iteration matrix) "
        "or full (rebuilt every iteration, a reference)", "--newton", "solver.newton", "--newton",
        choices=("modified", "full"), integrators=IMPLICIT),

@@ -35,11 +35,6 @@ xi = sp.Symbol("xi", real=True)
 le = sp.Symbol("l", positive=True)  # element length, p[L] / elements at run time
 
 
-def c_prefix(kernel_name: str) -> str:
-    """Element kernels are fse_*; the manoeuvre kernel implements the model interface (fsm_)."""
-    return "fsm_" if kernel_name == "maneuver" else "fse_"
-
-
 def hermite(l):
     return [1 - 3 * xi**2 + 2 * xi**3, l * (xi - 2 * xi**2 + xi**3), 3 * xi**2 - 2 * xi**3,
             l * (-xi**2 + xi**3)]

@@ -22,12 +22,13 @@ from flexsym.toolchain.build import _run, find_cmake, find_compiler
 from flexsym.core.errors import SpecError
 from flexsym.codegen.generate import read_manifest
 from flexsym.core.paths import runtime_dir
+from flexsym.model.integrators import BY_NAME as INTEGRATORS, names
 
 PLATFORM = "x86_64-linux"
 INPUT_MODES = ("none", "drive")
-METHODS = {"rk4": "FSR_RK4", "genalpha": "FSR_GENALPHA", "newmark": "FSR_NEWMARK",
-           "dopri5": "FSR_DOPRI5", "radau5": "FSR_RADAU5"}
-CONSTRAINED = {"ali3p": "FSR_ALI3P", "genalpha3": "FSR_GENALPHA3", "rk4p": "FSR_RK4P"}  # systems only
+# every integrator of the runtime's registry; the constrained ones for systems only
+METHODS = names(without="constrained")
+CONSTRAINED = names("constrained")
 DRIVE_INPUTS = (("theta_dot", "rad/s", "guided angular rate; held with its slope theta_ddot over a "
                  "communication step"),
                 ("theta_ddot", "rad/s2", "guided angular acceleration, held over a communication step"))
@@ -72,22 +73,22 @@ def check_request(opts: FmuOptions, out: Path | None, spec) -> None:
     if spec is None and opts.input != "none":
         raise SpecError(f"--input {opts.input}: a system scene's FMU has no inputs yet (its drivers "
                         "run as the scene says)")
-    offered = METHODS | (CONSTRAINED if spec is None else {})
+    offered = METHODS + (CONSTRAINED if spec is None else ())
     if opts.integrator not in offered:
         raise SpecError(f"--integrator {opts.integrator}: an FMU offers {', '.join(offered)}"
-                        + ("" if spec is None else " (ali3p, genalpha3, rk4p: system scenes only)"))
-    if opts.integrator == "dopri5" and opts.tol != 0:
-        raise SpecError("--integrator dopri5 adapts its steps; the FMU takes fixed steps of dt: "
-                        "use --tol 0 (dopri5 at fixed steps) or another integrator")
+                        + ("" if spec is None else f" ({', '.join(CONSTRAINED)}: system scenes only)"))
+    if INTEGRATORS[opts.integrator].has("adaptive") and opts.tol != 0:
+        raise SpecError(f"--integrator {opts.integrator} adapts its steps; the FMU takes fixed steps of dt: "
+                        f"use --tol 0 ({opts.integrator} at fixed steps) or another integrator")
     if opts.step is not None and opts.step != opts.dt:
         raise SpecError(f"--step {opts.step:g}: the FMU's steps end on its communication points, so "
                         "radau5 steps at dt (drop --step or set --dt to the step)")
     if opts.input == "drive" and not maneuver_of(spec.maneuver).accelerates:
         raise SpecError(f"--input drive: '{spec.name}' is generated without theta'' terms (its manoeuvre "
                         f"'{spec.maneuver}' has theta'' = 0); export a variant whose manoeuvre accelerates")
-    if opts.input == "drive" and opts.integrator in ("rk4", "dopri5"):
-        raise SpecError(f"--input drive needs an implicit integrator (genalpha, newmark, radau5): the "
-                        f"stability limit of {opts.integrator} depends on the drive to come")
+    if opts.input == "drive" and not INTEGRATORS[opts.integrator].has("drive_input"):
+        raise SpecError(f"--input drive needs an implicit integrator ({', '.join(names('drive_input'))}): "
+                        f"the stability limit of {opts.integrator} depends on the drive to come")
 
 
 def _check_out(out: Path) -> None:
@@ -151,7 +152,8 @@ def config_header(manifest: dict, opts: FmuOptions) -> str:
     lines = ["/* written by flexsym export-fmu (flexsym/sim/fmu.py); read by runtime_c/fmi3 */",
              f'#define FSU_TOKEN "{token(manifest, opts)}"',
              f"#define FSU_DRIVE_INPUT {int(opts.input == 'drive')}",
-             f"#define FSU_METHOD {(METHODS | CONSTRAINED)[opts.integrator]}",
+             f"#define FSU_METHOD {INTEGRATORS[opts.integrator].constant}",
+             f"#define FSU_MODEL {manifest['model']}",
              f"#define FSU_DT {_num(opts.dt)}",
              f"#define FSU_STEP {_num(opts.step or 0.0)}",
              f"#define FSU_TOL {_num(opts.tol or 0.0)}",

@@ -26,12 +26,13 @@ from flexsym.toolchain.build import Built
 from flexsym.core.errors import SpecError
 from flexsym.model.limits import is_real
 from flexsym.codegen.generate import read_manifest
-from flexsym.model.options import API, BY_NAME, INTEGRATORS, RunOptions, validate
+from flexsym.model.integrators import REGISTRY
+from flexsym.model.options import API, BY_NAME, RunOptions, validate
 from flexsym.toolchain.run import RunResult
 from flexsym.physics.validity import VALIDITY_LIMIT, deflection_weights
 
-# fsr_method codes (runtime.h) and the driver's status words
-METHOD_CODES = {"rk4": 0, "genalpha": 1, "newmark": 2, "dopri5": 3, "radau5": 4, "ali3p": 5, "genalpha3": 6, "rk4p": 7}
+# fsr_method codes (the runtime's integrator registry) and the driver's status words
+METHOD_CODES = {i.name: i.code for i in REGISTRY}
 STATUS_WORDS = {0: "ok", 1: "diverged"}  # any other fsr_status: "failed"
 SUMMARY_FIELDS = ("min", "max", "t_min", "t_max", "t_peak", "final")  # FSR_SUM_*, then `at`
 STAT_FIELDS = ("t_stop", "steps", "rejected_steps", "newton_iterations", "jacobian_evaluations",
@@ -44,7 +45,6 @@ PER_RUN_OPTIONS = ("t_end", "dt", "step", "out_every")  # options batch() also t
 RUN_OPTIONS = tuple(n for n in BY_NAME if n not in ("repeat", "energy", "ws", "ts")) + ("out_every",)
 # option -> fsr_batch input (batch.c), for those whose names differ
 INPUT_NAMES = {"newmark_gamma": "nm_gamma", "newmark_beta": "nm_beta"}
-assert set(METHOD_CODES) == set(INTEGRATORS)
 
 _dptr = ctypes.POINTER(ctypes.c_double)
 
@@ -136,9 +136,14 @@ class InProcessModel:
                  else self.manifest["maneuver"]["params"])
         self.maneuver_params = {p["name"]: p["default"] for p in drive}
         self.lib = ctypes.CDLL(str(built.library))
+        # the model as the struct of system.h, from the accessor the manifest names; every
+        # runtime call takes it
+        accessor = getattr(self.lib, self.manifest["model"])
+        accessor.restype, accessor.argtypes = ctypes.c_void_p, []
+        self.model = ctypes.c_void_p(accessor())
         fn = self.lib.fsr_batch
         fn.restype = ctypes.c_int
-        fn.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_char_p), ctypes.c_int, _dptr, ctypes.c_int,
+        fn.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.POINTER(ctypes.c_char_p), ctypes.c_int, _dptr, ctypes.c_int,
                        _dptr, _dptr, ctypes.c_double, _dptr, _dptr, ctypes.POINTER(ctypes.c_int),
                        ctypes.c_char_p, ctypes.POINTER(_dptr)]
         self.lib.fsr_batch_free.restype = None
@@ -189,7 +194,7 @@ class InProcessModel:
         c_names = (ctypes.c_char_p * len(all_names))(*[s.encode() for s in all_names])
         weights = None if self._weights is None else np.ascontiguousarray(self._weights, dtype=float)
         row_ptrs = (_dptr * n)() if rows else None
-        ret = self.lib.fsr_batch(len(all_names), c_names, n, _ptr(inputs), len(at), _ptr(at),
+        ret = self.lib.fsr_batch(self.model, len(all_names), c_names, n, _ptr(inputs), len(at), _ptr(at),
                                  None if weights is None else _ptr(weights), VALIDITY_LIMIT,
                                  _ptr(values), _ptr(stats),
                                  codes.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), messages, row_ptrs)

@@ -8,7 +8,7 @@ import numpy as np
 
 from flexsym.core.errors import SpecError
 from flexsym.toolchain.build import Built
-from flexsym.codegen.generate import read_manifest
+from flexsym.codegen.generate import c_prefix, read_manifest
 
 _dptr = ctypes.POINTER(ctypes.c_double)
 
@@ -18,14 +18,16 @@ def _ptr(a: np.ndarray):
 
 
 class CompiledModel:
-    """A built variant's library: the model interface of flexsym/model.h (fsm_mass, fsm_force,
-    ...) for every kind of model, and any generated kernel by name (manifest.json)."""
+    """A built variant's library: the one-beam model interface (fsm_<name>_mass, fsm_<name>_force,
+    ..., its generated header) for every kind of model, and any generated kernel by name
+    (manifest.json)."""
 
     def __init__(self, built: Built, gen_dir: Path):
         self.built = built
         self.manifest = read_manifest(gen_dir)
         self.lib = ctypes.CDLL(str(built.library))
         self.kernels = self.manifest["kernels"]
+        self.prefix = c_prefix(self.manifest["spec"]["name"])
         self.nq = len(self.manifest["coordinates"])
         self.ny = len(self.manifest["outputs"])
         self.param_defaults = np.array([p["default"] for p in self.manifest["params"]])
@@ -55,29 +57,29 @@ class CompiledModel:
                             [tuple(s) for s in info["outputs"].values()], list(info["inputs"].values()))
 
     def mass(self, q, p=None):
-        return self._invoke("fsm_mass", [("q", q), ("p", self._p(p))], [(self.nq, self.nq)])[0]
+        return self._invoke(self.prefix + "mass", [("q", q), ("p", self._p(p))], [(self.nq, self.nq)])[0]
 
     def force(self, q, qd, w, alpha=0.0, p=None):
-        return self._invoke("fsm_force", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
+        return self._invoke(self.prefix + "force", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
                             [(self.nq, 1)])[0]
 
     def residual_jac(self, q, qd, qdd, w, alpha=0.0, p=None):
         n = self.nq
-        return self._invoke("fsm_residual_jac", [("q", q), ("qd", qd), ("qdd", qdd), ("[w, alpha]", _wa(w, alpha)),
+        return self._invoke(self.prefix + "residual_jac", [("q", q), ("qd", qd), ("qdd", qdd), ("[w, alpha]", _wa(w, alpha)),
                                                  ("p", self._p(p))], [(n, n), (n, n)])
 
     def outputs(self, q, qd=None, qdd=None, w=0.0, alpha=0.0, p=None) -> dict:
         z = np.zeros(self.nq)
-        y = self._invoke("fsm_outputs", [("q", q), ("qd", z if qd is None else qd), ("qdd", z if qdd is None else qdd),
+        y = self._invoke(self.prefix + "outputs", [("q", q), ("qd", z if qd is None else qd), ("qdd", z if qdd is None else qdd),
                                          ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))], [(self.ny, 1)])[0]
         return dict(zip(self.manifest["outputs"], np.atleast_1d(y)))
 
     def energy(self, q, qd, w, alpha=0.0, p=None):
-        return self._invoke("fsm_energy", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
+        return self._invoke(self.prefix + "energy", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
                             [(3, 1)])[0]
 
     def maneuver(self, t, mp=None):
-        return self._invoke("fsm_maneuver", [("t", t), ("mp", self.maneuver_defaults if mp is None else mp)],
+        return self._invoke(self.prefix + "maneuver", [("t", t), ("mp", self.maneuver_defaults if mp is None else mp)],
                             [(3, 1)])[0]
 
     def _p(self, p):

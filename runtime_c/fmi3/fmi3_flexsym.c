@@ -19,6 +19,9 @@
 #include "flexsym/system.h"
 #include "flexsym_fmu_config.h"
 
+/* The model, named by the configuration (its generated folder's accessor, system.h) */
+const fsm_system* FSU_MODEL(void);
+
 /* GetFloat64 reads outputs (with a system's violation column, FSU_NY counts it) and
  * coordinates as one block of the row */
 typedef char fsu_vr_layout_check[FSU_VR_Q == FSU_VR_Y + FSU_NY ? 1 : -1];
@@ -31,7 +34,7 @@ typedef struct {
     fmi3LogMessageCallback log;
     char name[128];
     fsu_state state;
-    const fsm_system* m;  /* the model as a struct (a one-beam model through model_adapter.c) */
+    const fsm_system* m;  /* the model (system.h), which every runtime call is given */
     double p[FSU_NP > 0 ? FSU_NP : 1], mp[FSU_NMP > 0 ? FSU_NMP : 1], drive[2];
     double t_end;      /* the defined stopTime, else horizon() */
     int stop_defined;
@@ -120,7 +123,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
     probe.env = instanceEnvironment;
     probe.log = logMessage;
     snprintf(probe.name, sizeof probe.name, "%s", instanceName ? instanceName : "?");
-    const fsm_system* m = fsm_system_model();
+    const fsm_system* m = FSU_MODEL();
     if (m->np != FSU_NP || m->nmp != FSU_NMP || m->ny + (m->nc > 0) != FSU_NY || m->nq != FSU_NQ) {
         say(&probe, fmi3Error, "%s: the binary does not match its configuration", probe.name);
         return NULL;
@@ -218,7 +221,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 static fmi3Status start_run(fsu* c)
 {
     fsr_stepper_free(c->run);
-    c->run = fsr_stepper_new(&c->o, FSU_DRIVE_INPUT ? c->drive : NULL);
+    c->run = fsr_stepper_new(c->m, &c->o, FSU_DRIVE_INPUT ? c->drive : NULL);
     if (!c->run) return say(c, fmi3Error, "%s: out of memory", c->name);
     c->stale = c->retune = 0;
     const fsr_result* r = fsr_stepper_result(c->run);

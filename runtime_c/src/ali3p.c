@@ -223,7 +223,7 @@ static size_t ali3p_work_size(int n)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "ali3p", .method = FSR_ALI3P, .stages = 1, .work_size = ali3p_work_size,
+    .stages = 1, .work_size = ali3p_work_size,
     .cs_begin = ali3p_begin, .cs_step = ali3p_step};
 
 const fsr_integrator* fsr_integrator_ali3p(void)

@@ -1,4 +1,5 @@
-/* Many runs of one model in one call (in-process runs and sweeps from Python, see runtime.h).
+/* Many runs of one model (the struct of system.h) in one call (in-process runs and sweeps from
+ * Python, see runtime.h).
  *
  * Every run goes through fsr_simulate with options built exactly as the driver builds them
  * (fsr_default_options, the model's default parameters, then the named inputs), so a run
@@ -148,11 +149,10 @@ static void bound(const fsr_result* r, int ncs, const double* wts, double limit,
     }
 }
 
-int fsr_batch(int ninputs, const char* const* names, int nruns, const double* inputs,
+int fsr_batch(const fsm_system* m, int ninputs, const char* const* names, int nruns, const double* inputs,
               int nat, const double* at, const double* bound_weights, double bound_limit,
               double* summary, double* stats, int* status, char* messages, double** rows)
 {
-    const fsm_system* m = fsm_system_model();
     input_slot slots[64];
     if (ninputs > 64 || m->np > 64 || m->nmp > 64) {
         snprintf(messages, FSR_BATCH_MESSAGE, "too many inputs or parameters (at most 64)");
@@ -192,7 +192,7 @@ int fsr_batch(int ninputs, const char* const* names, int nruns, const double* in
         o.mp = mp;
         fsr_result r;
         double t0 = thread_cpu_seconds();
-        fsr_simulate(&o, &r);
+        fsr_simulate(m, &o, &r);
         double cpu = thread_cpu_seconds() - t0;
 
         status[i] = (int)r.status;

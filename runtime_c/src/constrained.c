@@ -269,7 +269,7 @@ fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const
     s->n = m->nq;
     s->nc = m->nc;
     r->ncols = 1 + m->ny + (m->nc > 0) + m->nq + (o->energy ? 3 : 0);
-    fsr_status st = fsr_check_constrained_options(o, m, r, it->name, capacity);
+    fsr_status st = fsr_check_constrained_options(o, m, r, fsr_method_name(o->method), capacity);
     if (st) return st;
     const size_t n = (size_t)s->n, nc = (size_t)s->nc, nn = n * n;
     s->L = fsr_length_scale(m, o->p);

@@ -66,7 +66,7 @@ int cs_row_due(const csim* s);
 fsr_status cs_accept(csim* s, double t1);
 fsr_status cs_newton_failed(csim* s, double t1, double dq, int it);
 
-/* A run of integrator `it`, resumable step by step (simulate.c: fsr_simulate_system,
+/* A run of model m by integrator `it`, resumable step by step (simulate.c: fsr_simulate,
  * fsr_stepper): cs_open with room for `capacity` rows (0: every row of the run), cs_start
  * (consistent initial state, the row at t = 0), then it->cs_begin, it->cs_step until
  * s->k == s->nsteps, cs_close. */

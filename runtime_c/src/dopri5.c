@@ -30,7 +30,7 @@ static int dopri5_fixed_grid(const fsr_options* o)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "dopri5", .method = FSR_DOPRI5, .stability_limited = erk_stability_limited, .stages = 1,
+    .stability_limited = erk_stability_limited, .stages = 1,
     .state_size = sizeof(erk_state), .work_size = erk_work_size, .fixed_grid = dopri5_fixed_grid,
     .begin = dopri5_begin, .step = erk_advance, .retune = erk_retune};
 

@@ -1,7 +1,7 @@
 /* Command-line driver: integrate a generated model, write CSV, report a JSON summary.
  *
  *   flexsym_<variant> [--t-end T] [--dt H]
- *                     [--integrator rk4|dopri5|genalpha|newmark|radau5|ali3p|genalpha3|rk4p]
+ *                     [--integrator NAME (of the registry, flexsym/integrators.h)]
  *                     [--step H] [--tol TOL] [--max-steps N] [--rho-inf R] [--newmark-gamma G]
  *                     [--newmark-beta B] [--newton modified|full] [--newton-tol TOL]
  *                     [--param NAME=VALUE]... [--out FILE.csv] [--out-every K]
@@ -41,6 +41,13 @@
 #include "flexsym/system.h"
 
 #define MAX_REPEAT FSR_MAX_REPEAT
+
+/* The model this driver is built with: flexsym_add_model (flexsym_runtime.cmake) compiles it
+ * with -DFSM_MODEL=<its accessor>, e.g. fsm_geometric_model (system.h). */
+#ifndef FSM_MODEL
+#error "compile with -DFSM_MODEL=<the model's accessor> (flexsym_runtime.cmake: flexsym_add_model)"
+#endif
+const fsm_system* FSM_MODEL(void);
 
 static int usage(const char* msg, const char* arg)
 {
@@ -187,7 +194,7 @@ static void die_with_parent(void)
 int main(int argc, char** argv)
 {
     die_with_parent();
-    const fsm_system* m = fsm_system_model();
+    const fsm_system* m = FSM_MODEL();
     fsr_options o;
     fsr_default_options(&o);
     double p[64], mp[64];
@@ -230,7 +237,7 @@ int main(int argc, char** argv)
         } else if (!strcmp(a, "--repeat")) {
             if (!parse_int(val, &repeat) || repeat < 1 || repeat > MAX_REPEAT) return usage("bad --repeat (runs, 1 to FSR_MAX_REPEAT of flexsym/limits.h)", val);
         } else if (!strcmp(a, "--integrator")) {
-            if (!fsr_method_by_name(val, &o.method)) return usage("unknown --integrator (rk4, dopri5, genalpha, newmark, radau5, ali3p, genalpha3, rk4p)", val);
+            if (!fsr_method_by_name(val, &o.method)) return usage("unknown --integrator (flexsym/integrators.h lists them)", val);
         } else if (!strcmp(a, "--param")) {
             if (!set_param(m, p, mp, val)) return usage("bad --param (NAME=VALUE with a known name)", val);
         } else return usage("unknown option", a);
@@ -243,7 +250,7 @@ int main(int argc, char** argv)
     for (long k = 0; k < runs; ++k) {
         if (k) fsr_free(&r);
         double t0 = cpu_seconds();
-        fsr_simulate(&o, &r);
+        fsr_simulate(m, &o, &r);
         double t1 = cpu_seconds();
         if (repeat == 1 || k > 0) times[repeat == 1 ? 0 : k - 1] = t1 - t0;
         if (r.status != FSR_OK) { repeat = 1; times[0] = t1 - t0; break; }

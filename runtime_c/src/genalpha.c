@@ -136,7 +136,7 @@ static fsr_status genalpha_begin(sim* s)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "genalpha", .method = FSR_GENALPHA, .stages = 1,
+    .stages = 1,
     .state_size = sizeof(alpha_state), .work_size = alpha_work_size,
     .begin = genalpha_begin, .step = alpha_step, .retune = alpha_retune};
 

@@ -137,7 +137,7 @@ static size_t genalpha3_work_size(int n)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "genalpha3", .method = FSR_GENALPHA3, .stages = 1, .work_size = genalpha3_work_size,
+    .stages = 1, .work_size = genalpha3_work_size,
     .cs_begin = genalpha3_begin, .cs_step = genalpha3_step};
 
 const fsr_integrator* fsr_integrator_genalpha3(void)

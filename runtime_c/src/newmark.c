@@ -43,7 +43,7 @@ static size_t newmark_work_size(int n)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "newmark", .method = FSR_NEWMARK, .stability_limited = conditional, .stages = 1,
+    .stability_limited = conditional, .stages = 1,
     .state_size = sizeof(alpha_state), .work_size = newmark_work_size,
     .begin = newmark_begin, .step = alpha_step, .retune = newmark_retune};
 

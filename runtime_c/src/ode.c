@@ -155,9 +155,10 @@ fsr_status sim_accept(sim* s, double t1, double h, const double* y1, const doubl
     return emit_rows(s, t1, y1, a1, d);
 }
 
-fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_result* r, long capacity)
+fsr_status sim_open(sim* s, const fsr_integrator* it, const fsm_system* m, const fsr_options* o, fsr_result* r,
+                    long capacity)
 {
-    const fsm_system* m = fsm_system_model();
+    const char* name = fsr_method_name(o->method);
     memset(s, 0, sizeof *s);
     memset(r, 0, sizeof *r);
     s->m = m;
@@ -165,10 +166,10 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_
     s->r = r;
     s->n = m->nq;
     r->ncols = 1 + m->ny + m->nq + (o->energy ? 3 : 0);
-    fsr_status st = fsr_check_ode_options(o, m, r, it->name, capacity);
+    fsr_status st = fsr_check_ode_options(o, m, r, name, capacity);
     if (!st && m->nc > 0)
         st = sim_fail(s, FSR_BAD_OPTIONS, "%s: this model has %d constraint equations: use ali3p, genalpha3 or rk4p",
-                      it->name, m->nc);
+                      name, m->nc);
     if (st) return st;
     int n = s->n;
     s->nd = m->nd;
@@ -225,7 +226,7 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_
 
 fsr_status sim_retune(sim* s, const fsr_integrator* it)
 {
-    fsr_status st = fsr_check_ode_options(s->o, s->m, s->r, it->name, s->capacity);
+    fsr_status st = fsr_check_ode_options(s->o, s->m, s->r, fsr_method_name(s->o->method), s->capacity);
     if (st) return st;
     s->L = fsr_length_scale(s->m, s->o->p);
     s->mass_have = s->mass_factored = 0;        /* M(p) again, factored */

@@ -20,7 +20,7 @@
 enum { DW_ACCEL = 0, DW_ROW = 1, DW_STEP = 2, DW_COUNT = 2 + 3 };
 
 typedef struct sim {
-    const fsm_system* m;  /* the model (system.h; a one-beam model through model_adapter.c) */
+    const fsm_system* m;  /* the model (system.h; a one-beam model through its model.c) */
     const fsr_options* o;
     fsr_result* r;
     int n;
@@ -61,10 +61,11 @@ typedef struct sim {
     int done;      /* set by the integrator's step after the last */
 } sim;
 
-/* Check the options and allocate a run of integrator `it` with room for `capacity` rows (0:
- * every row of the run); the state starts at o->y0, else at the model's initial_state, else at
- * rest. sim_close releases it. */
-fsr_status sim_open(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_result* r, long capacity);
+/* Check the options and allocate a run of model m by integrator `it` (method o->method) with
+ * room for `capacity` rows (0: every row of the run); the state starts at o->y0, else at the
+ * model's initial_state, else at rest. sim_close releases it. */
+fsr_status sim_open(sim* s, const fsr_integrator* it, const fsm_system* m, const fsr_options* o, fsr_result* r,
+                    long capacity);
 void sim_close(sim* s);
 /* After the caller changed o->p or o->mp: options checked again, caches dropped. */
 fsr_status sim_retune(sim* s, const fsr_integrator* it);

@@ -273,7 +273,7 @@ static int radau_fixed_grid(const fsr_options* o)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "radau5", .method = FSR_RADAU5, .stages = RADAU_STAGES,
+    .stages = RADAU_STAGES,
     .state_size = sizeof(radau_state), .work_size = radau_work_size, .fixed_grid = radau_fixed_grid,
     .begin = radau_begin, .step = radau_step, .retune = radau_retune};
 

@@ -13,7 +13,7 @@ static fsr_status rk4_begin(sim* s)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "rk4", .method = FSR_RK4, .stability_limited = erk_stability_limited, .stages = 1,
+    .stability_limited = erk_stability_limited, .stages = 1,
     .state_size = sizeof(erk_state), .work_size = erk_work_size,
     .begin = rk4_begin, .step = erk_advance, .retune = erk_retune};
 

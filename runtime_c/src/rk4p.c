@@ -164,7 +164,7 @@ static int always(const fsr_options* o)
 }
 
 static const fsr_integrator INTEGRATOR = {
-    .name = "rk4p", .method = FSR_RK4P, .stability_limited = always, .stages = 1,
+    .stability_limited = always, .stages = 1,
     .work_size = rk4p_work_size, .cs_begin = rk4p_begin, .cs_step = rk4p_step};
 
 const fsr_integrator* fsr_integrator_rk4p(void)

@@ -1,8 +1,8 @@
-/* The run loop: a run of the model linked into this program (fsm_system_model) or of a model
- * given as a struct (fsr_simulate_system), by an integrator picked from the table below by
- * method or name (integrator.h: rk4.c, dopri5.c, genalpha.c, newmark.c, radau5.c on a run of
- * ode.h; ali3p.c, genalpha3.c, rk4p.c on a run of constrained.h). It opens the run with the workspace
- * the integrator declares, writes the row at t = 0, calls begin, then step until the run is done
+/* The run loop: a run of a model given as a struct (system.h) by an integrator picked from the
+ * registry (flexsym/integrators.h) by method or name: a run of ode.h for rk4.c, dopri5.c,
+ * genalpha.c, newmark.c, radau5.c, of constrained.h for those with FSR_CAP_CONSTRAINED (ali3p.c,
+ * genalpha3.c, rk4p.c). It opens the run with the workspace the integrator's descriptor declares
+ * (integrator.h), writes the row at t = 0, calls begin, then step until the run is done
  * (fsr_simulate) or up to the time the caller asks for (fsr_stepper); so both give the same
  * rows bit for bit. It knows no integrator's internals.
  */
@@ -18,88 +18,82 @@
 #include "integrator.h"
 #include "ode.h"
 
-/* The table of integrators: NULL for a method not in it. */
-static const fsr_integrator* integrator_of(fsr_method m)
+/* The registry: one entry per line of flexsym/integrators.h. */
+typedef struct {
+    const char* name;
+    fsr_method method;
+    unsigned caps;
+    const fsr_integrator* (*descriptor)(void);
+} registered;
+
+static const registered REGISTRY[] = {
+#define FSR_INTEGRATOR(name, NAME, code, caps) {#name, FSR_##NAME, caps, fsr_integrator_##name},
+#include "flexsym/integrators.h"
+#undef FSR_INTEGRATOR
+};
+enum { NREGISTERED = sizeof REGISTRY / sizeof REGISTRY[0] };
+
+/* NULL for a method not in the registry */
+static const registered* registered_of(fsr_method m)
 {
-    switch (m) {
-    case FSR_RK4: return fsr_integrator_rk4();
-    case FSR_GENALPHA: return fsr_integrator_genalpha();
-    case FSR_NEWMARK: return fsr_integrator_newmark();
-    case FSR_DOPRI5: return fsr_integrator_dopri5();
-    case FSR_RADAU5: return fsr_integrator_radau5();
-    case FSR_ALI3P: return fsr_integrator_ali3p();
-    case FSR_GENALPHA3: return fsr_integrator_genalpha3();
-    case FSR_RK4P: return fsr_integrator_rk4p();
-    }
+    for (int i = 0; i < NREGISTERED; ++i)
+        if (REGISTRY[i].method == m) return &REGISTRY[i];
     return NULL;
 }
 
 const char* fsr_method_name(fsr_method m)
 {
-    const fsr_integrator* it = integrator_of(m);
-    return it ? it->name : "?";
+    const registered* e = registered_of(m);
+    return e ? e->name : "?";
 }
 
 int fsr_method_by_name(const char* name, fsr_method* m)
 {
-    const fsr_integrator* it;
-    for (int i = 0; (it = integrator_of((fsr_method)i)) != NULL; ++i)  /* methods are 0, 1, ... */
-        if (!strcmp(it->name, name)) {
-            *m = it->method;
+    for (int i = 0; i < NREGISTERED; ++i)
+        if (!strcmp(REGISTRY[i].name, name)) {
+            *m = REGISTRY[i].method;
             return 1;
         }
     return 0;
 }
 
-/* sim_open, refused for a method not in the table (it = NULL) */
-static fsr_status open_ode(sim* s, const fsr_integrator* it, const fsr_options* o, fsr_result* r, long capacity)
+/* sim_open, refused for a method not in the registry (e = NULL) */
+static fsr_status open_ode(sim* s, const registered* e, const fsm_system* m, const fsr_options* o, fsr_result* r,
+                           long capacity)
 {
-    if (!it) {
+    if (!e) {
         memset(s, 0, sizeof *s);
         memset(r, 0, sizeof *r);
         s->o = o;
         s->r = r;
         return fsr_fail(r, FSR_BAD_OPTIONS, "unknown method %d", (int)o->method);
     }
-    return sim_open(s, it, o, r, capacity);
+    return sim_open(s, e->descriptor(), m, o, r, capacity);
 }
 
-/* cs_open, refused for a method that is not a constrained integrator */
-static fsr_status open_constrained(csim* s, const fsr_integrator* it, const fsm_system* m, const fsr_options* o,
-                                   fsr_result* r, long capacity)
+fsr_status fsr_simulate(const fsm_system* m, const fsr_options* o, fsr_result* r)
 {
-    if (!it || !it->cs_step) {
-        memset(s, 0, sizeof *s);
-        memset(r, 0, sizeof *r);
-        return fsr_fail(r, FSR_BAD_OPTIONS, "a model given as a struct runs with ali3p, genalpha3 or rk4p "
-                        "(got method %d)", (int)o->method);
+    const registered* e = registered_of(o->method);
+    fsr_status st;
+    if (e && (e->caps & FSR_CAP_CONSTRAINED)) {
+        const fsr_integrator* it = e->descriptor();
+        csim c;
+        st = cs_open(&c, it, m, o, r, 0);
+        if (!st) st = cs_start(&c);
+        if (!st) st = it->cs_begin(&c);
+        while (!st && c.k < c.nsteps) st = it->cs_step(&c);
+        cs_close(&c);
+    } else {
+        sim s;
+        st = open_ode(&s, e, m, o, r, 0);
+        if (!st) {
+            const fsr_integrator* it = e->descriptor();
+            st = sim_store(&s, 0.0, s.state, s.state + s.n, NULL);
+            if (!st) st = it->begin(&s);
+            while (!st && !s.done) st = it->step(&s);
+        }
+        sim_close(&s);
     }
-    return cs_open(s, it, m, o, r, capacity);
-}
-
-fsr_status fsr_simulate(const fsr_options* o, fsr_result* r)
-{
-    const fsr_integrator* it = integrator_of(o->method);
-    if (it && it->cs_step) return fsr_simulate_system(fsm_system_model(), o, r);
-    sim s;
-    fsr_status st = open_ode(&s, it, o, r, 0);
-    if (!st) st = sim_store(&s, 0.0, s.state, s.state + s.n, NULL);
-    if (!st) st = it->begin(&s);
-    while (!st && !s.done) st = it->step(&s);
-    sim_close(&s);
-    r->status = st;
-    return st;
-}
-
-fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r)
-{
-    const fsr_integrator* it = integrator_of(o->method);
-    csim s;
-    fsr_status st = open_constrained(&s, it, m, o, r, 0);
-    if (!st) st = cs_start(&s);
-    if (!st) st = it->cs_begin(&s);
-    while (!st && s.k < s.nsteps) st = it->cs_step(&s);
-    cs_close(&s);
     r->status = st;
     return st;
 }
@@ -109,39 +103,42 @@ fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_re
 struct fsr_stepper {
     const fsr_integrator* it;
     sim s;
-    csim c;         /* instead of s for ali3p and genalpha3 (constrained.c) */
+    csim c;         /* instead of s for a constrained integrator (constrained.c) */
     int constrained;
     fsr_options o;  /* a copy; p and mp still point to the caller's arrays */
     fsr_result r;   /* status, message, counters; rows: the one row at the current time */
 };
 
-fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive)
+fsr_stepper* fsr_stepper_new(const fsm_system* m, const fsr_options* o, const double* drive)
 {
     fsr_stepper* p = calloc(1, sizeof *p);
     if (!p) return NULL;
     sim* s = &p->s;
-    const fsr_integrator* it = p->it = integrator_of(o->method);
+    const registered* e = registered_of(o->method);
+    const fsr_integrator* it = p->it = e ? e->descriptor() : NULL;
     p->o = *o;
     p->o.out_every = 1;  /* any grid point may be asked for */
-    if (it && it->cs_step) {
+    if (e && (e->caps & FSR_CAP_CONSTRAINED)) {
         csim* c = &p->c;
         p->constrained = 1;
-        fsr_status st = open_constrained(c, it, fsm_system_model(), &p->o, &p->r, 1);
+        fsr_status st = cs_open(c, it, m, &p->o, &p->r, 1);
         if (!st && drive)
             st = cs_fail(c, FSR_BAD_OPTIONS, "%s: no drive given step by step (the model's drive runs)",
-                         it->name);
+                         e->name);
         if (!st) st = cs_start(c);
         if (!st) st = it->cs_begin(c);
         p->r.status = st;
         return p;
     }
-    fsr_status st = open_ode(s, it, &p->o, &p->r, 1);
-    if (!st && it->fixed_grid && !it->fixed_grid(o))
+    fsr_status st = open_ode(s, e, m, &p->o, &p->r, 1);
+    if (!st && !(e->caps & FSR_CAP_FIXED_GRID) && !it->fixed_grid(o))
         st = sim_fail(s, FSR_BAD_OPTIONS, "%s: the stepper takes fixed steps of dt (dopri5 needs tol = 0, "
-                      "radau5 no step other than dt)", it->name);
-    if (!st && drive && it->stability_limited && it->stability_limited(o))
+                      "radau5 no step other than dt)", e->name);
+    /* the registry says which methods take a drive at all; Newmark's stability limit depends on
+     * its options */
+    if (!st && drive && (!(e->caps & FSR_CAP_DRIVE_INPUT) || (it->stability_limited && it->stability_limited(o))))
         st = sim_fail(s, FSR_BAD_OPTIONS, "%s: a drive given step by step needs an unconditionally stable "
-                      "method (the stability limit of this one depends on the drive to come)", it->name);
+                      "method (the stability limit of this one depends on the drive to come)", e->name);
     if (!st && drive && s->nd != 4)
         st = sim_fail(s, FSR_BAD_OPTIONS, "a drive given step by step needs a model with one guided joint "
                       "(this one has %d drive values)", s->nd);
@@ -228,7 +225,7 @@ fsr_status fsr_stepper_retune(fsr_stepper* p)
     sim* s = &p->s;
     fsr_result* r = &p->r;
     if (r->status) return r->status;
-    if (p->constrained) return refuse(p, "%s: retuning is not available yet", p->it->name);
+    if (p->constrained) return refuse(p, "%s: retuning is not available yet", fsr_method_name(p->o.method));
     fsr_status st = sim_retune(s, p->it);
     r->status = st;
     return st;

@@ -108,7 +108,7 @@ static const fsm_system model = {
     .constraint_rate = pl_constraint_rate, .constraint_acc = pl_constraint_acc,
     .outputs = outputs, .energy = pl_energy, .initial_state = initial_state};
 
-const fsm_system* fsm_system_model(void)
+const fsm_system* fsm_parallelogram_model(void)
 {
     return &model;
 }

@@ -56,7 +56,7 @@ static const fsm_system model = {
     .drive = drive, .mass = pl_mass, .force = pl_force, .residual_jac = pl_residual_jac,
     .outputs = outputs, .energy = pl_energy};
 
-const fsm_system* fsm_system_model(void)
+const fsm_system* fsm_pendulum_model(void)
 {
     return &model;
 }

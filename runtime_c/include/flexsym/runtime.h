@@ -1,13 +1,27 @@
-/* flexsym runtime: time integration of a generated model (see model.h). */
+/* flexsym runtime: time integration of a model given as the struct of system.h; every entry
+ * point takes it (several models may live in one process). */
 #ifndef FLEXSYM_RUNTIME_H
 #define FLEXSYM_RUNTIME_H
 
 #include "flexsym/system.h"
 
-/* One file per integrator (src/integrator.h). ali3p, genalpha3, rk4p: the constrained integrators;
- * they also run models without constraints (nc = 0). */
-typedef enum { FSR_RK4 = 0, FSR_GENALPHA = 1, FSR_NEWMARK = 2, FSR_DOPRI5 = 3, FSR_RADAU5 = 4,
-               FSR_ALI3P = 5, FSR_GENALPHA3 = 6, FSR_RK4P = 7 } fsr_method;
+/* The integrators: one file each (src/integrator.h) and one line each in the registry,
+ * flexsym/integrators.h, which gives their fsr_method codes and capabilities. ali3p, genalpha3,
+ * rk4p (FSR_CAP_CONSTRAINED): the constrained integrators; they also run models without
+ * constraints (nc = 0). */
+enum {
+    FSR_CAP_CONSTRAINED = 1,  /* a run with constraints (any nc); else a run of M q'' = f, nc = 0 */
+    FSR_CAP_IMPLICIT = 2,     /* solves with Newton (the Newton options apply) */
+    FSR_CAP_ADAPTIVE = 4,     /* adapts its step to tol (0: fixed steps of dt) */
+    FSR_CAP_FIXED_GRID = 8,   /* steps of dt on the output grid whatever the options (without it:
+                                 only for some, e.g. dopri5 with tol = 0, radau5 with step = dt) */
+    FSR_CAP_DRIVE_INPUT = 16  /* takes a drive given step by step (fsr_stepper_new) */
+};
+typedef enum {
+#define FSR_INTEGRATOR(name, NAME, code, caps) FSR_##NAME = code,
+#include "flexsym/integrators.h"
+#undef FSR_INTEGRATOR
+} fsr_method;
 
 typedef enum {
     FSR_OK = 0,
@@ -65,27 +79,27 @@ typedef struct {
 } fsr_result;
 
 void fsr_default_options(fsr_options* o);
-/* Integrate; returns the status (also in r->status). Rows computed before a failure are kept. */
-fsr_status fsr_simulate(const fsr_options* o, fsr_result* r);
+/* Integrate model m (system.h) with method o->method; returns the status (also in r->status).
+ * Rows computed before a failure are kept. A model with constraints (nc > 0) needs a
+ * constrained integrator (FSR_CAP_CONSTRAINED); with those, the initial state is first made
+ * consistent with the constraints (FSR_ASSEMBLY and a message naming the constraint with the
+ * largest residual when it cannot be). */
+fsr_status fsr_simulate(const fsm_system* m, const fsr_options* o, fsr_result* r);
 void fsr_free(fsr_result* r);
 const char* fsr_method_name(fsr_method m);
 /* *m = the method named name (as fsr_method_name gives it); returns 0 when there is none. */
 int fsr_method_by_name(const char* name, fsr_method* m);
-/* The same for a model given as a struct (system.h); methods ali3p, genalpha3, rk4p only. Before
- * the first step the initial state is made consistent with the constraints (FSR_ASSEMBLY and a
- * message naming the constraint with the largest residual when it cannot be). */
-fsr_status fsr_simulate_system(const fsm_system* m, const fsr_options* o, fsr_result* r);
 
 /* The same run advanced by the caller, step by step (an FMU's doStep): fsr_simulate is this
  * loop run to t_end, so the rows at grid points are identical bit for bit. Fixed steps of dt
  * only (genalpha, newmark, rk4, dopri5 with tol = 0, radau5 with step 0 or dt).
  * drive: NULL to take theta', theta'' from the model's manoeuvre (o->mp), or [theta',
  * theta''] at t = 0 given by the caller, then by fsr_stepper_set_drive (implicit methods; a
- * model with one guided joint, nd = 4; theta is their integral from 0). ali3p, genalpha3, rk4p:
- * the model's own drive only, no retuning yet.
+ * model with one guided joint, nd = 4; theta is their integral from 0; methods with
+ * FSR_CAP_DRIVE_INPUT). ali3p, genalpha3, rk4p: the model's own drive only, no retuning yet.
  * Returns NULL only when out of memory; check fsr_stepper_result(p)->status. */
 typedef struct fsr_stepper fsr_stepper;
-fsr_stepper* fsr_stepper_new(const fsr_options* o, const double* drive);
+fsr_stepper* fsr_stepper_new(const fsm_system* m, const fsr_options* o, const double* drive);
 /* Integrate to grid point t (a multiple of dt after the current time, or t_end). The row at t
  * is then fsr_stepper_result(p)->rows (ncols values). A stopped run stays stopped; a refused
  * request (t off the grid) returns FSR_BAD_OPTIONS with a message and changes nothing. */
@@ -98,7 +112,7 @@ const fsr_result* fsr_stepper_result(const fsr_stepper* p);
 double fsr_stepper_time(const fsr_stepper* p);
 void fsr_stepper_free(fsr_stepper* p);
 
-/* ---- Batch: many runs in one call (batch.c; in-process runs and sweeps from Python) ----
+/* ---- Batch: many runs of model m in one call (batch.c; in-process runs and sweeps from Python) ----
  * Run r takes fsr_default_options and the model's default parameters, then sets the named
  * inputs to inputs[r * ninputs + i]: option names method (an fsr_method), t_end, dt,
  * out_every, step, rho_inf, nm_gamma, nm_beta, newton_tol, newton_max, newton_full, tol,
@@ -121,7 +135,7 @@ enum { FSR_SUM_MIN, FSR_SUM_MAX, FSR_SUM_T_MIN, FSR_SUM_T_MAX, FSR_SUM_T_PEAK, F
 enum { FSR_STAT_T_STOP, FSR_STAT_STEPS, FSR_STAT_REJECTED, FSR_STAT_NEWTON, FSR_STAT_JACOBIANS,
        FSR_STAT_FORCES, FSR_STAT_OMEGA_MAX, FSR_STAT_NROWS, FSR_STAT_NCOLS, FSR_STAT_CPU,
        FSR_STAT_BOUND_PEAK, FSR_STAT_BOUND_T, FSR_STAT_FIELDS };
-int fsr_batch(int ninputs, const char* const* names, int nruns, const double* inputs,
+int fsr_batch(const fsm_system* m, int ninputs, const char* const* names, int nruns, const double* inputs,
               int nat, const double* at, const double* bound_weights, double bound_limit,
               double* summary, double* stats, int* status, char* messages, double** rows);
 void fsr_batch_free(double** rows, int nruns);

@@ -1,8 +1,14 @@
-/* A model as one struct: sizes, scales and kernels behind function pointers (several models can
- * live in one process). Every integrator takes the model only through this struct; a one-beam
- * model generated before systems (model.h's global kernels) is wrapped into it by
- * runtime_c/src/model_adapter.c, with nc = 0. rk4, dopri5, genalpha, newmark and radau5 need
- * nc = 0; ali3p, genalpha3 and rk4p take any nc.
+/* A model as one struct: sizes, scales and kernels behind function pointers. Every entry point
+ * of the runtime takes the model as a pointer to this struct (fsr_simulate, fsr_stepper_new,
+ * fsr_batch: runtime.h), so several models live in one process. A model's sources export one
+ * function that returns it, its accessor `const fsm_system* fsm_<name>_model(void)`, and name
+ * every other global symbol after the model (a generated folder's kernels are fsm_<name>_*), so
+ * several models link into one program. Who uses which model is said in one place: the
+ * accessor given to flexsym_add_model (flexsym_runtime.cmake) compiles the driver with
+ * -DFSM_MODEL=<accessor>; the manifest's "model" names it for the in-process library (Python,
+ * ctypes) and an FMU (FSU_MODEL). A one-beam model's kernels (drive = [theta', theta'']) are
+ * wrapped into this struct by its generated model.c, with nc = 0. Integrators without
+ * FSR_CAP_CONSTRAINED (flexsym/integrators.h) need nc = 0; the constrained ones take any nc.
  *
  * Equations, with the drive vector d (size nd) = [t, then theta_k, theta_k', theta_k'' for each
  * guided joint k] and the parameters p:
@@ -75,9 +81,5 @@ typedef struct fsm_system {
      * by blowup x the length scale */
     const unsigned char* coord_unbounded;
 } fsm_system;
-
-/* The model linked into this program (a generated system, or model_adapter.c for a one-beam
- * model). */
-const fsm_system* fsm_system_model(void);
 
 #endif
