@@ -310,7 +310,8 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     qs, ds, ps = mass.sx_in()
     mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds))
     scale = length_scale(system)
-    initial = [(c_double(system.joint(c.joint).initial), c_double(system.joint(c.joint).rate or 0.0))
+    initial = [tuple(c_double(v) for v in c.start) if c.start is not None else
+               (c_double(system.joint(c.joint).initial), c_double(system.joint(c.joint).rate or 0.0))
                if c.group == "joint" else ("0.0", "0.0") for c in der.coords]
     ctx = {
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",

@@ -25,9 +25,9 @@ from flexsym.model.modes import ModeRef
 from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
-JOINT_KINDS = ("revolute", "prismatic", "clamp")
+JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical")
 DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
-SPATIAL_JOINT_KINDS = ("revolute", "clamp")  # derived in 3D so far (physics/spatial.py)
+SPATIAL_JOINT_KINDS = ("revolute", "clamp", "spherical")  # derived in 3D so far (physics/spatial.py)
 TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
 SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
 STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
@@ -40,10 +40,10 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     # the section moments about the section's own x (torsion), y and z axes
     "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam",
 }
-SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz")
+SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Hx", "Hy", "Hz")  # H: angular momentum about the origin
 PLANAR_ONLY = ("M", "sigma", "reaction", "torque", "momentum", "dissipation")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
-OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation")
+OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
 REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
 _OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
 
@@ -332,7 +332,9 @@ class Joint:
     revolute: coordinate = relative angle, child frame angle = parent's + offset + q;
     prismatic: coordinate = displacement along `axis` (fixed in the parent, a unit vector after
     normalisation), child frame angle = parent's + offset; clamp: no coordinate, angle =
-    parent's + offset. `initial`: the coordinate at t = 0, a guess that the assembly at t = 0
+    parent's + offset; spherical (spatial systems): three rotations, as Euler parameters, the
+    child's frame parallel to the parent's at t = 0, `rate` its angular velocity relative to the
+    parent then (three numbers, parent's frame). `initial`: the coordinate at t = 0, a guess that the assembly at t = 0
     (flexsym/scenes/assembly.py) may move to close the loops, unless `fixed`; `rate`: its rate
     at t = 0 when given (None: 0, or what the loops need)."""
 
@@ -465,6 +467,8 @@ class System:
         taken = {"t": "the time", "violation": "the constraint violation", "T": "the kinetic energy",
                  "V": "the potential energy", "h": "the energy's step error"}
         taken |= {j.name: f"joint '{j.name}'" for j in self.joints if isinstance(j, Joint)}
+        taken |= {f"{j.name}_e{k}": f"an Euler parameter of joint '{j.name}'" for j in self.joints
+                  if isinstance(j, Joint) and j.kind == "spherical" for k in range(4)}
         for b in self.bodies:
             if getattr(b, "flexible", False):
                 names = (getattr(b.model, "coordinates", ()) if self.dimension == 2 or
@@ -650,11 +654,23 @@ class System:
         for key in ("offset", "initial"):
             if not _finite(getattr(j, key)):
                 raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
-        if j.rate is not None and not _finite(j.rate):
+        if j.kind == "spherical":
+            if n == 2:
+                raise SpecError(f"{where}: a spherical joint applies to spatial systems "
+                                "(dimension = 3) only")
+            if j.rate is not None and (not isinstance(j.rate, (tuple, list)) or len(j.rate) != 3
+                                       or not all(_finite(w) for w in j.rate)):
+                raise SpecError(f"{where}: rate {j.rate!r} must be three finite numbers (the "
+                                "child's angular velocity relative to the parent at t = 0, rad/s, "
+                                "in the parent's frame)")
+            if j.initial != 0 or j.fixed:
+                raise SpecError(f"{where}: a spherical joint starts with the child's frame parallel "
+                                "to the parent's (no initial, no fixed); give its rate only")
+        elif j.rate is not None and not _finite(j.rate):
             raise SpecError(f"{where}: rate {j.rate!r} must be a finite number")
         if not isinstance(j.fixed, bool):
             raise SpecError(f"{where}: fixed {j.fixed!r} must be true or false")
-        if (j.fixed or j.rate is not None) and not j.has_coordinate:
+        if (j.fixed or j.rate is not None) and not j.has_coordinate and j.kind != "spherical":
             raise SpecError(f"{where}: a {j.kind} joint has no coordinate to fix or give a rate")
         if j.kind == "clamp" and j.initial != 0:
             raise SpecError(f"{where}: initial applies to revolute and prismatic joints only (a "
@@ -893,6 +909,8 @@ def output_unit(system: System, quantity: str) -> str:
         return {"angle": ("rad", "m"), "rate": ("rad/s", "m/s"), "torque": ("N m", "N")}[fn][linear]
     if fn == "reaction":
         return "N m" if args[1] == "moment" else "N"
+    if fn in ("Hx", "Hy", "Hz"):
+        return "kg m^2/s"
     return {"x": "m", "y": "m", "z": "m", "v": "m", "vz": "m", "u": "m", "w": "m", "N": "N", "M": "N m",
             "Mx": "N m", "My": "N m", "Mz": "N m", "sigma": "Pa", "T": "J",
             "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)", "dissipation": "W"}[fn]

@@ -74,9 +74,10 @@ def _cross(a, b) -> sp.Expr:
 @dataclass
 class Coordinate:
     name: str
-    group: str  # 'joint' | 'axial' | 'bending'
+    group: str  # 'joint' | 'axial' | 'bending' | 'torsion' (spatial)
     body: str
     joint: str = ""
+    start: tuple | None = None  # (value, rate) at t = 0 when not the joint's initial / rate
 
 
 @dataclass
@@ -643,18 +644,23 @@ def beam_fields_at(der: SystemDerivation, body: str, x: float):
     return fa(part.fields.u), fa(part.fields.v), fa(part.fields.v_s) / L_
 
 
+def joint_coordinate(der: SystemDerivation, joint: str, rate: bool, where: str) -> sp.Expr:
+    """A joint's coordinate (or its rate): an unknown of q, or a guided joint's theta(t)."""
+    for c, x, xd in zip(der.coords, der.q, der.qd):
+        if c.joint == joint:
+            return xd if rate else x
+    for g in der.guided:
+        if g.joint == joint:
+            return g.symbols[1] if rate else g.symbols[0]
+    raise SpecError(f"{where}: joint '{joint}' is a cut joint (no coordinate)")
+
+
 def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
     system = der.system
     fn, args = parse_output(system, quantity)
     where = f"system '{system.name}': output '{quantity}'"
     if fn in ("angle", "rate"):
-        for c, x, xd in zip(der.coords, der.q, der.qd):
-            if c.joint == args[0]:
-                return x if fn == "angle" else xd
-        for g in der.guided:
-            if g.joint == args[0]:
-                return g.symbols[0] if fn == "angle" else g.symbols[1]
-        raise SpecError(f"{where}: joint '{args[0]}' is a cut joint (no coordinate)")
+        return joint_coordinate(der, args[0], fn == "rate", where)
     if fn in ("x", "y"):
         return marker_pose(der, args[0])[0][0 if fn == "x" else 1]
     if fn == "T":

@@ -48,8 +48,8 @@ from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, System,
-                                  beam_coordinates, beam_station, parse_output)
-from flexsym.physics.assemble import Coordinate, SystemDerivation, _guided
+                                  beam_coordinates, beam_station, length_scale, parse_output)
+from flexsym.physics.assemble import Coordinate, SystemDerivation, _guided, joint_coordinate, violation
 from flexsym.physics.integrals import IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
@@ -175,15 +175,23 @@ def derive_spatial(system: System) -> SystemDerivation:
         j = system.joint(tree.joint_of(body))
         if j.has_coordinate and j.name not in guided_by_joint:
             coords.append(Coordinate(j.name, "joint", body, j.name))
+        elif j.kind == "spherical":  # Euler parameters, identity at t = 0, e' = G^T omega / 2
+            w0 = j.rate or (0.0, 0.0, 0.0)
+            coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name,
+                                  (1.0 if k == 0 else 0.0, 0.0 if k == 0 else w0[k - 1] / 2))
+                       for k in range(4)]
     for b in system.bodies:
         if b.flexible:
             coords += [Coordinate(f"{b.name}_{n}", g, b.name) for n, g, _ in beam_coordinates(b)]
     q = sp.Matrix([sp.Symbol(c.name, real=True) for c in coords])
     qd = sp.Matrix([sp.Symbol(c.name + "_d", real=True) for c in coords])
     qdd = sp.Matrix([sp.Symbol(c.name + "_dd", real=True) for c in coords])
-    joint_sym = {c.joint: (x, xd) for c, x, xd in zip(coords, q, qd) if c.group == "joint"}
+    joint_sym: dict = {}
+    for c, x, xd in zip(coords, q, qd):
+        if c.group == "joint":
+            joint_sym.setdefault(c.joint, []).append((x, xd))
     for g in guided:
-        joint_sym[g.joint] = g.symbols[:2]
+        joint_sym[g.joint] = [g.symbols[:2]]
     der = SystemDerivation(system, tree, coords, guided, q, qd, qdd, params)
     der.spatial = {}
 
@@ -201,8 +209,17 @@ def derive_spatial(system: System) -> SystemDerivation:
             fp, m_p = frames[pbody], _vec((pm.x, pm.y, pm.z))
         cm = system.marker(j.child)[1]
         m_c = _vec((cm.x, cm.y, cm.z))
-        if j.kind == "revolute":
-            x, xd = joint_sym[j.name]
+        if j.kind == "spherical":
+            e = sp.Matrix([x for x, _ in joint_sym[j.name]])
+            ed = sp.Matrix([xd for _, xd in joint_sym[j.name]])
+            Q, rel = euler_rotation(e), 2 * euler_G(e) * ed
+            # e.e = 1 as a constraint row scaled to a length (the runtime's tolerances are
+            # lengths); (e.e')^2 k/2 in T makes M regular and vanishes with its forces on it
+            scale = sp.nsimplify(length_scale(system))
+            der.constraints.append((f"{j.name}.norm", scale * (e.dot(e) - 1) / 2))
+            der.T += 2 * _spin_inertia(system, body, psyms) * e.dot(ed)**2
+        elif j.kind == "revolute":
+            x, xd = joint_sym[j.name][0]
             axis = j.axis or (0.0, 0.0, 1.0)
             a = _vec(axis)
             a = a / sp.sqrt(a.dot(a))
@@ -265,10 +282,54 @@ def derive_spatial(system: System) -> SystemDerivation:
     Q_ += _applied(der)
     der.Q = Q_.applyfunc(sp.expand)
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
-    der.constraints = []
-    der.lam = sp.Matrix([])
+    der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
     return der
+
+
+def euler_rotation(e: sp.Matrix) -> sp.Matrix:
+    """A(e) (ground <- frame) of Euler parameters e = (e0, e1, e2, e3), |e| = 1."""
+    v = e[1:, 0]
+    return (e[0]**2 - v.dot(v)) * sp.eye(3) + 2 * v * v.T + 2 * e[0] * _skew(v)
+
+
+def euler_G(e: sp.Matrix) -> sp.Matrix:
+    """G(e): the frame's angular velocity in its own components is 2 G e' (G e = 0)."""
+    e0, e1, e2, e3 = e
+    return sp.Matrix([[-e1, e0, e3, -e2], [-e2, -e3, e0, e1], [-e3, e2, -e1, e0]])
+
+
+def _spin_inertia(system: System, body: str, psyms: dict) -> sp.Expr:
+    """A moment of inertia of the body (its scale only sets the regularisation's size)."""
+    b = system.body(body)
+    if b.flexible:
+        P = psyms[body]
+        return P["rho"] * P["A"] * P["L"]**3 / 3
+    return sp.nsimplify(max(b.inertia))
+
+
+def _momentum(der) -> sp.Matrix:
+    """Angular momentum about the ground origin, ground components: per rigid body
+    m G x v_G + A (I omega); per beam A [int rho A (A^T R + r) x v dx + int rho (I_y + I_z)
+    spin t dx] (the momentum conjugate to this T's rotation: conserved about an axis about
+    which nothing acts)."""
+    H = sp.zeros(3, 1)
+    for b in der.system.bodies:
+        fr = der.spatial["frames"][b.name]
+        if not b.flexible:
+            c, m = _vec(b.com), sp.nsimplify(b.mass)
+            vG = fr.V + _cross(fr.omega, c)
+            I3 = sp.diag(*[sp.nsimplify(v) for v in b.inertia])
+            H += fr.A * (m * _cross(fr.A.T * fr.R + c, vG) + I3 * fr.omega)
+            continue
+        d = der.spatial[b.name]
+        P, F = d["P"], d["F"]
+        L = P["L"]
+        tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
+        dens = P["rho"] * P["A"] * L * _cross(fr.A.T * fr.R + d["r"], d["vel"]) \
+            + P["rho"] * (P["Iy"] + P["I"]) * L * d["spin"] * tangent
+        H += fr.A * sp.Matrix([d["integral"](e) for e in dens])
+    return H
 
 
 def _marker_point(der, ref: str) -> sp.Matrix:
@@ -331,11 +392,7 @@ def _output(der, quantity: str) -> sp.Expr:
     fn, args = parse_output(system, quantity)
     where = f"system '{system.name}': output '{quantity}'"
     if fn in ("angle", "rate"):
-        for c, x, xd in zip(der.coords, der.q, der.qd):
-            if c.joint == args[0]:
-                return x if fn == "angle" else xd
-        g = next(g for g in der.guided if g.joint == args[0])
-        return g.symbols[0] if fn == "angle" else g.symbols[1]
+        return joint_coordinate(der, args[0], fn == "rate", where)
     if fn in ("x", "y", "z"):
         return _marker_point(der, args[0])["xyz".index(fn)]
     if fn == "T":
@@ -343,7 +400,9 @@ def _output(der, quantity: str) -> sp.Expr:
     if fn == "V":
         return der.V
     if fn == "violation":
-        return sp.Integer(0)
+        return violation(der)
+    if fn in ("Hx", "Hy", "Hz"):
+        return _momentum(der)["xyz".index(fn[1])]
     beam = system.body(args[0])
     x = beam_station(system, beam, args[1], where)
     if fn in ("u", "v", "vz"):
@@ -359,7 +418,7 @@ def _output(der, quantity: str) -> sp.Expr:
 def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     """N, Mx, My, Mz at station x (beam frame components), constitutive or from equilibrium."""
     d = der.spatial[beam.name]
-    P, F = d["P"], d["F"]
+    P = d["P"]
     source = beam.model.axial_force if fn == "N" else beam.model.moment
     if source != "equilibrium":
         L = P["L"]

@@ -408,7 +408,12 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
     if kind == "clamp" and "initial" in tab:
         r.fail(f"{where} initial", "applies to revolute and prismatic joints only (a clamp has no "
                "coordinate; use offset for its angle)")
-    initial, fixed, rate = _initial(r, where, tab)
+    if kind == "spherical":  # its one start datum: the angular velocity, a vector
+        given = tab.get("initial", {})
+        r.table(f"{where} initial", given, {"rate"})
+        initial, fixed, rate = 0.0, False, r.pair(f"{where} initial", given, "rate", n=3)
+    else:
+        initial, fixed, rate = _initial(r, where, tab)
     return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
                  axis=r.pair(where, tab, "axis", n=dim), offset=r.number(where, tab, "offset", default=0.0),
                  point=point or (0.0,) * dim, initial=initial, fixed=fixed, rate=rate)
