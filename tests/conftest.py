@@ -84,8 +84,18 @@ def system_kernels_agree():
 
     from flexsym.codegen.sysgen import build_system_kernels
 
+    from flexsym.physics.assemble import EF_T
+    from flexsym.physics.lagrange import equations_of_motion
+
     def check(der, built, t: float, seed: int) -> None:
         kernels = {k.name: k.function for k in build_system_kernels(der)}
+        M, f, y = der.M, der.f, sp.Matrix(list(der.outputs.values()))
+        frame_T = getattr(der, "frame_T", ())
+        if frame_T:  # a spatial system's T, which casadi differentiates: here sympy does
+            T = sum((T_b.xreplace(actual) for T_b, actual in frame_T), sp.Integer(0))
+            M_, f_ = equations_of_motion(T, sp.zeros(len(der.q), 1), der.q, der.qd,
+                                         [g.symbols for g in der.guided])
+            M, f, y = M + M_, f + f_, y.xreplace({EF_T: T})
         lib = ctypes.CDLL(str(built.library))
         rnd = np.random.default_rng(seed)
         n = len(der.q)
@@ -95,9 +105,8 @@ def system_kernels_agree():
         sym = dict(zip(der.q, q)) | dict(zip(der.qd, qd)) | dict(zip(der.qdd, qdd))
         sym |= {s_: v for (_, s_, v) in der.params} | {der.drive_symbols[0]: d[0]}
         ptr = ctypes.POINTER(ctypes.c_double)
-        for name, args, expr in (("mass", (q, d, p), der.M), ("force", (q, qd, d, p), der.f),
-                                 ("outputs", (q, qd, qdd, np.zeros(0), d, p),
-                                  sp.Matrix(list(der.outputs.values())))):
+        for name, args, expr in (("mass", (q, d, p), M), ("force", (q, qd, d, p), f),
+                                 ("outputs", (q, qd, qdd, np.zeros(0), d, p), y)):
             ref = np.array(expr.xreplace(sym).evalf(30), dtype=float).reshape(-1)
             cas = np.array(kernels[name](*args)).reshape(-1)  # a dense matrix, row by row
             out = np.zeros(ref.size)

@@ -186,7 +186,7 @@ def _run_options(args, spec, scene, overrides: bool = False):
         return with_overrides(scene.given, given, scene.path, spec) if given else scene.options
     if scene is not None:
         if given or args.param:
-            name = next(iter(given), "param")
+            name = "param" if args.param else next(iter(given))
             opt = BY_NAME.get(name)
             where = (f"set [{opt.scene.replace('.', '] ')} in the scene" if opt is not None and opt.scene
                      else "it does not combine with a scene file")

@@ -85,9 +85,12 @@ def build_system_kernels(der: SystemDerivation) -> list:
     # ef bodies' elastic energy is not in these kernels: system.c adds it per element with the
     # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
     en = matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
-    if der.ef_kinetic:
-        # Lagrange on the ef bodies' kinetic energy by AD (lagrange.equations_of_motion_sx)
-        T_ef = ef_kinetic_energy(der, tr, x)
+    frame_T = getattr(der, "frame_T", ())  # a spatial system's bodies (physics/spatial.py)
+    if der.ef_kinetic or frame_T:
+        # Lagrange on the kinetic energy of the ef bodies and of a spatial system's bodies by AD
+        # (lagrange.equations_of_motion_sx): written in their frame's motion, substituted here
+        T_ef = (ef_kinetic_energy(der, tr, x) if der.ef_kinetic else ca.SX(0.0)) \
+            + frame_kinetic_energy(tr, frame_T)
         guided = [(d[1 + 3 * k], d[2 + 3 * k], d[3 + 3 * k]) for k in range(len(der.guided))]
         M_ef, f_ef = equations_of_motion_sx(T_ef, 0, q, qd, guided)
         M += M_ef
@@ -187,6 +190,18 @@ def _ef_damping_kernel(der: SystemDerivation) -> list:
              [("g", g), ("g_e", ca.jacobian(g, e)), ("g_ed", ca.jacobian(g, ed))]),
             ("ef_damping_force", "one ANCF element: damping force g = dD/de' (no Jacobians)",
              [("e", e), ("ed", ed), ("pe", pe), ("c", c)], [("g", g)])]
+
+
+def frame_kinetic_energy(tr: SympyToCasadi, frame_T) -> ca.SX:
+    """Sum of the bodies' T written in placeholders of their frame's motion (omega, V), each
+    placeholder given its actual value (a sympy expression of q, q', d) in casadi: the sympy
+    side never expands a product of the frame's motion and the body's fields."""
+    total = ca.SX(0.0)
+    for T_b, actual in frame_T:
+        for ph, value in actual.items():
+            tr.symbols[ph], tr.priority[ph] = tr(value), 2
+        total += tr(T_b)
+    return total
 
 
 def ef_kinetic_energy(der: SystemDerivation, tr: SympyToCasadi, x: dict) -> ca.SX:

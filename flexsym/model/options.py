@@ -331,10 +331,10 @@ def validate(given: dict, where: Where = API, spec=None) -> RunOptions:
 
 def check_params(params: dict, where: Where = API, maneuver: str | None = None) -> dict:
     """Beam parameters (positive, finite) and manoeuvre parameters (as the table says)."""
-    from flexsym.model.parameters import BEAM_PARAMS
+    from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
     from flexsym.model.maneuver import MANEUVERS, maneuver_of
 
-    beam = {p.name for p in BEAM_PARAMS}
+    beam = {p.name for p in BEAM_PARAMS + SPATIAL_BEAM_PARAMS}  # a model without one refuses it
     man = ({p.name for p in maneuver_of(maneuver).params} if maneuver is not None
            else {p.name for m in MANEUVERS.values() for p in m.params})
     out = {}

@@ -12,3 +12,11 @@ BEAM_PARAMS: tuple[Param, ...] = (
     Param("I", 2.0e-7, "m^4", "second moment of area"),
     Param("L", 10.0, "m", "length"),
 )
+
+# A spatial beam's section adds these (physics/spatial.py: after each beam's BEAM_PARAMS; I is
+# then I_z, the bending along the frame's y).
+SPATIAL_BEAM_PARAMS: tuple[Param, ...] = (
+    Param("Iy", 8.0e-7, "m^4", "second moment of area for bending along z"),
+    Param("J", 4.0e-7, "m^4", "torsion constant"),
+    Param("G", 2.7e10, "N/m^2", "shear modulus"),
+)

@@ -3,9 +3,16 @@ spanning tree (sympy): the 3D sibling of assemble.py, producing the same SystemD
 that sysgen.py, the templates and the runtime take it unchanged.
 
 What is derived so far: a tree of rigid bodies and uniform modal beams joined by revolute
-joints (about an axis fixed in the parent's frame) and clamps, guided or motor-driven, under
-gravity and point forces. Closed loops, spherical/universal/prismatic joints, ef in 3D and
-damping are refused up front by System._check_spatial.
+joints (about an axis fixed in the parent's frame), spherical joints (Euler parameters on
+|e| = 1, a constraint row) and clamps, guided or motor-driven, under gravity and point forces.
+Closed loops, universal/prismatic joints, ef in 3D and damping are refused up front by
+System._check_spatial.
+
+Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
+left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
+and forms Lagrange's equations by AD: expanding a ball joint's quartic frame motion times the
+modal fields in sympy makes kernels too large to compile. Strain energies, gravity and the
+generalised forces stay in sympy.
 
 Kinematics, composed joint by joint in each body's own frame components (no trigonometric
 identity ever has to be simplified): with Q = Rot(a, q) the joint's rotation (Rodrigues),
@@ -34,8 +41,10 @@ the bending planes (second order).
 Outputs: angle/rate of a joint, x/y/z of a marker, u/v/vz and w (distance from the chord) at
 a station, N, Mx (torsion), My, Mz at a station, constitutive or from equilibrium of the
 part beyond the station (the variant's axial_force / moment), in the beam frame's
-components; T, V, violation (0: a tree). Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx,
-Mx = GJ phi_x (the moment of the part beyond the station on the part before it).
+components, the moments turned into the deformed section's axes to first order; T, V,
+violation, Hx/Hy/Hz (angular momentum about the origin). Section moments: Mz = EI_z v_xx,
+My = -EI_y vz_xx, Mx = GJ phi_x (the moment of the part beyond the station on the part
+before it).
 """
 from __future__ import annotations
 
@@ -45,17 +54,17 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.model.modes import mode, s
-from flexsym.model.parameters import BEAM_PARAMS
+from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, System,
                                   beam_coordinates, beam_station, length_scale, parse_output)
-from flexsym.physics.assemble import Coordinate, SystemDerivation, _guided, joint_coordinate, violation
+from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, joint_coordinate,
+                                      violation)
 from flexsym.physics.integrals import IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
 from flexsym.model.maneuver import parse_expression, t
 
-SPATIAL_PARAMS = ("Iy", "J", "G")  # after p's [rho, E, A, I, L] of each beam (I is I_z)
 
 
 def _skew(a: sp.Matrix) -> sp.Matrix:
@@ -94,8 +103,7 @@ def _params(system: System):
     """p: [rho, E, A, I, L, Iy, J, G] of each flexible body (plain names for one body)."""
     beams = [b for b in system.bodies if b.flexible]
     params, by_body = [], {}
-    generic = [(gp.name, gp.symbol) for gp in BEAM_PARAMS] + \
-              [(n, sp.Symbol(n, positive=True)) for n in SPATIAL_PARAMS]
+    generic = [(gp.name, gp.symbol) for gp in BEAM_PARAMS + SPATIAL_BEAM_PARAMS]
     for b in beams:
         sec = b.section
         values = {"rho": sec.rho, "E": sec.E, "A": sec.A, "I": sec.I, "L": b.length,
@@ -236,14 +244,18 @@ def derive_spatial(system: System) -> SystemDerivation:
 
     V_grav, Q_ = sp.Integer(0), sp.zeros(len(coords), 1)
     gvec = _vec(grav)
+    der.frame_T = []  # (T in the frame-motion placeholders, their actual values): sysgen, by AD
     for b in system.bodies:
         fr = frames[b.name]
+        om, vf = _motion_symbols(b.name)
+        actual = {x: e for x, e in zip(om, fr.omega)} | {x: e for x, e in zip(vf, fr.V)}
         if not b.flexible:
             c = _vec(b.com)
             m = sp.nsimplify(b.mass)
-            vG = fr.V + _cross(fr.omega, c)
+            vG = vf + _cross(om, c)
             I3 = [sp.nsimplify(v) for v in b.inertia]
-            der.T += m * vG.dot(vG) / 2 + sum(I3[k] * fr.omega[k]**2 for k in range(3)) / 2
+            der.frame_T.append((m * vG.dot(vG) / 2 + sum(I3[k] * om[k]**2 for k in range(3)) / 2,
+                                actual))
             V_grav += -m * (gvec.dot(fr.R) + fr.g.dot(c))
             continue
         P = psyms[b.name]
@@ -259,14 +271,15 @@ def derive_spatial(system: System) -> SystemDerivation:
         L, rho, A = P["L"], P["rho"], P["A"]
         r = sp.Matrix([L * s + F["u"], F["v"], F["vz"]])
         rd = sp.Matrix([F["u_d"], F["v_d"], F["vz_d"]])
-        vel = fr.V + rd + _cross(fr.omega, r)
-        spin = F["phi_d"] + fr.omega[0] + (fr.omega[1] * F["v_s"] + fr.omega[2] * F["vz_s"]) / L
+        vel = vf + rd + _cross(om, r)  # in the placeholders: short expansions, short integrals
+        spin = F["phi_d"] + om[0] + (om[1] * F["v_s"] + om[2] * F["vz_s"]) / L
 
         def integral(density, a=0, b_=1, table=table, P=P):
             generic = {gp.symbol: P[gp.name] for gp in BEAM_PARAMS}
             return table.integrate(sp.expand(density), a, b_).xreplace(table.substitutions()).xreplace(generic)
 
-        der.T += integral(rho * A * L / 2 * vel.dot(vel) + rho * (P["Iy"] + P["I"]) * L / 2 * spin**2)
+        der.frame_T.append((integral(rho * A * L / 2 * vel.dot(vel)
+                                     + rho * (P["Iy"] + P["I"]) * L / 2 * spin**2), actual))
         V_grav += -rho * A * L * gvec.dot(fr.R) - integral(rho * A * L * fr.g.dot(r))
         for term_name, wrt in strain.terms + (("torsion", ("torsion",)),):
             Vt = integral(_strain_density(term_name, F, P, fr.omega))
@@ -275,7 +288,7 @@ def derive_spatial(system: System) -> SystemDerivation:
             der.V += Vt
             Q_ += Qk
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
-                                   integral=integral)
+                                   integral=integral, om=om, vf=vf, actual=actual)
     der.V += V_grav
     der.V_grav = V_grav
     Q_ += sp.Matrix([-sp.diff(V_grav, x) for x in q])
@@ -285,6 +298,12 @@ def derive_spatial(system: System) -> SystemDerivation:
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
     return der
+
+
+def _motion_symbols(body: str) -> tuple[sp.Matrix, sp.Matrix]:
+    """Placeholders of a body frame's angular velocity and origin velocity (its components)."""
+    return (sp.Matrix(sp.symbols(f"{body}_Om_x {body}_Om_y {body}_Om_z", real=True)),
+            sp.Matrix(sp.symbols(f"{body}_V_x {body}_V_y {body}_V_z", real=True)))
 
 
 def euler_rotation(e: sp.Matrix) -> sp.Matrix:
@@ -326,9 +345,11 @@ def _momentum(der) -> sp.Matrix:
         P, F = d["P"], d["F"]
         L = P["L"]
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
-        dens = P["rho"] * P["A"] * L * _cross(fr.A.T * fr.R + d["r"], d["vel"]) \
+        Rl = sp.Matrix(sp.symbols(f"{b.name}_R_x {b.name}_R_y {b.name}_R_z", real=True))
+        dens = P["rho"] * P["A"] * L * _cross(Rl + d["r"], d["vel"]) \
             + P["rho"] * (P["Iy"] + P["I"]) * L * d["spin"] * tangent
-        H += fr.A * sp.Matrix([d["integral"](e) for e in dens])
+        now = d["actual"] | dict(zip(Rl, fr.A.T * fr.R))  # substituted after integrating
+        H += fr.A * sp.Matrix([d["integral"](e).xreplace(now) for e in dens])
     return H
 
 
@@ -396,7 +417,7 @@ def _output(der, quantity: str) -> sp.Expr:
     if fn in ("x", "y", "z"):
         return _marker_point(der, args[0])["xyz".index(fn)]
     if fn == "T":
-        return der.T
+        return der.T + EF_T  # EF_T: what casadi adds (the bodies' T in their frame's motion)
     if fn == "V":
         return der.V
     if fn == "violation":
@@ -416,7 +437,21 @@ def _output(der, quantity: str) -> sp.Expr:
 
 
 def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
-    """N, Mx, My, Mz at station x (beam frame components), constitutive or from equilibrium."""
+    """N (along the frame's x, as in the plane), Mx, My, Mz at station x in the deformed
+    section's axes, constitutive or from equilibrium. The equilibrium moment, found in the
+    frame's components, is turned by the section's rotation theta = (phi, -vz_x, v_x) to first
+    order, M_section = M - theta x M, the order of the modal kinematics."""
+    if fn != "N" and beam.model.moment == "equilibrium":
+        M = sp.Matrix([_frame_section(der, beam, x, f"M{k}") for k in "xyz"])
+        L = der.spatial[beam.name]["P"]["L"]
+        theta = sp.Matrix([_at(der, beam.name, x, "phi"), -_at(der, beam.name, x, "vz_s") / L,
+                           _at(der, beam.name, x, "v_s") / L])
+        return (M - _cross(theta, M))["xyz".index(fn[1])]
+    return _frame_section(der, beam, x, fn)
+
+
+def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
+    """N, Mx, My, Mz at station x: constitutive, or from equilibrium in the frame's components."""
     d = der.spatial[beam.name]
     P = d["P"]
     source = beam.model.axial_force if fn == "N" else beam.model.moment
@@ -436,22 +471,35 @@ def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
                 "Mz": P["E"] * P["I"] / L**2 * _at(der, beam.name, x, "v_ss")}[fn]
     # equilibrium of the part beyond x: S = int (g - a) rho A dx + loads on its markers,
     # M = int (r - r_x) x rho A (g - a) dx - d/dt int rho (I_y + I_z) spin dx e_x + load moments
+    # the acceleration in the frame's components, a = a_0 + alpha x r + omega x (omega x r)
+    # + 2 omega x r' + r'', integrated in placeholders and then given the frame's actual motion
     fr = der.spatial["frames"][beam.name]
     at = sp.nsimplify(x) / sp.nsimplify(beam.length)
-    vel = d["vel"]
-    acc = der.ddt(vel) + _cross(fr.omega, vel)  # d/dt in the rotating components
+    om, F, r = d["om"], d["F"], d["r"]
+    al = sp.Matrix(sp.symbols(f"{beam.name}_Al_x {beam.name}_Al_y {beam.name}_Al_z", real=True))
+    a0 = sp.Matrix(sp.symbols(f"{beam.name}_A0_x {beam.name}_A0_y {beam.name}_A0_z", real=True))
+    gl = sp.Matrix(sp.symbols(f"{beam.name}_g_x {beam.name}_g_y {beam.name}_g_z", real=True))
+    rd = sp.Matrix([F["u_d"], F["v_d"], F["vz_d"]])
+    rdd = sp.Matrix([F["u_dd"], F["v_dd"], F["vz_dd"]])
+    acc = a0 + _cross(al, r) + _cross(om, _cross(om, r)) + 2 * _cross(om, rd) + rdd
     L, rho, A = P["L"], P["rho"], P["A"]
-    load = rho * A * L * (fr.g - acc)
+    load = rho * A * L * (gl - acc)
     if fn == "N":
         out = d["integral"](load[0], at, 1)
     else:
         rx = sp.Matrix([field_at(_View(d["table"], d["modes"]), e, at).xreplace({s: at})
-                        for e in d["r"]])
-        mom = _cross(d["r"] - rx, load)
+                        for e in r])
+        mom = _cross(r - rx, load)
         k = "xyz".index(fn[1])
         out = d["integral"](mom[k], at, 1)
-        if fn == "Mx":
-            out -= der.ddt(d["integral"](rho * (P["Iy"] + P["I"]) * L * d["spin"], at, 1))
+        if fn == "Mx":  # minus the rate of the torsional angular momentum beyond x
+            spin_rate = F["phi_dd"] + al[0] + (al[1] * F["v_s"] + om[1] * F["v_d_s"]
+                                               + al[2] * F["vz_s"] + om[2] * F["vz_d_s"]) / L
+            out -= d["integral"](rho * (P["Iy"] + P["I"]) * L * spin_rate, at, 1)
+    omega = fr.omega
+    now = (d["actual"] | dict(zip(al, der.ddt(omega))) | dict(zip(gl, fr.g))
+           | dict(zip(a0, der.ddt(fr.V) + _cross(omega, fr.V))))
+    out = out.xreplace(now)
     section = _at(der, beam.name, x, "r")
     for ld in der.system.loads:
         if isinstance(ld, PointForce):
