@@ -8,7 +8,8 @@ gradients, Hessians and mass matrices; sysgen can instantiate it per element lik
 efbody.generic_element).
 
 Strains (Simo-Reissner, objective; Crisfield-Jelenic interpolation of the rotations):
-    Lambda_r = Lambda_1^T Lambda_2 = exp(phi)      relative rotation of the nodes (|phi| < pi)
+    Lambda_r = Lambda_1^T Lambda_2 = exp(phi)      relative rotation of the nodes (|phi| < pi,
+                                                   the short way, whatever the nodes' psi)
     Lambda_m = Lambda_1 exp(phi / 2)               the section at the midpoint
     K        = phi / le                            curvature and twist (Lambda^T Lambda' of the
                                                    constant-curvature interpolation, exact)
@@ -125,6 +126,9 @@ def element_kinematics(e, le):
     r1, p1, r2, p2 = _split(e)
     q1, q2 = quaternion(p1), quaternion(p2)
     qr = qmul(qconj(q1), q2)
+    # q and -q are one rotation: take the relative rotation's short way (below pi), whatever
+    # the signs of the nodal quaternions (nodal rotation vectors on either side of |psi| = pi)
+    qr = ca.if_else(qr[0] < 0, -1, 1) * qr
     K = qlog(qr) / le
     half = ca.vertcat(1 + qr[0], qr[1:4]) / ca.sqrt(2 * (1 + qr[0]))
     Lm = qmatrix(qmul(q1, half))
