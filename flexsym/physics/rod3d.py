@@ -41,12 +41,20 @@ default) because without it the bending rotations carry no inertia and the mass 
 singular; its effect is O((r_g/L)^2) as well. Gravity (g in frame components) enters as
 V_g = -int rho A g . r dx (exact for the linear element).
 
-Rotation parametrisation: psi relative to the floating frame is regular for |psi| < 2 pi (the
-exponential map's tangent is singular at 2 pi: a section turned by a full turn cannot be
-perturbed out of its plane to first order). A frame that follows the root keeps bending
-rotations far below that. exp(psi) and the log of the relative rotation are evaluated through
-quaternions with series expansions near zero, so casadi's derivatives of any order are exact
-at the undeformed state (psi = 0, phi = 0).
+Rotation parametrisation: psi relative to the floating frame. The exponential map is regular
+for |psi| < 2 pi; at 2 pi its out-of-plane derivatives vanish (a node turned by a full turn),
+yet a bent element's stress keeps the Hessian regular there (the end-moment test rolls a
+cantilever into a full circle, tip psi = 2 pi). Nodal rotation vectors on either side of
+|psi| = pi are fine: the relative rotation is taken the short way. A frame that follows the
+root keeps bending rotations far below these limits. exp(psi) and the log of the relative
+rotation are evaluated through quaternions with series expansions near zero, so casadi's
+derivatives of any order are exact at the undeformed state (psi = 0, phi = 0).
+
+Stiffness of the equations: the bending rotary inertia is tiny, so each element has a mode of
+rotation against shear at about sqrt(2 G A / (rho I)) ~ c_shear / r_g (1e6 rad/s for a 20 x 10
+mm steel section), whatever the mesh; the planar ANCF `ef`'s fastest is axial, ~ c / le. An
+implicit integrator is needed (or `bending_inertia` > 1 as mass scaling: rho I_eff = rho A
+le^2 / 12 brings it down to ~ c / le and changes frequencies by O(h^2)).
 
 Section forces (constitutive, in the deformed section's frame, constant over an element):
     (N, Q_y, Q_z) = (EA G1, GA G2, GA G3),  (M_t, M_y, M_z) = (GJ K1, EI_y K2, EI_z K3).
@@ -54,6 +62,12 @@ Section forces (constitutive, in the deformed section's frame, constant over an 
 Clamped root: the body's first node is fixed to the frame (r = 0, psi = 0); its coordinates are
 dropped (ClampedBeam). A root node still carries half an element's rotary inertia, which moves
 with the frame (its omega terms stay in T).
+
+Wiring into a system (as sysgen.ef_kinetic_energy does for the planar ef): per element, call
+element_functions()["kinetic"](e, e', omega, V, le, sec, b) with the element's 12 nodal values
+(root entries 0), their rates, and the frame's omega and V in frame components; "elastic" and
+"gravity" (g in frame components) likewise; sum, and take Lagrange's equations by casadi AD.
+Section forces: "forces" per element (midpoint values) or ClampedBeam.section_forces_at.
 """
 from __future__ import annotations
 
