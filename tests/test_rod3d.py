@@ -15,7 +15,8 @@ from scipy.linalg import eig, eigh
 from scipy.optimize import brentq, fsolve
 from scipy.spatial.transform import Rotation
 
-from flexsym.physics.rod3d import ClampedBeam, Section, element_functions
+from flexsym.physics.rod3d import (ClampedBeam, Section, angular_velocity, element_functions, qmatrix,
+                                   quaternion)
 
 # steel, rectangular 20 mm (along y) x 10 mm (along z): I_z = 4 I_y, J by St Venant's series
 B, H = 0.02, 0.01
@@ -54,7 +55,6 @@ def tip_loaded(n, length=L, force=(0, 0, 0), moment_z=0.0, arm=(0, 0, 0)):
     beam, f = model(n, length)
     q, lam, sec = ca.SX.sym("q", 6 * n), ca.SX.sym("lam"), ca.SX.sym("sec", 7)
     tip = q[6 * n - 6:]
-    from flexsym.physics.rod3d import qmatrix, quaternion
     point = tip[0:3] + qmatrix(quaternion(tip[3:6])) @ ca.DM(arm)
     Pi = f["Ve"](q, sec) - lam * (ca.dot(ca.DM(force), point) + moment_z * tip[5])
     return beam, ca.Function("g", [q, lam, sec], [ca.gradient(Pi, q)]), \
@@ -331,7 +331,6 @@ def test_frame_motion_and_relative_motion_give_the_same_kinetic_energy():
     """T of a (deformed) element at rest in a frame moving with (omega, V) equals T of the same
     element moving rigidly with that velocity in a frame at rest: r' = V + omega x r, and psi'
     such that the section's angular velocity is omega. Checks how the frame's motion enters."""
-    from flexsym.physics.rod3d import angular_velocity, qmatrix, quaternion
     f = element_functions()["kinetic"]
     psi, rate = ca.SX.sym("psi", 3), ca.SX.sym("rate", 3)
     Wrel = ca.Function("W", [psi], [ca.jacobian(angular_velocity(psi, rate), rate)])
