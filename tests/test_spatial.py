@@ -285,3 +285,24 @@ def test_s6_bends_and_twists_and_runs_with_the_other_constrained_integrators(s6)
     for integrator, extra in (("rk4p", {}), ("ali3p", {"newton": "full"})):
         o = _run(s6, t_end=0.5, dt=1e-4, integrator=integrator, **extra)
         assert np.abs(o["z_tip"] - r["z_tip"]).max() < 1e-4, integrator
+
+
+def test_spatial_plot_is_a_3d_view_of_the_run(tmp_path):
+    """--plot on a spatial scene: the stations' ground x, y, z become columns, and the chord
+    distance the picture scales is the output w(B, x) at the same station (3D, unsigned)."""
+    from flexsym.analysis.system_plot import chord_distance, with_plot_outputs
+    from flexsym.toolchain.pipeline import prepare_system
+
+    system, geometry = with_plot_outputs(system_from_dict(_s6_data(w_q="w(strip, 0.3)"), name="s6"))
+    assert all(len(cols) == 3 and cols[2].startswith("pz_") for cols in geometry["strip"])
+    r = _run(prepare_system(system, log=lambda m: None), t_end=0.2, dt=1e-4, integrator="genalpha3")
+    k = len(r.t) // 2
+    stations = np.array([[r[c][k] for c in cols] for cols in geometry["strip"]])
+    assert chord_distance(stations)[3] == pytest.approx(r["w_q"][k], rel=1e-9)
+    assert r["w_q"][k] > 0
+    scene, png = tmp_path / "s6.toml", tmp_path / "s6.png"
+    scene.write_text(S6.read_text().replace("t_end = 2.0", "t_end = 0.2"))
+    run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(scene), "--out",
+                          str(tmp_path / "s6.csv"), "--plot", str(png)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -1,11 +1,11 @@
 """The plot of a system run: every output against time, and the mechanism at a few instants
 with each beam's deflection from its chord (root to tip) scaled and labelled as such.
 
-A spatial system is drawn as seen from above (its x-y projection; a 3D view is to come).
+A spatial system is drawn in a 3D view (equal scales on the three axes).
 The picture is drawn from output columns only: `with_plot_outputs` adds the ground positions
-x(B.m), y(B.m) of every marker of every body and of STATIONS evenly spaced stations along each
-beam (markers plot1, plot2, ...) as extra columns (px_..., py_...), so it needs nothing from
-the derivation beyond what the run writes.
+x(B.m), y(B.m) (and z(B.m) in 3D) of every marker of every body and of STATIONS evenly spaced
+stations along each beam (markers plot1, plot2, ...) as extra columns (px_..., py_..., pz_...),
+so it needs nothing from the derivation beyond what the run writes.
 """
 from __future__ import annotations
 
@@ -20,10 +20,10 @@ from flexsym.model.system import Marker, Output, System, output_unit
 STATIONS = 11  # points along a beam, root and tip included
 
 
-def _columns(body: str, marker: str, index: int) -> tuple[str, str]:
+def _columns(body: str, marker: str, index: int, dimension: int = 2) -> tuple[str, ...]:
     name = f"{body}_{marker}"
     name = name if len(name) <= 45 else f"m{index}"
-    return f"px_{name}", f"py_{name}"
+    return tuple(f"p{c}_{name}" for c in "xyz"[:dimension])
 
 
 def with_plot_outputs(system: System) -> tuple[System, dict]:
@@ -44,11 +44,11 @@ def with_plot_outputs(system: System) -> tuple[System, dict]:
         pairs = []
         for ref in refs:
             index += 1
-            cx, cy = _columns(b.name, ref, index)
-            if cx not in taken:
-                outputs += [Output(cx, f"x({b.name}.{ref})"), Output(cy, f"y({b.name}.{ref})")]
-                taken |= {cx, cy}
-            pairs.append((cx, cy))
+            cols = _columns(b.name, ref, index, system.dimension)
+            if cols[0] not in taken:
+                outputs += [Output(c, f"{a}({b.name}.{ref})") for c, a in zip(cols, "xyz")]
+                taken |= set(cols)
+            pairs.append(cols)
         geometry[b.name] = pairs
     return replace(system, bodies=tuple(bodies), outputs=tuple(outputs)), geometry
 
@@ -70,7 +70,9 @@ def exaggerate(points: np.ndarray, factor: float) -> np.ndarray:
 
 def chord_distance(points: np.ndarray) -> np.ndarray:
     """Signed distance of each point from the chord root-tip, positive to the left of root ->
-    tip (the output w(B, x))."""
+    tip (the output w(B, x)); in 3D (n x 3 points) the distance, unsigned."""
+    if points.shape[1] == 3:
+        return np.linalg.norm(points - exaggerate(points, 0.0), axis=1)
     a, b = points[0], points[-1]
     e = (b - a) / max(math.hypot(*(b - a)), 1e-300)
     rel = points - a
@@ -87,11 +89,12 @@ def plot_system(system: System, geometry: dict, columns: dict, path, instants: i
     import matplotlib.pyplot as plt
 
     t = np.asarray(columns["t"], dtype=float)
-    shown = [o for o in system.outputs if not o.column.startswith(("px_", "py_"))]
+    shown = [o for o in system.outputs if not o.column.startswith(("px_", "py_", "pz_"))]
     picks = np.unique(np.round(np.linspace(0, len(t) - 1, instants)).astype(int))
-    pts = {b: np.stack([np.column_stack([columns[cx], columns[cy]]) for cx, cy in pairs], axis=1)
-           for b, pairs in geometry.items()}  # body -> (rows, points, 2)
-    every = np.concatenate([p[picks].reshape(-1, 2) for p in pts.values()])
+    dim = system.dimension
+    pts = {b: np.stack([np.column_stack([columns[c] for c in cols]) for cols in pairs], axis=1)
+           for b, pairs in geometry.items()}  # body -> (rows, points, dimension)
+    every = np.concatenate([p[picks].reshape(-1, dim) for p in pts.values()])
     size = float(np.max(np.ptp(every, axis=0))) or 1.0
     flex = [b.name for b in system.bodies if b.flexible]
     wmax = max((float(np.max(np.abs(chord_distance(pts[b][k])))) for b in flex for k in picks), default=0.0)
@@ -107,7 +110,7 @@ def plot_system(system: System, geometry: dict, columns: dict, path, instants: i
         ax.grid(alpha=0.3)
         if k == len(shown) - 1:
             ax.set_xlabel("t [s]")
-    ax = fig.add_subplot(grid[:, 1])
+    ax = fig.add_subplot(grid[:, 1], **({"projection": "3d"} if dim == 3 else {}))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for n, k in enumerate(picks):
         c = colours[n % len(colours)]
@@ -122,13 +125,20 @@ def plot_system(system: System, geometry: dict, columns: dict, path, instants: i
         ax.plot([], [], color=c, label=f"t = {t[k]:.4g} s")
     for j in system.joints:
         if j.parent == "ground":
-            ax.plot(*j.point[:2], "k^", ms=8)
-    ax.set_aspect("equal", adjustable="datalim")
+            ax.plot(*([c] for c in j.point), "k^", ms=8)
+    if dim == 3:  # equal scales: a cube around the drawn points (set_aspect("equal") in 3D)
+        centre, half = (every.max(0) + every.min(0)) / 2, max(size, 1e-9) / 2
+        for k, setter in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
+            setter(centre[k] - half, centre[k] + half)
+        ax.set_box_aspect((1, 1, 1))
+        ax.set_zlabel("z [m]")
+    else:
+        ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    view = "mechanism" if system.dimension == 2 else "mechanism seen from above (its x-y projection)"
+    view = "mechanism"
     ax.set_title(f"{view}; beam deflection from its chord scaled x{factor:g}" if flex
                  else view, fontsize=9)
     fig.suptitle(title or system.name)
