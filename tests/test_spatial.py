@@ -306,3 +306,60 @@ def test_spatial_plot_is_a_3d_view_of_the_run(tmp_path):
                           str(tmp_path / "s6.csv"), "--plot", str(png)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# ----- S7 spatial_slider_crank: a closed spatial loop (ball joint, universal joint, slider)
+S7 = ROOT / "scenes" / "spatial_slider_crank.toml"
+
+
+@pytest.fixture(scope="module")
+def s7():
+    data = tomllib.loads(S7.read_text())
+    data["output"]["columns"] |= {"viol": "violation", "phi": "angle(crank_joint)"}
+    return _built(data)
+
+
+def _x_rigid(phi, r=0.1, L=0.3):
+    return r * np.cos(phi) + np.sqrt(L**2 - (0.05 - r * np.sin(phi))**2 - 0.15**2)
+
+
+def test_s7_holds_its_loop_and_tends_to_the_rigid_slider_crank(s7):
+    """The loop (ball joint at the crank pin, universal joint at the slider, |e| = 1) holds to
+    round-off (violation 6e-16 of the size); stiffened (E, G x 100, x 10^4) the slider follows
+    the rigid closed form x_s = r cos(phi) + sqrt(L^2 - (0.05 - r sin(phi))^2 - 0.15^2) within
+    1.6e-7 m and 1.5e-9 m (1/E), and the rod's axial force at mid-span, set by the rigid
+    motion's inertia, no longer changes (3e-5 of its 237 N peak between the two)."""
+    errs, N = [], []
+    for k in (1e2, 1e4):
+        r = _run(s7, t_end=0.3, dt=1e-5, integrator="genalpha3", params={"E": 2e11 * k, "G": 7.7e10 * k})
+        assert np.abs(r["viol"]).max() < 1e-13
+        errs.append(np.abs(r["x_s"] - _x_rigid(r["phi"])).max())
+        N.append(r["N_mid"])
+    assert errs[1] < 1e-8 and 50 < errs[0] / errs[1] < 200
+    assert np.abs(N[0] - N[1]).max() < 1e-3 * np.abs(N[1]).max()
+    assert np.abs(N[1]).max() > 100  # the slider's inertia really loads the rod
+
+
+def test_s7_constrained_integrators_agree(s7):
+    """genalpha3 and rk4p give the same slider motion and axial force: measured 8.5e-9 m and
+    5e-4 of the peak N. (ali3p's Newton fails at t = 0.26 s here even when full: not yet
+    understood, stated in docs/theory/spatial.md.)"""
+    ref = _run(s7, t_end=0.3, dt=1e-5, integrator="genalpha3")
+    assert np.abs(ref["viol"]).max() < 1e-13
+    for integrator in ("rk4p",):
+        r = _run(s7, t_end=0.3, dt=1e-5, integrator=integrator)
+        assert np.abs(r["x_s"] - ref["x_s"]).max() < 1e-7, integrator
+        assert np.abs(r["N_mid"] - ref["N_mid"]).max() < 2e-3 * np.abs(ref["N_mid"]).max(), integrator
+
+
+def test_s7_loop_that_does_not_close_is_refused(tmp_path):
+    """No spatial assembly yet: a slider started 1 mm off the closed position is refused in one
+    line naming the joint and the gap, and nothing is written."""
+    scene = tmp_path / "s7.toml"
+    scene.write_text(S7.read_text().replace("initial = 0.3549509756796393", "initial = 0.3559509756796393"))
+    out = tmp_path / "out.csv"
+    r = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(scene), "--out", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.count("flexsym: error") == 1 and "joint 'cardan' does not close at t = 0" in r.stderr
+    assert not out.exists()

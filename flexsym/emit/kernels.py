@@ -111,6 +111,19 @@ class SympyToCasadi:
                 v = self(val)
                 out = v if (out is None and cond == sp.true) else ca.if_else(self(cond), v, out)
             return out
+        # sympy folds the conditions of nested Piecewise (a max over several rows: the
+        # violation) into ITE, And, Or
+        if isinstance(e, sp.logic.boolalg.ITE):
+            c, a, b = (self(x) for x in e.args)
+            return ca.if_else(c, a, b)
+        if isinstance(e, (sp.And, sp.Or)):
+            join = ca.logic_and if isinstance(e, sp.And) else ca.logic_or
+            out = self(e.args[0])
+            for x in e.args[1:]:
+                out = join(out, self(x))
+            return out
+        if isinstance(e, sp.Not):
+            return ca.logic_not(self(e.args[0]))
         if e.is_Relational:
             a, b = self(e.lhs), self(e.rhs)
             return {"<": a < b, "<=": a <= b, ">": a > b, ">=": a >= b, "==": a == b,

@@ -25,9 +25,10 @@ from flexsym.model.modes import ModeRef
 from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
-JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical")
+JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal")
 DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
-SPATIAL_JOINT_KINDS = ("revolute", "clamp", "spherical")  # derived in 3D so far (physics/spatial.py)
+SPATIAL_JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal")
+SPATIAL_CUT_KINDS = ("spherical", "universal")  # closing a loop in 3D: their constraint rows  # derived in 3D so far (physics/spatial.py)
 TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
 SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
 STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
@@ -348,6 +349,7 @@ class Joint:
     initial: float = 0.0
     fixed: bool = False
     rate: float | None = None
+    direction: tuple | None = None  # spatial spherical: the child's x axis at t = 0 (parent's frame)
 
     @property
     def has_coordinate(self) -> bool:
@@ -523,9 +525,15 @@ class System:
                 raise SpecError(f"{where}: body '{b.name}' is connected to nothing (no joint "
                                 "names it)")
         tree = spanning_tree(self)
-        if n == 3 and tree.cut:
-            raise SpecError(f"{where}: joint(s) {', '.join(tree.cut)} close a loop: closed loops are "
-                            "not derived for spatial systems yet (a tree is)")
+        for name in tree.cut if n == 3 else ():
+            if self.joint(name).kind not in SPATIAL_CUT_KINDS:
+                raise SpecError(f"{where}: joint '{name}' closes a loop: a {self.joint(name).kind} "
+                                f"joint closing a spatial loop is not derived yet (closing: "
+                                f"{', '.join(SPATIAL_CUT_KINDS)})")
+        for j in self.joints if n == 3 else ():
+            if j.kind == "universal" and j.name not in tree.cut:
+                raise SpecError(f"{where}: joint '{j.name}': a universal joint is derived as the joint "
+                                "that closes a loop only (list it after the joints of the tree)")
         guided = set()
         for d in self.drivers:
             self._check_driver(d, tree, guided)
@@ -637,7 +645,17 @@ class System:
         if bodies[0] == bodies[1]:
             raise SpecError(f"{where}: joins body '{bodies[0]}' to itself")
         n = self.dimension
-        if j.kind == "prismatic" or (n == 3 and j.kind == "revolute" and j.axis is not None):
+        if n == 2 and j.kind == "universal":
+            raise SpecError(f"{where}: a universal joint applies to spatial systems (dimension = 3) only")
+        if j.direction is not None:
+            d = j.direction
+            if j.kind != "spherical" or n != 3:
+                raise SpecError(f"{where}: direction applies to spatial spherical joints only")
+            if (not isinstance(d, (tuple, list)) or len(d) != 3 or not all(_finite(c) for c in d)
+                    or math.hypot(*d) < MIN_AXIS):
+                raise SpecError(f"{where}: direction {d!r} must be three finite numbers, not all 0 "
+                                "(the child's x axis at t = 0, in the parent's frame)")
+        if j.kind == "prismatic" or (n == 3 and j.kind in ("revolute", "universal") and j.axis is not None):
             ax, count = j.axis, ("two", "three")[n - 2]
             if ax is None or len(ax) != n or not all(_finite(a) for a in ax) or not any(ax):
                 raise SpecError(f"{where}: a {j.kind} joint needs an axis ({count} finite numbers, "
@@ -647,7 +665,10 @@ class System:
                                 f"direction, normalised: write e.g. {[1] + [0] * (n - 1)})")
         elif j.axis is not None:
             raise SpecError(f"{where}: axis applies to prismatic joints only" if n == 2 else
-                            f"{where}: axis applies to revolute and prismatic joints only")
+                            f"{where}: axis applies to revolute, prismatic and universal joints only")
+        if n == 3 and j.kind == "universal" and j.axis is None:
+            raise SpecError(f"{where}: a universal joint needs its child's axis (three numbers, in the "
+                            "child's frame)")
         if n == 3 and j.offset != 0:
             raise SpecError(f"{where}: offset (a planar angle) does not apply to spatial joints: "
                             "the child's frame starts parallel to the parent's")
@@ -750,7 +771,8 @@ class System:
             raise SpecError(f"{where}: {str(exc).split(': ', 1)[1]}") from None
 
 
-_SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2}
+_SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2,
+                     "direction": None}
 
 
 def system_to_dict(system: System) -> dict:

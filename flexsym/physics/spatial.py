@@ -48,6 +48,7 @@ before it).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import sympy as sp
@@ -183,10 +184,9 @@ def derive_spatial(system: System) -> SystemDerivation:
         j = system.joint(tree.joint_of(body))
         if j.has_coordinate and j.name not in guided_by_joint:
             coords.append(Coordinate(j.name, "joint", body, j.name))
-        elif j.kind == "spherical":  # Euler parameters, identity at t = 0, e' = G^T omega / 2
-            w0 = j.rate or (0.0, 0.0, 0.0)
-            coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name,
-                                  (1.0 if k == 0 else 0.0, 0.0 if k == 0 else w0[k - 1] / 2))
+        elif j.kind == "spherical":  # Euler parameters: e(0) turns x to direction, e' = G^T omega/2
+            e0, ed0 = initial_euler(j.direction, j.rate)
+            coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
                        for k in range(4)]
     for b in system.bodies:
         if b.flexible:
@@ -233,10 +233,18 @@ def derive_spatial(system: System) -> SystemDerivation:
             a = a / sp.sqrt(a.dot(a))
             Q = rotation(axis, x)
             rel = a * xd
+        elif j.kind == "prismatic":  # the child slides along the unit axis (parent's frame)
+            x, xd = joint_sym[j.name][0]
+            a = _vec(j.axis)
+            a = a / sp.sqrt(a.dot(a))
+            Q, rel = sp.eye(3), sp.zeros(3, 1)
+            m_p = m_p + a * x
         else:
             Q, rel = sp.eye(3), sp.zeros(3, 1)
         omega = Q.T * fp.omega + rel
         V = Q.T * (fp.V + _cross(fp.omega, m_p)) - _cross(omega, m_c)
+        if j.kind == "prismatic":
+            V += a * xd
         A_ = fp.A * Q
         R = fp.R + fp.A * m_p - A_ * m_c
         frames[body] = Frame(A_, R, omega, V, Q.T * fp.g)
@@ -295,9 +303,136 @@ def derive_spatial(system: System) -> SystemDerivation:
     Q_ += _applied(der)
     der.Q = Q_.applyfunc(sp.expand)
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
+    _cut_rows(der)
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
     return der
+
+
+def initial_euler(direction, rate) -> tuple[list[float], list[float]]:
+    """A spherical joint's Euler parameters at t = 0: the shortest rotation turning the parent's
+    x axis to `direction` (none: the identity), and their rates for the child's angular velocity
+    `rate` relative to the parent (parent's frame): e' = G(e)^T A(e)^T omega / 2."""
+    import numpy as np
+
+    e = np.array([1.0, 0.0, 0.0, 0.0])
+    if direction is not None:
+        d = np.asarray(direction, float) / np.linalg.norm(direction)
+        axis = np.cross([1.0, 0.0, 0.0], d)
+        angle = math.atan2(np.linalg.norm(axis), d[0])
+        axis = axis / np.linalg.norm(axis) if np.linalg.norm(axis) > 0 else np.array([0.0, 0.0, 1.0])
+        e = np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
+    w = np.asarray(rate if rate is not None else (0.0, 0.0, 0.0), float)
+    A = np.array(euler_rotation(sp.Matrix(e)).evalf(), dtype=float)
+    G = np.array(euler_G(sp.Matrix(e)).evalf(), dtype=float)
+    return [float(v) for v in e], [float(v) for v in G.T @ (A.T @ w) / 2]
+
+
+def _start_values(der) -> dict:
+    """Every symbol's value at t = 0: the coordinates' starts (elastic 0: undeformed) and the
+    guided joints' theta(0), theta'(0) (for checks and the universal joints' fixed axes)."""
+    from flexsym.scenes.assembly import theta0
+
+    vals = {}
+    for c, x, xd in zip(der.coords, der.q, der.qd):
+        if c.start is not None:
+            vals[x], vals[xd] = c.start
+        elif c.group == "joint":
+            j = der.system.joint(c.joint)
+            vals[x], vals[xd] = j.initial, j.rate or 0.0
+        else:
+            vals[x], vals[xd] = 0.0, 0.0
+    for g in der.guided:
+        th, thd = theta0(der.system)[g.joint]
+        vals[g.symbols[0]], vals[g.symbols[1]] = th, thd
+    vals |= {sym: v for _, sym, v in der.params}
+    return vals
+
+
+def _section_rotation(der, ref: str) -> sp.Matrix:
+    """Ground <- section axes at 'body.marker' (a beam's: the frame turned by the section's
+    rotation theta = (phi, -vz_x, v_x), to first order as the modal kinematics)."""
+    body, m = der.system.marker(ref)
+    fr = der.spatial["frames"][body]
+    if not der.system.body(body).flexible:
+        return fr.A
+    L = der.spatial[body]["P"]["L"]
+    theta = sp.Matrix([_at(der, body, m.x, "phi"), -_at(der, body, m.x, "vz_s") / L,
+                       _at(der, body, m.x, "v_s") / L])
+    return fr.A * (sp.eye(3) + _skew(theta))
+
+
+def _cut_rows(der) -> None:
+    """Constraint rows of the joints that close loops: a spherical joint's three (the parent's
+    point minus the child's, ground components), a universal joint's three and one more: the
+    child's axis e1 stays perpendicular to a direction e2 fixed in the parent's section, e2 at
+    t = 0 perpendicular to e1 and to the parent's x axis (scaled to a length, as every row).
+    Refused when a loop does not close at t = 0 (3D assembly is not derived yet)."""
+    system = der.system
+    scale = sp.nsimplify(length_scale(system))
+    der.spatial["cuts"] = {}
+    start = None
+    for name in der.tree.cut:
+        j = system.joint(name)
+        first = len(der.constraints)
+        gap = _marker_point(der, j.parent) - _marker_point(der, j.child)
+        der.constraints += [(f"{name}.{c}", gap[k]) for k, c in enumerate("xyz")]
+        axes = None
+        if j.kind == "universal":
+            start = start or _start_values(der)
+            e1 = der.spatial["frames"][system.marker(j.child)[0]].A * _vec(j.axis)
+            e1 = e1 / sp.sqrt(_vec(j.axis).dot(_vec(j.axis)))
+            Rp = _section_rotation(der, j.parent)
+            e1_0 = [float(v) for v in e1.xreplace(start).evalf()]
+            x_0 = [float(v) for v in (Rp * sp.Matrix([1, 0, 0])).xreplace(start).evalf()]
+            e2_0 = _vec(_unit(_np_cross(e1_0, x_0), name))
+            e2_local = sp.Matrix([sp.nsimplify(float(v)) for v in (Rp.xreplace(start).evalf().T * e2_0)])
+            e2 = Rp * e2_local
+            der.constraints.append((f"{name}.cross", scale * e1.dot(e2)))
+            axes = (e1, e2, scale)
+        der.spatial["cuts"][name] = (first, axes)
+    if der.tree.cut:
+        start = start or _start_values(der)
+        for row, phi in der.constraints:
+            if row.endswith(".norm"):
+                continue
+            gap = float(phi.xreplace(start).evalf())
+            if abs(gap) > 1e-9 * float(scale):
+                raise SpecError(f"system '{system.name}': joint '{row.split('.')[0]}' does not close "
+                                f"at t = 0 ({row}: {gap:.3g} m): give the joint coordinates that close "
+                                "it (the spatial assembly at t = 0 is not derived yet)")
+
+
+def _np_cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _unit(v, joint: str):
+    n = math.sqrt(sum(c * c for c in v))
+    if n < 1e-9:
+        raise SpecError(f"joint '{joint}': the universal joint's axis lies along the parent's x axis "
+                        "at t = 0 (no cross axis perpendicular to both)")
+    return [c / n for c in v]
+
+
+def cut_loads(der, beam: str) -> list[tuple[sp.Matrix, sp.Matrix, str]]:
+    """(force, torque) in ground components that each cut joint exerts on `beam`, and the
+    marker: minus Phi_q^T lambda split by side (rows parent - child: the parent gets -lambda,
+    the child +lambda; a universal joint's row e1.e2 gives the torques)."""
+    out = []
+    for name, (first, axes) in der.spatial.get("cuts", {}).items():
+        j = der.system.joint(name)
+        lam = der.lam[first:first + 3, 0]
+        for side, ref, sign in (("parent", j.parent, -1), ("child", j.child, 1)):
+            if ref == GROUND or der.system.marker(ref)[0] != beam:
+                continue
+            torque = sp.zeros(3, 1)
+            if axes is not None:
+                e1, e2, scale = axes
+                mu = der.lam[first + 3, 0] * scale
+                torque = -mu * (_cross(e2, e1) if side == "parent" else _cross(e1, e2))
+            out.append((sign * lam, torque, ref))
+    return out
 
 
 def _motion_symbols(body: str) -> tuple[sp.Matrix, sp.Matrix]:
@@ -501,6 +636,16 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
            | dict(zip(a0, der.ddt(fr.V) + _cross(omega, fr.V))))
     out = out.xreplace(now)
     section = _at(der, beam.name, x, "r")
+    for F, tau, ref in cut_loads(der, beam.name):
+        m = der.system.marker(ref)[1]
+        if not (m.x > x or (x >= beam.length and m.x >= beam.length)):
+            continue
+        Floc, tloc = fr.A.T * F, fr.A.T * tau
+        if fn == "N":
+            out += Floc[0]
+        else:
+            k = "xyz".index(fn[1])
+            out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)[k] + tloc[k]
     for ld in der.system.loads:
         if isinstance(ld, PointForce):
             body, m = der.system.marker(ld.marker)

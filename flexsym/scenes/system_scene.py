@@ -75,7 +75,7 @@ KEYS = {
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
     "beam": {"name", "kind", "model", "markers", "damping", *UNIFORM_KEYS, *FE_KEYS},
     "beam3": {"name", "kind", "model", "markers", *SPATIAL_KEYS},
-    "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial"},
+    "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial", "direction"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
     "gravity": {"g"},
@@ -416,7 +416,8 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
         initial, fixed, rate = _initial(r, where, tab)
     return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
                  axis=r.pair(where, tab, "axis", n=dim), offset=r.number(where, tab, "offset", default=0.0),
-                 point=point or (0.0,) * dim, initial=initial, fixed=fixed, rate=rate)
+                 point=point or (0.0,) * dim, initial=initial, fixed=fixed, rate=rate,
+                 direction=r.pair(where, tab, "direction", n=3) if "direction" in tab else None)
 
 
 def _initial(r: _Items, where: str, tab: dict) -> tuple[float, bool, float | None]:
@@ -606,6 +607,8 @@ def check_assembly(system: System) -> tuple[System, Assembly]:
         if j.name in system.tree().cut and (j.fixed or j.rate is not None):
             raise SpecError(f"system '{system.name}': joint '{j.name}' is a cut joint (it closes a "
                             "loop, no coordinate): fixed and rate do not apply")
+    if system.dimension == 3:  # no spatial assembly yet: physics/spatial.py refuses an open loop
+        return system, Assembly(scale=length_scale(system))
     return assemble(system, length_scale(system))
 
 
