@@ -180,7 +180,6 @@ BAD = [  # (what, edit of flap.toml's text, what the one line says)
     ("no gravity vector", ("g = [0.0, 0.0, -9.81]", ""), "[gravity] g: missing"),
     ("planar moment output", ('M_flap_A = "My(blade, root)"', 'M_flap_A = "M(blade, root)"'),
      "M is not derived for spatial systems yet (use Mx, My or Mz"),
-    ("ef not yet in 3D", ('model = "m3"', 'model = "ef"'), "ef is not available yet"),
     ("a prismatic joint", ('kind = "revolute"', 'kind = "prismatic"'),
      "a prismatic joint is not derived for spatial systems yet"),
     ("dimension 4", ("dimension = 3", "dimension = 4"), "dimension: must be 2 (planar) or 3"),
@@ -363,3 +362,102 @@ def test_s7_loop_that_does_not_close_is_refused(tmp_path):
     assert r.returncode == 2, r.stderr
     assert r.stderr.count("flexsym: error") == 1 and "joint 'cardan' does not close at t = 0" in r.stderr
     assert not out.exists()
+
+
+# ----- the spatial geometrically exact reference ef (physics/rod3d.py elements)
+def _flap_ef(n: int, **changes) -> dict:
+    data = _flap_data(**changes)
+    for b in data["body"]:
+        if b["kind"] == "beam":
+            b["model"] = {"variant": "ef", "elements": n}
+    return data
+
+
+@pytest.fixture(scope="module")
+def flap_ef8():
+    return _built(_flap_ef(8))
+
+
+def test_flap_ef_starts_in_the_static_sag(flap_ef8):
+    """t = 0, 8 rod elements: the static sag under gravity. With E and G x 100 (the linear
+    limit) the tip sag is rho A g L^4 / (8 E I_y) times 1 + 4 E I_y / (G A L^2) (the rod's
+    shear, 2.07e-4) to 1e-6; at the scene's E it is less than that by the geometric
+    nonlinearity (the sagged beam's foreshortened arm; -5.5e-4 measured at n = 4, the bound
+    here is -1e-3 .. -1e-4). The root flap moment
+    (rod3d's midpoint section forces extrapolated to the root) is rho A g L^2 / 2 within the
+    extrapolation's O(h^2)."""
+    sag = RHO * A * G_ * L**4 / (8 * E * IY)
+    shear = 4 * E * IY / (2.7e10 * A * L**2)
+    r = _run(flap_ef8, t_end=0.002, dt=1e-3)
+    stiff = _run(flap_ef8, t_end=0.002, dt=1e-3, params={"E": 7e12, "G": 2.7e12})
+    linear = -stiff["w_tip"][0] * 100 / (sag * (1 + shear)) - 1
+    assert abs(linear) < 1e-6, linear
+    nonlinear = -r["w_tip"][0] / (sag * (1 + shear)) - 1
+    assert -1e-3 < nonlinear < -1e-4, nonlinear
+    assert abs(r["v_tip"][0]) < 1e-12 and abs(r["M_lag_A"][0]) < 1e-9
+    root = RHO * A * G_ * L**2 / 2
+    assert abs(r["M_flap_A"][0] / root - 1) < 0.01
+
+
+def test_flap_ef_c_kernels_against_casadi(flap_ef8):
+    """The generated C (mass, force, residual_jac, energy; rod3d elements assembled per element
+    in system.c) against an independent casadi assembly of the same beam (rod3d.ClampedBeam's
+    energies in the guided hub's frame, Lagrange by casadi AD) at a random state and drive,
+    to 1e-11 of each result."""
+    import ctypes
+
+    import casadi as ca
+
+    from flexsym.physics.lagrange import equations_of_motion_sx
+    from flexsym.physics.rod3d import ClampedBeam, Section
+
+    n = 8
+    beam = ClampedBeam(n=n, L=L)
+    sec = Section(E=E, G=2.7e10, rho=RHO, A=A, Iy=IY, Iz=2e-7, J=4e-7).vector
+    q, qd, qdd, d = ca.SX.sym("q", 6 * n), ca.SX.sym("qd", 6 * n), ca.SX.sym("qdd", 6 * n), ca.SX.sym("d", 4)
+    T, Ve, Vg = beam.energies(q + beam.q0, qd, ca.vertcat(0, 0, d[2]), ca.DM.zeros(3),
+                              ca.DM([0, 0, -G_]), sec)
+    Vt = Ve + Vg
+    M, f = equations_of_motion_sx(T, -ca.gradient(Vt, q), q, qd, [(d[1], d[2], d[3])])
+    r = ca.mtimes(M, qdd) - f
+    M2 = ca.mtimes(qd.T, ca.mtimes(M, qd)) / 2
+    hub = d[2]**2 / 2  # the guided hub's T (I_z = 1): in T, and -T0 in h
+    ref = ca.Function("ref", [q, qd, qdd, d], [M, f, ca.jacobian(r, q), ca.jacobian(r, qd),
+                                               ca.vertcat(T + hub, Vt, M2 - ca.substitute(T, qd, 0 * qd) - hub + Vt)])
+    rnd = np.random.default_rng(3)
+    qv, qdv, qddv = rnd.uniform(-0.1, 0.1, 6 * n), rnd.uniform(-0.5, 0.5, 6 * n), rnd.uniform(-1, 1, 6 * n)
+    dv = np.array([0.3, 0.7, 2.1, 0.4])
+    want = [np.array(x) for x in ref(qv, qdv, qddv, dv)]
+
+    lib = ctypes.CDLL(str(flap_ef8.library))
+    P = ctypes.POINTER(ctypes.c_double)
+    fn4 = ctypes.CFUNCTYPE(None, P, P, P, P)
+    fn5 = ctypes.CFUNCTYPE(None, P, P, P, P, P)
+    fn7 = ctypes.CFUNCTYPE(None, P, P, P, P, P, P, P)
+
+    class System(ctypes.Structure):
+        _fields_ = ([("s%d" % k, ctypes.c_char_p) for k in range(3)] + [("i%d" % k, ctypes.c_int) for k in range(6)]
+                    + [("length_scale", ctypes.c_double)] + [("j%d" % k, ctypes.c_int) for k in range(5)]
+                    + [("ptr%d" % k, ctypes.c_void_p) for k in range(7)]
+                    + [("drive", ctypes.c_void_p), ("mass", fn4), ("force", fn5), ("residual_jac", fn7)]
+                    + [("c%d" % k, ctypes.c_void_p) for k in range(5)] + [("energy", fn5)])
+
+    from flexsym.codegen.generate import model_accessor
+    acc = getattr(lib, model_accessor("flap"))
+    acc.restype = ctypes.POINTER(System)
+    s = acc().contents
+    assert s.i0 == 6 * n
+    p = np.array([RHO, E, A, 2e-7, L, IY, 4e-7, 2.7e10])  # rho E A I L Iy J G
+    arr = lambda a: np.ascontiguousarray(a, dtype=float)
+    qv, qdv, qddv, dv, p = map(arr, (qv, qdv, qddv, dv, p))
+    ptr = lambda a: a.ctypes.data_as(P)
+    N = 6 * n
+    Mc, fc, Jq, Jv, en = np.zeros(N * N), np.zeros(N), np.zeros(N * N), np.zeros(N * N), np.zeros(3)
+    s.mass(ptr(qv), ptr(dv), ptr(p), ptr(Mc))
+    s.force(ptr(qv), ptr(qdv), ptr(dv), ptr(p), ptr(fc))
+    s.residual_jac(ptr(qv), ptr(qdv), ptr(qddv), ptr(dv), ptr(p), ptr(Jq), ptr(Jv))
+    s.energy(ptr(qv), ptr(qdv), ptr(dv), ptr(p), ptr(en))
+    for name, got, ref_ in (("mass", Mc, want[0]), ("force", fc, want[1]), ("dr_dq", Jq, want[2]),
+                            ("dr_dqd", Jv, want[3]), ("energy", en, want[4])):
+        ref_ = ref_.reshape(-1)  # row by row, as the C writes it
+        assert np.abs(got - ref_).max() <= 1e-11 * np.abs(ref_).max(), name

@@ -86,11 +86,12 @@ def build_system_kernels(der: SystemDerivation) -> list:
     # element kernel ef_elastic (its force -dV/dq and stiffness d2V/dq2), see ef_elements()
     en = matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
     frame_T = getattr(der, "frame_T", ())  # a spatial system's bodies (physics/spatial.py)
-    if der.ef_kinetic or frame_T:
+    casadi_T = getattr(der, "casadi_T", ())  # a spatial system's ef beams (rod3d, casadi)
+    if der.ef_kinetic or frame_T or casadi_T:
         # Lagrange on the kinetic energy of the ef bodies and of a spatial system's bodies by AD
         # (lagrange.equations_of_motion_sx): written in their frame's motion, substituted here
         T_ef = (ef_kinetic_energy(der, tr, x) if der.ef_kinetic else ca.SX(0.0)) \
-            + frame_kinetic_energy(tr, frame_T)
+            + frame_kinetic_energy(tr, frame_T) + sum((c(tr, x) for c in casadi_T), ca.SX(0.0))
         guided = [(d[1 + 3 * k], d[2 + 3 * k], d[3 + 3 * k]) for k in range(len(der.guided))]
         M_ef, f_ef = equations_of_motion_sx(T_ef, 0, q, qd, guided)
         M += M_ef
@@ -105,6 +106,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
                 + ca.mtimes(ca.jacobian(p_th, d), ddot) - ca.jacobian(T_ef, d[1 + 3 * k]))
     if der.ef_damping and any(e.has(EF_D) for e in der.outputs.values()):
         tr.symbols[EF_D] = ef_dissipation(der, tr, x)  # the output `dissipation` (2 D)
+    for sym, value in getattr(der, "casadi_outputs", {}).items():  # spatial ef: placeholders
+        tr.symbols[sym], tr.priority[sym] = value(tr, x), 2
     # outputs and ef elastic energies hold square roots and atan2: translated as they are
     y = ca.vertcat(*[tr(e) for e in der.outputs.values()])
     dsyms = {t_sym: x["t"]} | {p.symbol: x["mp"][i] for i, p in enumerate(der.drive_params)}
@@ -132,7 +135,9 @@ def build_system_kernels(der: SystemDerivation) -> list:
              [("q", q), ("e", x["lam"]), ("d", d), ("p", p)],
              [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
         ]
-    return make_kernels(constraint_kernels + _ef_element_kernel(der) + _ef_damping_kernel(der) + [
+    return make_kernels(constraint_kernels + _ef_element_kernel(der) + _rod_element_kernel(der)
+                        + _rod_kinetic_kernels(der, tr, x, ddot)
+                        + _ef_damping_kernel(der) + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
@@ -164,6 +169,81 @@ def _ef_element_kernel(der: SystemDerivation) -> list:
              [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)]),
             ("ef_elastic_grad", "one ANCF element: elastic energy and its gradient (no Hessian)",
              [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
+
+
+def _rod_element_kernel(der: SystemDerivation) -> list:
+    """One rod3d element's elastic energy V(e; pe), its gradient and Hessian (casadi AD), e the
+    12 nodal values (r1, psi1, r2, psi2), pe = [le, E, G, rho, A, Iy, Iz, J]: generated once,
+    called per element by system.c (rod_elastic_add), as the planar ef's ef_elastic."""
+    if not getattr(der, "rod_bodies", None):
+        return []
+    from flexsym.physics.rod3d import elastic_energy
+    e, pe = ca.SX.sym("e", 12), ca.SX.sym("pe", 8)
+    V = elastic_energy(e, pe[0], pe[1:8])
+    H, g = ca.hessian(V, e)
+    return [("rod_elastic", "one rod3d element: elastic energy, its gradient and Hessian",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)]),
+            ("rod_elastic_grad", "one rod3d element: elastic energy and its gradient (no Hessian)",
+             [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
+
+
+def _rod_kinetic_kernels(der: SystemDerivation, tr, x: dict, ddot) -> list:
+    """Spatial ef beams whose frame moves with the drive alone: their elements' kinetic energy
+    T_e(e, e'; omega, V) and its Lagrange terms r_e = d/dt dT_e/de' - dT_e/de = M_e e'' - f_e,
+    one element's kernels (casadi AD) called per element by system.c (rod_kinetic_add), with
+    the frame's motion fm = (omega, V, omega', V') of each such body from rod_frame(d, p)."""
+    bodies = [b for b in getattr(der, "rod_bodies", ()) if b["kinetic_in_c"]]
+    if not bodies:
+        return []
+    from flexsym.physics.rod3d import kinetic_energy
+    e, ed, edd = ca.SX.sym("e", 12), ca.SX.sym("ed", 12), ca.SX.sym("edd", 12)
+    fm, pe = ca.SX.sym("fm", 12), ca.SX.sym("pe", 8)
+    om, V, omd, Vd = fm[0:3], fm[3:6], fm[6:9], fm[9:12]
+    T = kinetic_energy(e, ed, om, V, pe[0], pe[1:8])
+    M, p_ = ca.hessian(T, ed)
+    dpdt = ca.mtimes(ca.jacobian(p_, e), ed) + ca.mtimes(ca.jacobian(p_, om), omd) \
+        + ca.mtimes(ca.jacobian(p_, V), Vd)
+    f = ca.gradient(T, e) - dpdt
+    r = ca.mtimes(M, edd) - f
+    h = ca.mtimes(ed.T, ca.mtimes(M, ed)) / 2 - ca.substitute(T, ed, ca.SX.zeros(12))
+    frames = []
+    for b in bodies:
+        w = ca.vertcat(*[tr(c) for c in b["frame"].omega])
+        v = ca.vertcat(*[tr(c) for c in b["frame"].V])
+        frames += [w, v, ca.mtimes(ca.jacobian(w, x["d"]), ddot), ca.mtimes(ca.jacobian(v, x["d"]), ddot)]
+    return [("rod_frame", "the frame motion (omega, V, omega', V') of each spatial ef beam moved by the drive alone",
+             [("d", x["d"]), ("p", x["p"])], [("fm", ca.vertcat(*frames))]),
+            ("rod_kinetic_mass", "one rod3d element: its mass matrix d2T/de'2",
+             [("e", e), ("pe", pe)], [("M", M)]),
+            ("rod_kinetic_force", "one rod3d element in its frame's motion: T, T2 - T0 and f of M e'' = f",
+             [("e", e), ("ed", ed), ("fm", fm), ("pe", pe)], [("T", T), ("h", h), ("f", f)]),
+            ("rod_kinetic_jac", "one rod3d element: dr/de, dr/de' of r = M e'' - f",
+             [("e", e), ("ed", ed), ("edd", edd), ("fm", fm), ("pe", pe)],
+             [("dr_de", ca.jacobian(r, e)), ("dr_ded", ca.jacobian(r, ed))])]
+
+
+def rod_elements(der: SystemDerivation) -> list[dict]:
+    """Per spatial ef beam, what system.c needs to assemble its rod3d elements: the parameter
+    indices of [L, E, G, rho, A, Iy, I, J], the element count, and per element and entry
+    (r1, psi1, r2, psi2) the coordinate index (-1: the clamped root) and the fraction a of L
+    added to it (node k's x = k L / n)."""
+    out = []
+    for body in getattr(der, "rod_bodies", ()):
+        n, idx = body["n"], body["idx"]
+        node = [[(i, float(k) / n if c == 0 else 0.0) for c, i in enumerate(idx[k])] for k in range(n + 1)]
+        out.append({"name": body["name"], "n": n, "kinetic_in_c": body["kinetic_in_c"],
+                    "params": [body["pidx"][k] for k in ("L", "E", "G", "rho", "A", "Iy", "I", "J")],
+                    "elements": [[(i, c_double(a)) for i, a in node[k] + node[k + 1]] for k in range(n)]})
+    return out
+
+
+def _bandwidth(der: SystemDerivation) -> int:
+    """Half-bandwidth of M and the Jacobians: 11 when every coordinate is a node of one spatial
+    ef beam (a node couples to its neighbours only: 6 + 5), else -1 (dense)."""
+    rods = getattr(der, "rod_bodies", ())
+    if len(rods) == 1 and all(c.group == "node" for c in der.coords) and len(der.coords) > 23:
+        return 11
+    return -1
 
 
 def _ef_damping_element():
@@ -323,7 +403,8 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     versions = tool_versions()
     mass = next(k.function for k in kernels if k.name == "mass")
     qs, ds, ps = mass.sx_in()
-    mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds))
+    mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds)) and not any(
+        b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ()))  # rod elements: M_e(e) in C
     scale = length_scale(system)
     initial = [tuple(c_double(v) for v in c.start) if c.start is not None else
                (c_double(system.joint(c.joint).initial), c_double(system.joint(c.joint).rate or 0.0))
@@ -347,6 +428,8 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "outputs_use_acceleration": der.outputs_use_acceleration,
         "outputs_use_drive": der.outputs_use_drive,
         "ef_bodies": ef_elements(der), "ef_damped": bool(der.ef_damping),
+        "rod_bodies": rod_elements(der), "bandwidth": _bandwidth(der),
+        "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
         "elastic": [i for i, c in enumerate(der.coords) if c.group != "joint"],
     }

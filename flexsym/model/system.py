@@ -580,7 +580,8 @@ class System:
 
     def _check_spatial(self) -> None:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
-        before any work: revolute and clamp joints in a tree, uniform modal beams undamped."""
+        before any work: revolute, spherical and clamp joints in a tree, uniform modal beams or
+        the geometrically exact ef (rod3d), undamped."""
         where = f"system '{self.name}'"
         for j in self.joints:
             if j.kind not in SPATIAL_JOINT_KINDS:
@@ -589,18 +590,16 @@ class System:
         for b in self.bodies:
             if not b.flexible:
                 continue
-            if getattr(b.model, "kind", None) != "modal":
-                raise SpecError(f"{where}: body '{b.name}': the spatial geometrically exact "
-                                "reference ef is not available yet; use a modal model (m0-m3, "
-                                "prestress)")
             if b.model.body is not None:
                 raise SpecError(f"{where}: body '{b.name}': a beam from finite-element data is "
                                 "planar only so far")
+            if b.damping is not None and b.damping.active:
+                raise SpecError(f"{where}: body '{b.name}': structural damping is planar only so far")
+            if getattr(b.model, "kind", None) == "fe":
+                continue  # the geometrically exact rod (physics/rod3d.py), uniform, undamped
             if b.model.strain not in SPATIAL_STRAINS:
                 raise SpecError(f"{where}: body '{b.name}': strain model '{b.model.strain}' is not "
                                 f"derived in 3D (derived: {', '.join(SPATIAL_STRAINS)})")
-            if b.damping is not None and b.damping.active:
-                raise SpecError(f"{where}: body '{b.name}': structural damping is planar only so far")
             if b.model.axial_force == "equilibrium" or b.model.moment == "equilibrium":
                 pass  # N and the moments from equilibrium are derived in 3D
 
