@@ -215,7 +215,7 @@ def test_select_on_a_spatial_scene_is_refused_up_front():
     r = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "select", str(FLAP), "--tol", "0.01"],
                        capture_output=True, text=True)
     assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
-    assert "spatial ef reference is not available yet" in r.stderr
+    assert "select is not derived for spatial systems yet" in r.stderr
 
 
 # ----- S6 spherical_pendulum: a ball joint (Euler parameters on |e| = 1), tumbling

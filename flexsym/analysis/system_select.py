@@ -77,8 +77,9 @@ def errors(r, ref, columns) -> tuple[float, str]:
 def check_selectable(scene) -> None:
     """Refuse, before any line is printed or any work done, what select cannot score."""
     if scene.system.dimension == 3:
-        raise SpecError(f"{scene.path}: select scores candidates against ef, and the spatial ef "
-                        "reference is not available yet")
+        raise SpecError(f"{scene.path}: select is not derived for spatial systems yet (its ef "
+                        "reference runs only where the drive alone moves a beam's frame; "
+                        "docs/validation/spatial.md compares the models on S5 by hand)")
 
 
 def select_system(scene, tol: float, repeat: int = 3, log=print):
