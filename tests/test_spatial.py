@@ -210,8 +210,8 @@ def test_spatial_outputs_are_refused_in_a_planar_system():
 
 
 def test_select_on_a_spatial_scene_is_refused_up_front():
-    """select is not derived for spatial systems yet (its ef reference is S5-shaped only): one line, exit 2,
-    before the first line of its report."""
+    """select is not derived for spatial systems yet (its ef reference is S5-shaped only): one
+    line, exit 2, before the first line of its report."""
     r = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "select", str(FLAP), "--tol", "0.01"],
                        capture_output=True, text=True)
     assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
