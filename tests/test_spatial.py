@@ -180,8 +180,8 @@ BAD = [  # (what, edit of flap.toml's text, what the one line says)
     ("no gravity vector", ("g = [0.0, 0.0, -9.81]", ""), "[gravity] g: missing"),
     ("planar moment output", ('M_flap_A = "My(blade, root)"', 'M_flap_A = "M(blade, root)"'),
      "M is not derived for spatial systems yet (use Mx, My or Mz"),
-    ("a prismatic joint", ('kind = "revolute"', 'kind = "prismatic"'),
-     "a prismatic joint is not derived for spatial systems yet"),
+    ("a universal joint in the tree", ('kind = "revolute"', 'kind = "universal"'),
+     "a universal joint is derived as the joint that closes a loop only"),
     ("dimension 4", ("dimension = 3", "dimension = 4"), "dimension: must be 2 (planar) or 3"),
     ("damping", ('model = "m3"', 'model = "m3"\ndamping = { beta = 1e-3 }'), "damping: unknown key"),
 ]
