@@ -43,7 +43,8 @@ from flexsym.core.paths import cache_dir, file_lock, module_file, templates_dir
 from flexsym.model.system import System, length_scale, system_to_dict
 from flexsym.core.versions import generator_hash, tool_versions
 
-_OWN = ("physics.assemble", "physics.spatial", "physics.efbody", "model.system", "codegen.sysgen")
+_OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.rod3d", "physics.efbody",
+        "model.system", "codegen.sysgen")
 
 
 def fingerprint(system: System) -> str:

@@ -18,7 +18,8 @@ GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "mode
                      "model.library", "physics.assemble", "physics.efbody", "physics.outputs",
                      "model.variant", "physics.lagrange", "physics.modal", "codegen.derive",
                      "emit.kernels", "emit.cemit", "codegen.generate", "physics.fe", "model.fedata",
-                     "physics.exact", "model.beam_element", "physics.spatial")
+                     "physics.exact", "model.beam_element", "physics.spatial", "physics.spatial_ef",
+                     "physics.rod3d")
 
 
 def tool_versions() -> dict[str, str]:

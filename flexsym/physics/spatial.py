@@ -2,11 +2,12 @@
 spanning tree (sympy): the 3D sibling of assemble.py, producing the same SystemDerivation, so
 that sysgen.py, the templates and the runtime take it unchanged.
 
-What is derived so far: a tree of rigid bodies and uniform modal beams joined by revolute
-joints (about an axis fixed in the parent's frame), spherical joints (Euler parameters on
-|e| = 1, a constraint row) and clamps, guided or motor-driven, under gravity and point forces.
-Closed loops, universal/prismatic joints, ef in 3D and damping are refused up front by
-System._check_spatial.
+What is derived so far: rigid bodies, uniform modal beams and the geometrically exact `ef`
+(spatial_ef.py) joined in a tree by revolute and prismatic joints (axes fixed in the parent's
+frame), spherical joints (Euler parameters on |e| = 1, a constraint row) and clamps, with loops
+closed by spherical and universal joints (_cut_rows), guided or motor-driven, under gravity and
+point forces. What is not (cylindrical joints, damping, bodies from finite-element data, ...)
+is refused up front by System._check_spatial.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
@@ -65,6 +66,8 @@ from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guide
 from flexsym.physics.integrals import IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
+from flexsym.physics.spatial_ef import (ef_at, ef_body, ef_coordinates, ef_elastic_output,
+                                        ef_kinetic_output, ef_section, is_ef)
 from flexsym.model.maneuver import parse_expression, t
 
 
@@ -190,7 +193,7 @@ def derive_spatial(system: System) -> SystemDerivation:
             coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
                        for k in range(4)]
     for b in system.bodies:
-        if b.flexible and _is_ef(b):  # rod3d: per free node, displacement and rotation vector
+        if b.flexible and is_ef(b):  # rod3d: per free node, displacement and rotation vector
             coords += [Coordinate(f"{b.name}_{n}", "node", b.name, start=(0.0, 0.0))
                        for n in ef_coordinates(b)]
         elif b.flexible:
@@ -273,8 +276,8 @@ def derive_spatial(system: System) -> SystemDerivation:
             V_grav += -m * (gvec.dot(fr.R) + fr.g.dot(c))
             continue
         P = psyms[b.name]
-        if _is_ef(b):
-            V_grav += _ef_body(der, b, P, fr, om, vf, actual, gvec)
+        if is_ef(b):
+            V_grav += ef_body(der, b, P, fr, om, vf, actual, gvec)
             continue
         spec = b.model.validate()
         names = beam_coordinates(b)
@@ -322,8 +325,6 @@ def initial_euler(direction, rate) -> tuple[list[float], list[float]]:
     """A spherical joint's Euler parameters at t = 0: the shortest rotation turning the parent's
     x axis to `direction` (none: the identity), and their rates for the child's angular velocity
     `rate` relative to the parent (parent's frame): e' = G(e)^T A(e)^T omega / 2."""
-    import numpy as np
-
     e = np.array([1.0, 0.0, 0.0, 0.0])
     if direction is not None:
         d = np.asarray(direction, float) / np.linalg.norm(direction)
@@ -504,7 +505,7 @@ def _marker_point(der, ref: str) -> sp.Matrix:
     if not der.system.body(body).flexible:
         return fr.R + fr.A * _vec((m.x, m.y, m.z))
     if der.spatial[body].get("kind") == "ef":
-        return fr.R + fr.A * _ef_at(der, body, m.x)
+        return fr.R + fr.A * ef_at(der, body, m.x)
     return fr.R + fr.A * _at(der, body, m.x, "r")
 
 
@@ -563,10 +564,10 @@ def _output(der, quantity: str) -> sp.Expr:
     if fn in ("x", "y", "z"):
         return _marker_point(der, args[0])["xyz".index(fn)]
     if fn == "T":  # EF_T: what casadi adds (the bodies' T in their frame's motion)
-        return der.T + EF_T + (_ef_kinetic_output(der) if der.casadi_T_out else 0)
+        return der.T + EF_T + (ef_kinetic_output(der) if der.casadi_T_out else 0)
     ef = getattr(der, "rod_bodies", [])
     if fn == "V":
-        return der.V + (_ef_elastic_output(der) if ef else 0)
+        return der.V + (ef_elastic_output(der) if ef else 0)
     if fn == "violation":
         return violation(der)
     if fn in ("Hx", "Hy", "Hz"):
@@ -576,18 +577,18 @@ def _output(der, quantity: str) -> sp.Expr:
         return _momentum(der)["xyz".index(fn[1])]
     beam = system.body(args[0])
     x = beam_station(system, beam, args[1], where)
-    if _is_ef(beam):
+    if is_ef(beam):
         if fn in ("u", "v", "vz"):
-            r = _ef_at(der, beam.name, x)
+            r = ef_at(der, beam.name, x)
             k = ("u", "v", "vz").index(fn)
             return r[k] - (sp.nsimplify(x) / sp.nsimplify(beam.length) * der.spatial[beam.name]["P"]["L"]
                            if k == 0 else 0)
         if fn == "w":
-            p0, p1, px = (_ef_at(der, beam.name, xx) for xx in (0.0, beam.length, x))
+            p0, p1, px = (ef_at(der, beam.name, xx) for xx in (0.0, beam.length, x))
             d = p1 - p0
             c = _cross(d, px - p0)
             return sp.sqrt(c.dot(c) / d.dot(d))
-        return _ef_section(der, beam, x, fn)
+        return ef_section(der, beam, x, fn)
     if fn in ("u", "v", "vz"):
         return _at(der, beam.name, x, fn)
     if fn == "w":  # distance from the chord root-tip
@@ -685,158 +686,3 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
             else:
                 out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)["xyz".index(fn[1])]
     return out
-
-
-# ----- the geometrically exact reference `ef` in 3D (physics/rod3d.py, casadi) -----
-# A uniform beam clamped to its floating frame at its root, n two-node Simo-Reissner elements.
-# Coordinates per free node k = 1..n (frame components): the displacement (ux, uy, uz) from
-# the undeformed position (k L / n, 0, 0) and the section's rotation vector (px, py, pz); all
-# zero at the undeformed start. Gravity is linear in the nodes and stays in sympy; the
-# elements' kinetic energy (in the frame's actual omega and V) is built in casadi and joins
-# the AD path (der.casadi_T); their elastic energy is one casadi element kernel called per
-# element by system.c (sysgen._rod_element_kernel, der.rod_bodies). Outputs that need the
-# element (section forces, the elastic energy) are placeholders in the sympy outputs, each
-# given its casadi value by sysgen (der.casadi_outputs).
-
-EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
-EF_V = sp.Symbol("V_rod_", real=True)  # the rod elements' elastic energy (casadi)
-
-
-def _is_ef(b) -> bool:
-    return getattr(b.model, "kind", None) == "fe"
-
-
-def ef_coordinates(b) -> list[str]:
-    """The coordinate names (without the body prefix) of a spatial ef beam."""
-    return [f"{c}{k}" for k in range(1, b.model.elements + 1) for c in EF_NODE]
-
-
-def _ef_body(der, b, P: dict, fr: Frame, om, vf, actual, gvec) -> sp.Expr:
-    """Registers a spatial ef beam (der.rod_bodies, der.casadi_T, der.spatial) and returns its
-    gravity potential (sympy)."""
-    n = b.model.elements
-    qindex = {c.name: i for i, c in enumerate(der.coords)}
-    idx = [[-1] * 6] + [[qindex[f"{b.name}_{c}{k}"] for c in EF_NODE] for k in range(1, n + 1)]
-    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
-    pidx = {k: pindex[v] for k, v in P.items()}
-    L, rho, A = P["L"], P["rho"], P["A"]
-
-    def node(k):  # sympy position of node k in the frame
-        if k == 0:
-            return sp.zeros(3, 1)
-        return sp.Matrix([sp.Rational(k, n) * L + der.q[idx[k][0]], der.q[idx[k][1]], der.q[idx[k][2]]])
-
-    info = dict(kind="ef", n=n, P=P, idx=idx, pidx=pidx, node=node, frame=fr, length=b.length)
-    der.spatial[b.name] = info
-    # a frame whose motion is the drive's alone (a guided hub, a clamp chain to ground): the
-    # elements' kinetic energy is a second element kernel called per element in C (its Lagrange
-    # terms by casadi AD within the element); else it joins the system's AD path (der.casadi_T),
-    # whose kernels grow by ~2e4 operations per element
-    free = sp.Matrix([*fr.omega, *fr.V]).free_symbols
-    in_c = not free & (set(der.q) | set(der.qd))
-    der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c, frame=fr))
-    info["kinetic_in_c"] = in_c
-    der.terms.append((b.name, "rod3d_elastic", ("node",), None, None))
-
-    def kinetic(tr, x, info=info):
-        import casadi as ca
-        from flexsym.physics.rod3d import element_functions
-        f = element_functions()["kinetic"]
-        omega = ca.vertcat(*[tr(e) for e in fr.omega])
-        V = ca.vertcat(*[tr(e) for e in fr.V])
-        nodes, rates = rod_nodes(info, x["q"], x["p"]), rod_nodes(info, x["qd"], None)
-        le, sec = x["p"][pidx["L"]] / n, rod_section(info, x["p"])
-        return sum((f(ca.vertcat(nodes[k], nodes[k + 1]), ca.vertcat(rates[k], rates[k + 1]),
-                      omega, V, le, sec, 1.0) for k in range(n)), ca.SX(0.0))
-    if in_c:
-        der.casadi_T_out.append(kinetic)  # only the T output reads it (energy: system.c)
-    else:
-        der.casadi_T.append(kinetic)
-    g_c = fr.g
-    return (-rho * A * L * gvec.dot(fr.R)
-            - rho * A * L / (2 * n) * sum((g_c.dot(node(k) + node(k + 1)) for k in range(n)), sp.Integer(0)))
-
-
-def rod_section(info, p):
-    """sec = (E, G, rho, A, Iy, Iz, J) of rod3d from the run-time parameters."""
-    import casadi as ca
-    return ca.vertcat(*[p[info["pidx"][k]] for k in ("E", "G", "rho", "A", "Iy", "I", "J")])
-
-
-def rod_nodes(info, v, p):
-    """Nodal 6-vectors (frame components) k = 0..n of a spatial ef beam from the coordinate
-    vector v (casadi): positions when p is given (x = k L / n added), else rates."""
-    import casadi as ca
-    n, out = info["n"], [ca.SX.zeros(6)]
-    for k in range(1, n + 1):
-        ent = [v[i] for i in info["idx"][k]]
-        if p is not None:
-            ent[0] = ent[0] + p[info["pidx"]["L"]] * k / n
-        out.append(ca.vertcat(*ent))
-    return out
-
-
-def _ef_at(der, body: str, x: float) -> sp.Matrix:
-    """The deformed axis point at station x (linear between the nodes), frame components."""
-    info = der.spatial[body]
-    n = info["n"]
-    s_ = sp.nsimplify(x) / sp.nsimplify(info["length"]) * n
-    j = min(int(sp.floor(s_)), n - 1)
-    tt = s_ - j
-    return (1 - tt) * info["node"](j) + tt * info["node"](j + 1)
-
-
-def _ef_section(der, beam, x: float, fn: str) -> sp.Expr:
-    """N, Mx, My, Mz at x: rod3d's constitutive section forces (deformed section axes) at the
-    element midpoints, linear in x between them and extrapolated over the end half-elements
-    (rod3d.ClampedBeam.section_forces_at), as a placeholder given its casadi value by sysgen."""
-    info = der.spatial[beam.name]
-    n = info["n"]
-    sym = sp.Symbol(f"rod_{beam.name}_{fn}_{len(der.casadi_outputs)}", real=True)
-    comp = {"N": 0, "Mx": 3, "My": 4, "Mz": 5}[fn]
-    s_ = float(x) / float(info["length"]) * n  # in element lengths
-    k = min(max(int(np.floor(s_ - 0.5)), 0), max(n - 2, 0))
-    tt = s_ - (k + 0.5)
-
-    def value(tr, xx, info=info, k=k, tt=tt, comp=comp):
-        import casadi as ca
-        from flexsym.physics.rod3d import element_functions
-        f = element_functions()["forces"]
-        nodes = rod_nodes(info, xx["q"], xx["p"])
-        le, sec = xx["p"][info["pidx"]["L"]] / n, rod_section(info, xx["p"])
-        Fk = f(ca.vertcat(nodes[k], nodes[k + 1]), le, sec)[comp]
-        if n == 1:
-            return Fk
-        Fk1 = f(ca.vertcat(nodes[k + 1], nodes[k + 2]), le, sec)[comp]
-        return (1 - tt) * Fk + tt * Fk1
-    der.casadi_outputs[sym] = value
-    return sym
-
-
-def _ef_elastic_output(der) -> sp.Expr:
-    """The rod elements' elastic energy in the V output (a placeholder, casadi)."""
-    if EF_V not in der.casadi_outputs:
-        def value(tr, xx):
-            import casadi as ca
-            from flexsym.physics.rod3d import element_functions
-            f = element_functions()["elastic"]
-            total = ca.SX(0.0)
-            for body in der.rod_bodies:
-                info = der.spatial[body["name"]]
-                nodes = rod_nodes(info, xx["q"], xx["p"])
-                le, sec = xx["p"][info["pidx"]["L"]] / info["n"], rod_section(info, xx["p"])
-                total += sum((f(ca.vertcat(nodes[k], nodes[k + 1]), le, sec)
-                              for k in range(info["n"])), ca.SX(0.0))
-            return total
-        der.casadi_outputs[EF_V] = value
-    return EF_V
-
-
-EF_TK = sp.Symbol("T_rod_", real=True)  # the T of ef beams whose elements' T is a C kernel
-
-
-def _ef_kinetic_output(der) -> sp.Expr:
-    if EF_TK not in der.casadi_outputs:
-        der.casadi_outputs[EF_TK] = lambda tr, xx: sum((c(tr, xx) for c in der.casadi_T_out),
-                                                       __import__("casadi").SX(0.0))
-    return EF_TK

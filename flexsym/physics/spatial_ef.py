@@ -1,0 +1,157 @@
+"""The geometrically exact reference `ef` of spatial systems (physics/rod3d.py's elements,
+casadi): a body kind of physics/spatial.py, which asks it for a beam's coordinates, gravity
+potential, axis points and section forces.
+
+A uniform beam clamped to its floating frame at its root, n two-node Simo-Reissner elements.
+Coordinates per free node k = 1..n (frame components): the displacement (ux, uy, uz) from the
+undeformed position (k L / n, 0, 0) and the section's rotation vector (px, py, pz); all zero
+at the undeformed start. Gravity is linear in the nodes and stays in sympy. The elements'
+kinetic energy (in the frame's actual omega and V) is an element kernel called per element by
+system.c when the drive alone moves the frame, else it joins the AD path (der.casadi_T, whose
+kernels grow by ~2e4 operations per element); their elastic energy is one casadi element
+kernel called per element by system.c (sysgen._rod_element_kernel, der.rod_bodies). Outputs
+that need the element (section forces, the elastic energy) are placeholders in the sympy
+outputs, each given its casadi value by sysgen (der.casadi_outputs).
+"""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import sympy as sp
+
+from flexsym.physics.rod3d import element_functions
+
+EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
+EF_V = sp.Symbol("V_rod_", real=True)  # the rod elements' elastic energy (casadi)
+
+
+def is_ef(b) -> bool:
+    return getattr(b.model, "kind", None) == "fe"
+
+
+def ef_coordinates(b) -> list[str]:
+    """The coordinate names (without the body prefix) of a spatial ef beam."""
+    return [f"{c}{k}" for k in range(1, b.model.elements + 1) for c in EF_NODE]
+
+
+def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
+    """Registers a spatial ef beam (der.rod_bodies, der.casadi_T, der.spatial) and returns its
+    gravity potential (sympy)."""
+    n = b.model.elements
+    qindex = {c.name: i for i, c in enumerate(der.coords)}
+    idx = [[-1] * 6] + [[qindex[f"{b.name}_{c}{k}"] for c in EF_NODE] for k in range(1, n + 1)]
+    pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
+    pidx = {k: pindex[v] for k, v in P.items()}
+    L, rho, A = P["L"], P["rho"], P["A"]
+
+    def node(k):  # sympy position of node k in the frame
+        if k == 0:
+            return sp.zeros(3, 1)
+        return sp.Matrix([sp.Rational(k, n) * L + der.q[idx[k][0]], der.q[idx[k][1]], der.q[idx[k][2]]])
+
+    info = dict(kind="ef", n=n, P=P, idx=idx, pidx=pidx, node=node, frame=fr, length=b.length)
+    der.spatial[b.name] = info
+    # a frame whose motion is the drive's alone (a guided hub, a clamp chain to ground): the
+    # elements' kinetic energy is a second element kernel called per element in C (its Lagrange
+    # terms by casadi AD within the element); else it joins the system's AD path (der.casadi_T),
+    # whose kernels grow by ~2e4 operations per element
+    free = sp.Matrix([*fr.omega, *fr.V]).free_symbols
+    in_c = not free & (set(der.q) | set(der.qd))
+    der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c, frame=fr))
+    info["kinetic_in_c"] = in_c
+    der.terms.append((b.name, "rod3d_elastic", ("node",), None, None))
+
+    def kinetic(tr, x, info=info):
+        f = element_functions()["kinetic"]
+        omega = ca.vertcat(*[tr(e) for e in fr.omega])
+        V = ca.vertcat(*[tr(e) for e in fr.V])
+        nodes, rates = rod_nodes(info, x["q"], x["p"]), rod_nodes(info, x["qd"], None)
+        le, sec = x["p"][pidx["L"]] / n, rod_section(info, x["p"])
+        return sum((f(ca.vertcat(nodes[k], nodes[k + 1]), ca.vertcat(rates[k], rates[k + 1]),
+                      omega, V, le, sec, 1.0) for k in range(n)), ca.SX(0.0))
+    if in_c:
+        der.casadi_T_out.append(kinetic)  # only the T output reads it (energy: system.c)
+    else:
+        der.casadi_T.append(kinetic)
+    g_c = fr.g
+    return (-rho * A * L * gvec.dot(fr.R)
+            - rho * A * L / (2 * n) * sum((g_c.dot(node(k) + node(k + 1)) for k in range(n)), sp.Integer(0)))
+
+
+def rod_section(info, p):
+    """sec = (E, G, rho, A, Iy, Iz, J) of rod3d from the run-time parameters."""
+    return ca.vertcat(*[p[info["pidx"][k]] for k in ("E", "G", "rho", "A", "Iy", "I", "J")])
+
+
+def rod_nodes(info, v, p):
+    """Nodal 6-vectors (frame components) k = 0..n of a spatial ef beam from the coordinate
+    vector v (casadi): positions when p is given (x = k L / n added), else rates."""
+    n, out = info["n"], [ca.SX.zeros(6)]
+    for k in range(1, n + 1):
+        ent = [v[i] for i in info["idx"][k]]
+        if p is not None:
+            ent[0] = ent[0] + p[info["pidx"]["L"]] * k / n
+        out.append(ca.vertcat(*ent))
+    return out
+
+
+def ef_at(der, body: str, x: float) -> sp.Matrix:
+    """The deformed axis point at station x (linear between the nodes), frame components."""
+    info = der.spatial[body]
+    n = info["n"]
+    s_ = sp.nsimplify(x) / sp.nsimplify(info["length"]) * n
+    j = min(int(sp.floor(s_)), n - 1)
+    tt = s_ - j
+    return (1 - tt) * info["node"](j) + tt * info["node"](j + 1)
+
+
+def ef_section(der, beam, x: float, fn: str) -> sp.Expr:
+    """N, Mx, My, Mz at x: rod3d's constitutive section forces (deformed section axes) at the
+    element midpoints, linear in x between them and extrapolated over the end half-elements
+    (rod3d.ClampedBeam.section_forces_at), as a placeholder given its casadi value by sysgen."""
+    info = der.spatial[beam.name]
+    n = info["n"]
+    sym = sp.Symbol(f"rod_{beam.name}_{fn}_{len(der.casadi_outputs)}", real=True)
+    comp = {"N": 0, "Mx": 3, "My": 4, "Mz": 5}[fn]
+    s_ = float(x) / float(info["length"]) * n  # in element lengths
+    k = min(max(int(np.floor(s_ - 0.5)), 0), max(n - 2, 0))
+    tt = s_ - (k + 0.5)
+
+    def value(tr, xx, info=info, k=k, tt=tt, comp=comp):
+        f = element_functions()["forces"]
+        nodes = rod_nodes(info, xx["q"], xx["p"])
+        le, sec = xx["p"][info["pidx"]["L"]] / n, rod_section(info, xx["p"])
+        Fk = f(ca.vertcat(nodes[k], nodes[k + 1]), le, sec)[comp]
+        if n == 1:
+            return Fk
+        Fk1 = f(ca.vertcat(nodes[k + 1], nodes[k + 2]), le, sec)[comp]
+        return (1 - tt) * Fk + tt * Fk1
+    der.casadi_outputs[sym] = value
+    return sym
+
+
+def ef_elastic_output(der) -> sp.Expr:
+    """The rod elements' elastic energy in the V output (a placeholder, casadi)."""
+    if EF_V not in der.casadi_outputs:
+        def value(tr, xx):
+            f = element_functions()["elastic"]
+            total = ca.SX(0.0)
+            for body in der.rod_bodies:
+                info = der.spatial[body["name"]]
+                nodes = rod_nodes(info, xx["q"], xx["p"])
+                le, sec = xx["p"][info["pidx"]["L"]] / info["n"], rod_section(info, xx["p"])
+                total += sum((f(ca.vertcat(nodes[k], nodes[k + 1]), le, sec)
+                              for k in range(info["n"])), ca.SX(0.0))
+            return total
+        der.casadi_outputs[EF_V] = value
+    return EF_V
+
+
+EF_TK = sp.Symbol("T_rod_", real=True)  # the T of ef beams whose elements' T is a C kernel
+
+
+def ef_kinetic_output(der) -> sp.Expr:
+    if EF_TK not in der.casadi_outputs:
+        der.casadi_outputs[EF_TK] = lambda tr, xx: sum((c(tr, xx) for c in der.casadi_T_out),
+                                                       ca.SX(0.0))
+    return EF_TK
