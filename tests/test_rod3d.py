@@ -269,7 +269,7 @@ def exudyn_tip(n, force):
                                 loadVector=list(force)))
     mbs.Assemble()
     settings = exu.SimulationSettings()
-    settings.solutionSettings.writeSolutionToFile = False  # no solution/ folder in the cwd
+    settings.solution.file.write = False  # no solution/ folder in the cwd
     settings.staticSolver.numberOfLoadSteps = 50
     settings.staticSolver.verboseMode = 0
     settings.staticSolver.newton.relativeTolerance = 1e-10

@@ -220,6 +220,7 @@ def test_select_on_a_spatial_scene_is_refused_up_front():
 
 # ----- S6 spherical_pendulum: a ball joint (Euler parameters on |e| = 1), tumbling
 S6 = ROOT / "scenes" / "spherical_pendulum.toml"
+S6_EXTRA = {"T": "T", "V": "V", "Hz": "Hz", "viol": "violation", "w_q": "w(strip, 0.3)"}
 
 
 def _s6_data(**columns) -> dict:
@@ -229,8 +230,19 @@ def _s6_data(**columns) -> dict:
 
 
 @pytest.fixture(scope="module")
-def s6():
-    return _built(_s6_data(T="T", V="V", Hz="Hz", viol="violation"))
+def s6_with_geometry():
+    """S6 with the checks' columns and the picture's (one build shared by every S6 test and by
+    the CLI run of the same scene text: S6_EXTRA)."""
+    from flexsym.analysis.system_plot import with_plot_outputs
+    from flexsym.toolchain.pipeline import prepare_system
+
+    system, geometry = with_plot_outputs(system_from_dict(_s6_data(**S6_EXTRA), name="spherical_pendulum"))
+    return prepare_system(system, log=lambda m: None), geometry
+
+
+@pytest.fixture(scope="module")
+def s6(s6_with_geometry):
+    return s6_with_geometry[0]
 
 
 def test_s6_conserves_energy_and_vertical_angular_momentum(s6):
@@ -286,21 +298,23 @@ def test_s6_bends_and_twists_and_runs_with_the_other_constrained_integrators(s6)
         assert np.abs(o["z_tip"] - r["z_tip"]).max() < 1e-4, integrator
 
 
-def test_spatial_plot_is_a_3d_view_of_the_run(tmp_path):
+def test_spatial_plot_is_a_3d_view_of_the_run(s6_with_geometry, tmp_path):
     """--plot on a spatial scene: the stations' ground x, y, z become columns, and the chord
     distance the picture scales is the output w(B, x) at the same station (3D, unsigned)."""
-    from flexsym.analysis.system_plot import chord_distance, with_plot_outputs
-    from flexsym.toolchain.pipeline import prepare_system
+    from flexsym.analysis.system_plot import chord_distance
 
-    system, geometry = with_plot_outputs(system_from_dict(_s6_data(w_q="w(strip, 0.3)"), name="s6"))
+    s6, geometry = s6_with_geometry
     assert all(len(cols) == 3 and cols[2].startswith("pz_") for cols in geometry["strip"])
-    r = _run(prepare_system(system, log=lambda m: None), t_end=0.2, dt=1e-4, integrator="genalpha3")
+    r = _run(s6, t_end=0.2, dt=1e-4, integrator="genalpha3")
     k = len(r.t) // 2
     stations = np.array([[r[c][k] for c in cols] for cols in geometry["strip"]])
     assert chord_distance(stations)[3] == pytest.approx(r["w_q"][k], rel=1e-9)
     assert r["w_q"][k] > 0
     scene, png = tmp_path / "s6.toml", tmp_path / "s6.png"
-    scene.write_text(S6.read_text().replace("t_end = 2.0", "t_end = 0.2"))
+    extra = "".join(f', {c} = "{q}"' for c, q in S6_EXTRA.items())
+    text = S6.read_text().replace('T_mid = "Mx(strip, mid)" }', 'T_mid = "Mx(strip, mid)"' + extra + " }")
+    assert extra in text  # the same system as the fixture's: its build is reused
+    scene.write_text(text.replace("t_end = 2.0", "t_end = 0.2"))
     run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(scene), "--out",
                           str(tmp_path / "s6.csv"), "--plot", str(png)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
