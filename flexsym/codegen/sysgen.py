@@ -29,7 +29,7 @@ import casadi as ca
 import sympy as sp
 
 from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, derive_system, ef_guided_force,
-                                      length_param)
+                                      length_param, start_of)
 from flexsym.physics.spatial import derive_spatial
 from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
@@ -407,9 +407,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds)) and not any(
         b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ()))  # rod elements: M_e(e) in C
     scale = length_scale(system)
-    initial = [tuple(c_double(v) for v in c.start) if c.start is not None else
-               (c_double(system.joint(c.joint).initial), c_double(system.joint(c.joint).rate or 0.0))
-               if c.group == "joint" else ("0.0", "0.0") for c in der.coords]
+    initial = [tuple(c_double(v) for v in start_of(system, c)) for c in der.coords]
     ctx = {
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
         "prefix": c_prefix(system.name), "accessor": model_accessor(system.name),

@@ -80,6 +80,18 @@ class Coordinate:
     start: tuple | None = None  # (value, rate) at t = 0 when not the joint's initial / rate
 
 
+def start_of(system: System, c: Coordinate) -> tuple[float, float]:
+    """A coordinate's (value, rate) at t = 0: its own start, else its joint's initial and rate,
+    else 0 (an elastic coordinate: undeformed, at rest). The one place this is decided (the
+    generated initial state, the spatial loop check)."""
+    if c.start is not None:
+        return c.start
+    if c.group == "joint":
+        j = system.joint(c.joint)
+        return j.initial, j.rate or 0.0
+    return 0.0, 0.0
+
+
 @dataclass
 class Guided:
     joint: str

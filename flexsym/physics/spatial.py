@@ -62,7 +62,7 @@ from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, System,
                                   beam_coordinates, beam_station, length_scale, parse_output)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, joint_coordinate,
-                                      violation)
+                                      start_of, violation)
 from flexsym.physics.integrals import IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
@@ -345,15 +345,10 @@ def _start_values(der) -> dict:
 
     vals = {}
     for c, x, xd in zip(der.coords, der.q, der.qd):
-        if c.start is not None:
-            vals[x], vals[xd] = c.start
-        elif c.group == "joint":
-            j = der.system.joint(c.joint)
-            vals[x], vals[xd] = j.initial, j.rate or 0.0
-        else:
-            vals[x], vals[xd] = 0.0, 0.0
+        vals[x], vals[xd] = start_of(der.system, c)
+    drive0 = theta0(der.system)
     for g in der.guided:
-        th, thd = theta0(der.system)[g.joint]
+        th, thd = drive0[g.joint]
         vals[g.symbols[0]], vals[g.symbols[1]] = th, thd
     vals |= {sym: v for _, sym, v in der.params}
     return vals
@@ -395,7 +390,7 @@ def _cut_rows(der) -> None:
             Rp = _section_rotation(der, j.parent)
             e1_0 = [float(v) for v in e1.xreplace(start).evalf()]
             x_0 = [float(v) for v in (Rp * sp.Matrix([1, 0, 0])).xreplace(start).evalf()]
-            e2_0 = _vec(_unit(_np_cross(e1_0, x_0), name))
+            e2_0 = _vec(_unit(np.cross(e1_0, x_0), name))
             e2_local = sp.Matrix([sp.nsimplify(float(v)) for v in (Rp.xreplace(start).evalf().T * e2_0)])
             e2 = Rp * e2_local
             der.constraints.append((f"{name}.cross", scale * e1.dot(e2)))
@@ -411,10 +406,6 @@ def _cut_rows(der) -> None:
                 raise SpecError(f"system '{system.name}': joint '{row.split('.')[0]}' does not close "
                                 f"at t = 0 ({row}: {gap:.3g} m): give the joint coordinates that close "
                                 "it (the spatial assembly at t = 0 is not derived yet)")
-
-
-def _np_cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
 def _unit(v, joint: str):
