@@ -889,5 +889,16 @@ def main(argv=None) -> int:
             signal.signal(sig, handler)
 
 
+def entry() -> None:
+    """The `flexsym` command. A second Ctrl-C while an interrupted command is stopping (GNU
+    timeout sends two) lands outside main's own handling: it ends the command with 130 too,
+    not with a traceback."""
+    try:
+        code = main()
+    except KeyboardInterrupt:
+        code = 130
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

@@ -27,6 +27,7 @@ a running sweep locks. Workers end with the sweep (_init_local_worker).
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import errno
 import hashlib
@@ -432,9 +433,34 @@ def _local_results(plan, chunks, workers, inherited=()):
             yield fut.result()
         finished = True
     finally:
-        # all done: wait for the pool's own thread, else it may still be closing its pipe when
-        # the interpreter exits ("Exception ignored ... Bad file descriptor"); interrupted: go now
-        pool.shutdown(wait=finished, cancel_futures=not finished)
+        # Wait for the pool's own thread, else it may still be closing its pipe when the
+        # interpreter exits ("Exception ignored ... Bad file descriptor"). Interrupted: kill the
+        # workers first. Left to finish their chunks (they ignore Ctrl-C), they kept the exit
+        # waiting, and a second SIGINT then (GNU timeout sends two: to the command and to its
+        # group) cut the interpreter's wait for the pool's thread short: multiprocessing's exit
+        # closed the task queue before that thread sent the workers their stop, and waited for
+        # them forever. Their unfinished runs are dropped; --resume runs them.
+        with _sigint_ignored(not finished):
+            if not finished:
+                for proc in list((getattr(pool, "_processes", None) or {}).values()):
+                    proc.kill()
+            pool.shutdown(wait=True, cancel_futures=not finished)
+
+
+@contextlib.contextmanager
+def _sigint_ignored(ignore: bool):
+    """Ctrl-C ignored inside (in the main thread, where signals are handled): a repeated one
+    cannot cut the clean-up of an interrupted sweep short."""
+    import signal
+
+    if not ignore or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def dask_client(dask):
