@@ -499,7 +499,7 @@ class System:
                 raise SpecError(f"{where}: {len(items)} {what}, more than the limit of {limit} (the "
                                 "derivation's cost grows quickly with the number of bodies)")
         self._check_magnitudes()
-        if self.dimension not in DIMENSIONS or isinstance(self.dimension, bool):
+        if type(self.dimension) is not int or self.dimension not in DIMENSIONS:
             raise SpecError(f"{where}: dimension {self.dimension!r} must be 2 (planar) or 3 (spatial)")
         n = self.dimension
         names: dict[str, str] = {}
@@ -530,6 +530,12 @@ class System:
                 raise SpecError(f"{where}: joint '{name}' closes a loop: a {self.joint(name).kind} "
                                 f"joint closing a spatial loop is not derived yet (closing: "
                                 f"{', '.join(SPATIAL_CUT_KINDS)})")
+        for _, name in tree.parent_joint if n == 3 else ():
+            parent = self.joint(name).parent.partition(".")[0]
+            if parent != GROUND and self.body(parent).flexible:
+                raise SpecError(f"{where}: joint '{name}': a body hung from a flexible beam's marker "
+                                "is not derived in 3D yet (a beam's marker may close a loop: a "
+                                "spherical or universal joint listed after the tree's)")
         for j in self.joints if n == 3 else ():
             if j.kind == "universal" and j.name not in tree.cut:
                 raise SpecError(f"{where}: joint '{j.name}': a universal joint is derived as the joint "
@@ -559,6 +565,11 @@ class System:
             if n == 2 and fn in SPATIAL_ONLY:
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} applies to spatial systems "
                                 "(dimension = 3) only")
+            ef = next((b.name for b in self.bodies if getattr(b.model, "kind", None) == "fe"), None) \
+                if n == 3 and fn in ("Hx", "Hy", "Hz") else None
+            if ef:
+                raise SpecError(f"{where}: output '{o.quantity}': angular momentum is not derived for "
+                                f"a spatial ef beam yet ('{ef}'): use a modal model for {fn}")
             if n == 3 and fn in PLANAR_ONLY:
                 hint = " (use Mx, My or Mz: the torsion and bending moments)" if fn == "M" else ""
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} is not derived for spatial "
@@ -656,9 +667,10 @@ class System:
                                 "(the child's x axis at t = 0, in the parent's frame)")
         if j.kind == "prismatic" or (n == 3 and j.kind in ("revolute", "universal") and j.axis is not None):
             ax, count = j.axis, ("two", "three")[n - 2]
+            frame = "child's" if j.kind == "universal" else "parent's"  # e1 turns with the child
             if ax is None or len(ax) != n or not all(_finite(a) for a in ax) or not any(ax):
                 raise SpecError(f"{where}: a {j.kind} joint needs an axis ({count} finite numbers, "
-                                "not all 0) in the parent's frame")
+                                f"not all 0) in the {frame} frame")
             if math.hypot(*ax) < MIN_AXIS:
                 raise SpecError(f"{where}: axis {list(ax)} is shorter than {MIN_AXIS:g} (it is a "
                                 f"direction, normalised: write e.g. {[1] + [0] * (n - 1)})")

@@ -107,6 +107,35 @@ def poses(system: System, q: dict) -> dict:
     return out
 
 
+def rotations3(system: System) -> dict:
+    """Each body's frame of a spatial system at t = 0 (ground <- frame, numpy), composed as
+    physics/spatial.py does (A_c = A_p Q): a revolute turned by its initial value or theta(0)
+    about its axis, a spherical joint by the shortest turn of x to its direction, undeformed
+    beams. The numbers of the start geometry checks, before anything is derived."""
+    q = {j.name: j.initial for j in system.joints} | {k: v[0] for k, v in theta0(system).items()}
+    out = {GROUND: np.eye(3)}
+    tree = system.tree()
+    for body in tree.order:
+        j = system.joint(tree.joint_of(body))
+        Q = np.eye(3)
+        if j.kind == "revolute":
+            Q = _turn(j.axis or (0.0, 0.0, 1.0), q[j.name])
+        elif j.kind == "spherical" and j.direction is not None:
+            d = np.asarray(j.direction, float) / np.linalg.norm(j.direction)
+            axis = np.cross([1.0, 0.0, 0.0], d)
+            n = np.linalg.norm(axis)
+            Q = _turn(axis if n > 0 else (0.0, 0.0, 1.0), math.atan2(n, d[0]))
+        out[body] = out[j.parent.partition(".")[0]] @ Q
+    return out
+
+
+def _turn(axis, angle) -> np.ndarray:
+    """Rodrigues: the rotation by angle about axis (normalised here)."""
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
 def _local(system, ref):
     m = system.marker(ref)[1]
     return (m.x, m.y)

@@ -41,7 +41,8 @@ expression through the bounded parser of maneuver.py with only its allowed names
 parameters, each requested beam output carried by some mode of the body's model, and the
 assembly at t = 0 (flexsym/scenes/assembly.py: the free joint coordinates and rates are solved
 so that every cut joint closes with undeformed bodies; a loop that cannot close, or is singular
-there, is refused).
+there, is refused; a spatial system, not assembled yet: a universal joint's axis along its
+parent's x axis at t = 0 is refused).
 """
 from __future__ import annotations
 
@@ -50,10 +51,11 @@ import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
 import sympy as sp
 
 from flexsym.core.errors import SpecError
-from flexsym.scenes.assembly import Assembly, assemble, poses, theta0
+from flexsym.scenes.assembly import Assembly, assemble, poses, rotations3, theta0
 from flexsym.model.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
@@ -190,7 +192,7 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     description = r.string("[system]", system_tab, "description", default="")
     start = r.string("[system]", system_tab, "start", default="undeformed")
     dim = system_tab.get("dimension", 2)
-    if dim not in (2, 3) or isinstance(dim, bool):
+    if type(dim) is not int or dim not in (2, 3):  # 3.0 too: it counts the coordinates
         r.fail("[system] dimension", f"must be 2 (planar) or 3 (spatial) (got {dim!r})")
     for key, limit in (("body", MAX_BODIES), ("joint", MAX_JOINTS)):
         if len(_entries(r, data, key)) > limit:  # before anything is read (system.py's limit)
@@ -233,6 +235,9 @@ def _markers(r, where, tab, beam: bool, dim: int = 2) -> tuple[Marker, ...]:
     out = []
     for name, pos in given.items():
         if beam:
+            if isinstance(pos, list):  # [x, y, z]: a beam's markers lie on its axis
+                r.fail(f"{where} markers {name}", f"a beam's marker is its distance x along the "
+                       f"axis (m), one number: markers on a beam lie on its axis (got {pos!r})")
             x = r.number(f"{where} markers", given, name)
             out.append(Marker(name, x))
         else:
@@ -410,6 +415,10 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
                "coordinate; use offset for its angle)")
     if kind == "spherical":  # its one start datum: the angular velocity, a vector
         given = tab.get("initial", {})
+        if not isinstance(given, dict):  # an angle: it has three, and starts at its direction
+            r.fail(f"{where} initial", "a spherical joint starts with the child's frame parallel to "
+                   "the parent's (or its x along direction): give initial = { rate = [wx, wy, wz] } "
+                   f"only (got {given!r})")
         r.table(f"{where} initial", given, {"rate"})
         initial, fixed, rate = 0.0, False, r.pair(f"{where} initial", given, "rate", n=3)
     else:
@@ -608,8 +617,25 @@ def check_assembly(system: System) -> tuple[System, Assembly]:
             raise SpecError(f"system '{system.name}': joint '{j.name}' is a cut joint (it closes a "
                             "loop, no coordinate): fixed and rate do not apply")
     if system.dimension == 3:  # no spatial assembly yet: physics/spatial.py refuses an open loop
+        _check_universal_axes(system)
         return system, Assembly(scale=length_scale(system))
     return assemble(system, length_scale(system))
+
+
+def _check_universal_axes(system: System) -> None:
+    """A universal joint's cross axis e2 is perpendicular to its axis e1 and to the parent's x
+    axis at t = 0 (physics/spatial.py): e1 along that x leaves no such direction."""
+    frames = None
+    for j in system.joints:
+        if j.kind != "universal":
+            continue
+        frames = frames or rotations3(system)
+        e1 = frames[j.child.partition(".")[0]] @ np.asarray(j.axis, float)
+        x = frames[j.parent.partition(".")[0]][:, 0]
+        if np.linalg.norm(np.cross(e1 / np.linalg.norm(e1), x)) < 1e-9:
+            raise SpecError(f"system '{system.name}': joint '{j.name}': axis {list(j.axis)} lies along "
+                            f"the x axis of '{j.parent}' at t = 0 (the cross axis, perpendicular to "
+                            "both, is undefined): give an axis across it, in the child's frame")
 
 
 # ----- the scene ------------------------------------------------------------------------------
