@@ -744,9 +744,9 @@ class System:
     def _check_load(self, load) -> None:
         where = f"system '{self.name}': load {getattr(load, 'name', '') or type(load).__name__}"
         n = self.dimension
-        if n == 3 and not isinstance(load, (Gravity, PointForce)):
+        if n == 3 and not isinstance(load, (Gravity, PointForce, SpringDamper)):
             raise SpecError(f"{where}: a {type(load).__name__} is not derived for spatial systems "
-                            "yet (gravity and point forces are)")
+                            "yet (gravity, point forces and spring-dampers are)")
         if isinstance(load, Gravity):
             if len(load.g) != n or not all(_finite(c) for c in load.g):
                 raise SpecError(f"{where}: g {load.g!r} must be {('two', 'three')[n - 2]} finite numbers")
@@ -763,9 +763,12 @@ class System:
             if not isinstance(load.expression, str) or not load.expression.strip():
                 raise SpecError(f"{where}: empty torque expression")
         elif isinstance(load, SpringDamper):
-            for ref in (load.a, load.b):
+            for end, ref, point in (("a", load.a, load.point_a), ("b", load.b, load.point_b)):
                 if ref != GROUND:
                     self._ref(where, ref)
+                elif len(point) != n or not all(_finite(c) for c in point):
+                    raise SpecError(f"{where}: point_{end} {point!r} (its ground end) must be "
+                                    f"{('two', 'three')[n - 2]} finite numbers")
             for key in ("k", "c", "l0"):
                 v = getattr(load, key)
                 if not _finite(v) or v < 0:

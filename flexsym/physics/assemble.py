@@ -473,10 +473,7 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     Q += sp.Matrix([-sp.diff(V_grav, x) for x in q])
     for load in system.loads:
         if isinstance(load, SpringDamper):
-            Vs, Qs = _spring(der, load)
-            der.V += Vs
-            der.terms.append(("", f"spring {load.name or load.a + '-' + load.b}", ("all",), Vs, Qs))
-            Q += Qs
+            Q += add_spring(der, load, _spring_ends(der, load))
     Q += _applied_forces(der, list(q))
     der.Q = Q.applyfunc(sp.expand)
 
@@ -579,10 +576,10 @@ def _spring_ends(der: SystemDerivation, load) -> list[sp.Matrix]:
             for ref, point in ((load.a, load.point_a), (load.b, load.point_b))]
 
 
-def _spring_force_on_a(der: SystemDerivation, load) -> sp.Matrix:
+def spring_force_on_a(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.Matrix:
     """The spring-damper's force on its end a (ground frame; on b: the opposite): along the
-    line from a to b, k (l - l0) + c l' (l0 = 0: k delta + c delta'), as _spring's Q."""
-    a, b = _spring_ends(der, load)
+    line from a to b, k (l - l0) + c l' (l0 = 0: k delta + c delta'), as add_spring's Q."""
+    a, b = ends
     delta = b - a
     k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
     if l0 == 0:
@@ -591,9 +588,10 @@ def _spring_force_on_a(der: SystemDerivation, load) -> sp.Matrix:
     return (k * (length - l0) + c * der.ddt(length)) * delta / length
 
 
-def _spring(der: SystemDerivation, load) -> tuple[sp.Expr, sp.Matrix]:
-    """V = k (l - l0)^2 / 2 and Q = -dV/dq - c l' dl/dq of a spring-damper."""
-    ends = _spring_ends(der, load)
+def add_spring(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.Matrix:
+    """A spring-damper between the points `ends` (ground components, planar or spatial): its
+    V = k (l - l0)^2 / 2 added to der.V and to der.terms, and its Q = -dV/dq - c l' dl/dq
+    returned."""
     delta = ends[1] - ends[0]
     k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
     if l0 == 0:  # no square root: smooth when the ends meet
@@ -604,7 +602,10 @@ def _spring(der: SystemDerivation, load) -> tuple[sp.Expr, sp.Matrix]:
         length = sp.sqrt(delta.dot(delta))
         V = k * (length - l0)**2 / 2
         damping = sp.Matrix([-c * der.ddt(length) * sp.diff(length, x) for x in der.q])
-    return V, sp.Matrix([-sp.diff(V, x) for x in der.q]) + damping
+    Q = sp.Matrix([-sp.diff(V, x) for x in der.q]) + damping
+    der.V += V
+    der.terms.append(("", f"spring {load.name or load.a + '-' + load.b}", ("all",), V, Q))
+    return Q
 
 
 def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
@@ -899,7 +900,7 @@ def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix
                 F = _rot(der.poses[beam.name].angle) * F
             out.append((F, sp.Integer(0), marker_pose(der, load.marker)[0]))
         elif isinstance(load, SpringDamper) and (beyond(load.a) or beyond(load.b)):
-            Fa = _spring_force_on_a(der, load)
+            Fa = spring_force_on_a(der, load, _spring_ends(der, load))
             for ref, F in ((load.a, Fa), (load.b, -Fa)):
                 if beyond(ref):
                     out.append((F, sp.Integer(0), marker_pose(der, ref)[0]))

@@ -5,9 +5,9 @@ that sysgen.py, the templates and the runtime take it unchanged.
 What is derived so far: rigid bodies, uniform modal beams and the geometrically exact `ef`
 (spatial_ef.py) joined in a tree by revolute and prismatic joints (axes fixed in the parent's
 frame), spherical joints (Euler parameters on |e| = 1, a constraint row) and clamps, with loops
-closed by spherical and universal joints (_cut_rows), guided or motor-driven, under gravity and
-point forces. What is not (cylindrical joints, damping, bodies from finite-element data, ...)
-is refused up front by System._check_spatial.
+closed by spherical and universal joints (_cut_rows), guided or motor-driven, under gravity,
+point forces and spring-dampers. What is not (cylindrical joints, torques, structural
+damping, bodies from finite-element data, ...) is refused up front by System._check_spatial.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
@@ -59,10 +59,10 @@ from flexsym.core.errors import SpecError
 from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
-from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, System,
-                                  beam_coordinates, beam_station, length_scale, parse_output)
-from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, joint_coordinate,
-                                      start_of, violation)
+from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, SpringDamper,
+                                  System, beam_coordinates, beam_station, length_scale, parse_output)
+from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
+                                      joint_coordinate, spring_force_on_a, start_of, violation)
 from flexsym.physics.integrals import IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
@@ -309,6 +309,9 @@ def derive_spatial(system: System) -> SystemDerivation:
     der.V += V_grav
     der.V_grav = V_grav
     Q_ += sp.Matrix([-sp.diff(V_grav, x) for x in q])
+    for load in system.loads:
+        if isinstance(load, SpringDamper):
+            Q_ += add_spring(der, load, _spring_ends(der, load))
     Q_ += _applied(der)
     der.Q = Q_.applyfunc(sp.expand)
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
@@ -495,6 +498,11 @@ def _marker_point(der, ref: str) -> sp.Matrix:
     return fr.R + fr.A * _at(der, body, m.x, "r")
 
 
+def _spring_ends(der, load: SpringDamper) -> list[sp.Matrix]:
+    return [_vec(pt) if ref == GROUND else _marker_point(der, ref)
+            for ref, pt in ((load.a, load.point_a), (load.b, load.point_b))]
+
+
 def _at(der, body: str, x: float, what: str):
     """A field of a beam at station x (the table's values substituted)."""
     d = der.spatial[body]
@@ -657,13 +665,21 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
         else:
             k = "xyz".index(fn[1])
             out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)[k] + tloc[k]
-    for ld in der.system.loads:
+    for ld in der.system.loads:  # point forces and spring ends on the part beyond x
         if isinstance(ld, PointForce):
-            body, m = der.system.marker(ld.marker)
+            acting = [(ld.marker, _vec((ld.fx, ld.fy, ld.fz)), ld.frame == "body")]
+        elif isinstance(ld, SpringDamper):
+            Fa = spring_force_on_a(der, ld, _spring_ends(der, ld))
+            acting = [(ld.a, Fa, False), (ld.b, -Fa, False)]
+        else:
+            continue
+        for ref, Fv, local in acting:
+            if ref == GROUND:
+                continue
+            body, m = der.system.marker(ref)
             if body != beam.name or not (m.x > x or (x >= beam.length and m.x >= beam.length)):
                 continue
-            Fv = _vec((ld.fx, ld.fy, ld.fz))
-            Floc = Fv if ld.frame == "body" else fr.A.T * Fv
+            Floc = Fv if local else fr.A.T * Fv
             if fn == "N":
                 out += Floc[0]
             else:
