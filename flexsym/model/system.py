@@ -565,7 +565,8 @@ class System:
             if n == 2 and fn in SPATIAL_ONLY:
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} applies to spatial systems "
                                 "(dimension = 3) only")
-            ef = next((b.name for b in self.bodies if getattr(b.model, "kind", None) == "fe"), None) \
+            ef = next((b.name for b in self.bodies
+                       if b.flexible and getattr(b.model, "kind", None) == "fe"), None) \
                 if n == 3 and fn in ("Hx", "Hy", "Hz") else None
             if ef:
                 raise SpecError(f"{where}: output '{o.quantity}': angular momentum is not derived for "
