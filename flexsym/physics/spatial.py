@@ -404,8 +404,8 @@ def _cut_rows(der) -> None:
             gap = float(phi.xreplace(start).evalf())
             if abs(gap) > 1e-9 * float(scale):
                 raise SpecError(f"system '{system.name}': joint '{row.split('.')[0]}' does not close "
-                                f"at t = 0 ({row}: {gap:.3g} m): give the joint coordinates that close "
-                                "it (the spatial assembly at t = 0 is not derived yet)")
+                                f"at t = 0 ({row}: {gap:.3g} m): assemble the system first "
+                                "(scenes.system_scene.checked_system; the scene reader does)")
 
 
 def _unit(v):

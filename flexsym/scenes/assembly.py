@@ -5,7 +5,9 @@ Every flexible body is undeformed (its elastic coordinates and their rates are 0
 joints' constraints Phi(q, t) = 0 are solved for the *free* joint coordinates only: those of
 the tree joints that are not guided and not `fixed`, starting from their `initial` values
 (guesses; 0 when not given). A guided joint's coordinate and rate are its driver's theta(0),
-theta'(0); a fixed coordinate never moves; a given `rate` never changes.
+theta'(0); a fixed coordinate never moves; a given `rate` never changes. In a spatial system
+a ball joint's coordinates are two tilts of its `direction` across it (poses3); the spatial
+velocity analysis is not derived yet, so a spatial loop must start at rest (refused else).
 
 Positions: Gauss-Newton with minimum-norm steps (numpy's least squares) on Phi scaled by the
 mechanism's size, coordinates scaled likewise (a prismatic one by the size), each step halved
@@ -57,7 +59,8 @@ class Assembly:
         run's, whose multiple of the size is what the runtime's consistent start leaves alone."""
         if not (self.moved or self.rates):
             return None
-        parts = [f"joint {n} moved {b - a:+.3g} {u} to {b:.10g}" for n, u, a, b in self.moved]
+        parts = [f"joint {n} turned {b:.3g} {u} to [{', '.join(f'{c:.10g}' for c in m[0])}]" if m else
+                 f"joint {n} moved {b - a:+.3g} {u} to {b:.10g}" for n, u, a, b, *m in self.moved]
         parts += [f"joint {n} rate set to {b:.10g} {u}/s (from {a:g})" for n, u, a, b in self.rates]
         tol = newton_tol * self.scale
         strain = ("below the runtime's tolerance {:.2g} m: elastic coordinates 0 at t = 0, no "
@@ -108,25 +111,76 @@ def poses(system: System, q: dict) -> dict:
 
 
 def rotations3(system: System) -> dict:
-    """Each body's frame of a spatial system at t = 0 (ground <- frame, numpy), composed as
-    physics/spatial.py does (A_c = A_p Q): a revolute turned by its initial value or theta(0)
-    about its axis, a spherical joint by the shortest turn of x to its direction, undeformed
-    beams. The numbers of the start geometry checks, before anything is derived."""
+    """Each body's frame of a spatial system at t = 0 (ground <- frame, numpy): the start
+    geometry checks' numbers, before anything is derived."""
     q = {j.name: j.initial for j in system.joints} | {k: v[0] for k, v in theta0(system).items()}
-    out = {GROUND: np.eye(3)}
+    return {b: np.array(A.evalf(), dtype=float) for b, (A, _) in poses3(system, q).items()}
+
+
+def poses3(system: System, q: dict) -> dict:
+    """Each body's frame of a spatial system (A: ground <- frame, R: its origin), composed as
+    physics/spatial.py does (A_c = A_p Q, R_c = R_p + A_p m_p - A_c m_c) with undeformed beams:
+    a revolute turned by q[joint] about its axis, a prismatic slid by q[joint] along its axis,
+    a spherical joint by the shortest turn of x to its direction, tilted by q[joint] = (a, b)
+    along two directions across it (the assembly's coordinates; absent: not tilted)."""
+    out = {GROUND: (sp.eye(3), sp.zeros(3, 1))}
     tree = system.tree()
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
-        Q = np.eye(3)
+        A_p, R_p = out[j.parent.partition(".")[0]] if j.parent != GROUND else out[GROUND]
+        m_p = sp.Matrix(j.point) if j.parent == GROUND else _local3(system, j.parent)
+        Q = sp.eye(3)
+        c = q.get(j.name, 0)
         if j.kind == "revolute":
-            Q = _turn(j.axis or (0.0, 0.0, 1.0), q[j.name])
-        elif j.kind == "spherical" and j.direction is not None:
-            d = np.asarray(j.direction, float) / np.linalg.norm(j.direction)
-            axis = np.cross([1.0, 0.0, 0.0], d)
-            n = np.linalg.norm(axis)
-            Q = _turn(axis if n > 0 else (0.0, 0.0, 1.0), math.atan2(n, d[0]))
-        out[body] = out[j.parent.partition(".")[0]] @ Q
+            Q = _turn3(sp.Matrix(j.axis or (0.0, 0.0, 1.0)), c)
+        elif j.kind == "prismatic":
+            a = sp.Matrix(j.axis)
+            m_p = m_p + a / sp.sqrt(a.dot(a)) * c
+        elif j.kind == "spherical":
+            d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *(c if isinstance(c, tuple) else (0, 0))))
+            v, cos = sp.Matrix([0, -d[2], d[1]]), d[0]  # x cross d, x . d (d a unit vector)
+            K = sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+            Q = sp.eye(3) + K + K * K / (1 + cos)  # the shortest turn of x to d
+        A = A_p * Q
+        out[body] = (A, R_p + A_p * m_p - A * _local3(system, j.child))
     return out
+
+
+def _tilted(direction, a, b) -> list:
+    """The unit direction d0 + a t1 + b t2, normalised (t1, t2: unit, across d0 and each other)."""
+    d0 = np.asarray(direction, float) / np.linalg.norm(direction)
+    t1 = np.cross(d0, np.eye(3)[int(np.argmin(np.abs(d0)))])
+    t1 /= np.linalg.norm(t1)
+    t2 = np.cross(d0, t1)
+    d = [d0[k] + a * t1[k] + b * t2[k] for k in range(3)]
+    n = sp.sqrt(sum(x * x for x in d)) if any(isinstance(x, sp.Basic) for x in d) else math.sqrt(sum(x * x for x in d))
+    return [x / n for x in d]
+
+
+def _turn3(axis: sp.Matrix, angle) -> sp.Matrix:
+    a = axis / sp.sqrt(axis.dot(axis))
+    K = sp.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return sp.eye(3) + sp.sin(angle) * K + (1 - sp.cos(angle)) * K * K
+
+
+def _local3(system, ref) -> sp.Matrix:
+    m = system.marker(ref)[1]
+    return sp.Matrix([m.x, m.y, m.z])
+
+
+def cut_rows3(system: System, frames: dict) -> list[tuple[str, object, bool]]:
+    """(cut joint, Phi row, is a length) of a spatial system's loops with undeformed bodies: a
+    spherical or universal joint's two points coincide (a universal joint's cross axis is
+    perpendicular at t = 0 by its definition, physics/spatial.py)."""
+    rows = []
+    for name in system.tree().cut:
+        j = system.joint(name)
+        ends = []
+        for ref in (j.parent, j.child):
+            A, R = frames[ref.partition(".")[0]]
+            ends.append(R + A * _local3(system, ref))
+        rows += [(name, ends[0][k] - ends[1][k], True) for k in range(3)]
+    return rows
 
 
 def _turn(axis, angle) -> np.ndarray:
@@ -176,12 +230,19 @@ class _Loops:
     def __init__(self, system: System, scale: float):
         tree = system.tree()
         self.order = [j.name for j in system.joints]
-        self.joints = [system.joint(tree.joint_of(b)) for b in tree.order]
-        self.joints = [j for j in self.joints if j.has_coordinate]
+        tree_joints = [system.joint(tree.joint_of(b)) for b in tree.order]
+        # a spherical joint's two coordinates tilt its direction (poses3); the others' their own
+        self.joints = [j for j in tree_joints if j.has_coordinate or j.kind == "spherical"
+                       for _ in range(2 if j.kind == "spherical" else 1)]
         self.unit = np.array([scale if j.kind == "prismatic" else 1.0 for j in self.joints])
         x = sp.symbols(f"x0:{len(self.joints)}", real=True)
-        q = {j.name: xi * u for j, xi, u in zip(self.joints, x, self.unit)}
-        rows = cut_rows(system, poses(system, q))
+        q = {}
+        for j, xi, u in zip(self.joints, x, self.unit):
+            q[j.name] = q.get(j.name, ()) + (xi,) if j.kind == "spherical" else xi * u
+        if system.dimension == 3:
+            rows = cut_rows3(system, poses3(system, q))
+        else:
+            rows = cut_rows(system, poses(system, q))
         self.names = [n for n, _, _ in rows]
         self.lengths = [length for _, _, length in rows]
         phi = sp.Matrix([e / scale if length else e for _, e, length in rows])
@@ -238,7 +299,7 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
     where = f"system '{system.name}'"
     fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
     free = ~fixed
-    x0 = np.array([guided[j.name][0] if j.name in guided else j.initial
+    x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if j.kind == "spherical" else j.initial
                    for j in loops.joints]) / loops.unit
     x, res = x0, np.max(np.abs(loops.phi(x0)), initial=0.0)
     if res > CLOSE_TOL:
@@ -258,11 +319,19 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
         _singular(system, loops, jac, free, rank)
 
     # velocities: Phi_q q' = 0 in all tree joint coordinates (Phi_t = Phi_theta theta'(0))
-    given = np.array([guided[j.name][1] if j.name in guided else (j.rate or 0.0)
-                      for j in loops.joints]) / loops.unit
-    rate_free = np.array([j.name not in guided and j.rate is None for j in loops.joints], dtype=bool)
+    spherical = np.array([j.kind == "spherical" for j in loops.joints], dtype=bool)
+    given = np.array([0.0 if s else guided[j.name][1] if j.name in guided else (j.rate or 0.0)
+                      for j, s in zip(loops.joints, spherical)]) / loops.unit
+    rate_free = np.array([j.name not in guided and j.rate is None and not s
+                          for j, s in zip(loops.joints, spherical)], dtype=bool)
     v = given.copy()
     rhs = -jac @ given
+    if system.dimension == 3 and (np.max(np.abs(rhs), initial=0.0) > 0
+                                  or any(j.rate is not None for j in loops.joints if j.kind == "spherical")):
+        # a ball joint's rate turns its direction and spins it: not in these coordinates
+        raise SpecError(f"{where}: a spatial loop starts at rest so far (the velocity analysis at "
+                        f"t = 0 is planar only): {_names(loops, ~rate_free)} give rates; start the "
+                        "drivers with theta'(0) = 0 (a maneuver such as spin-up) and no joint rates")
     if np.max(np.abs(rhs), initial=0.0) > 0:
         v[rate_free] += np.linalg.lstsq(jac[:, rate_free], rhs, rcond=None)[0]
         left = np.max(np.abs(jac @ v))
@@ -273,7 +342,17 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
                             f"(residual {left:.3g}); give fewer rates")
 
     moved, rates, joints = [], [], dict((j.name, j) for j in system.joints)
+    for j in {j.name: j for j in loops.joints if j.kind == "spherical"}.values():
+        a, b = x[[k for k, jk in enumerate(loops.joints) if jk.name == j.name]]
+        if a or b:  # its direction tilted: reported as the angle turned
+            d0 = np.asarray(j.direction or (1.0, 0.0, 0.0), float)
+            d = np.array(_tilted(d0, a, b), dtype=float) * np.linalg.norm(d0)
+            turn = math.atan2(np.linalg.norm(np.cross(d0, d)), float(d0 @ d))
+            moved.append((f"{j.name} direction", "rad", 0.0, turn, [float(c) for c in d]))
+            joints[j.name] = replace(j, direction=tuple(float(c) for c in d))
     for j, u, a, b, va, vb, own in zip(loops.joints, loops.unit, x0, x, given, v, rate_free):
+        if j.kind == "spherical":
+            continue
         unit = "m" if j.kind == "prismatic" else "rad"
         new = {}
         if b != a:
@@ -285,7 +364,7 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
         if new:
             joints[j.name] = replace(j, **new)
     order = [j.name for j in system.joints]
-    moved.sort(key=lambda m: order.index(m[0]))
+    moved.sort(key=lambda m: order.index(m[0].split()[0]))
     rates.sort(key=lambda m: order.index(m[0]))
     report = Assembly(tuple(moved), tuple(rates), float(res * scale), scale, True)
     return replace(system, joints=tuple(joints[j.name] for j in system.joints)), report

@@ -616,10 +616,10 @@ def check_assembly(system: System) -> tuple[System, Assembly]:
         if j.name in system.tree().cut and (j.fixed or j.rate is not None):
             raise SpecError(f"system '{system.name}': joint '{j.name}' is a cut joint (it closes a "
                             "loop, no coordinate): fixed and rate do not apply")
-    if system.dimension == 3:  # no spatial assembly yet: physics/spatial.py refuses an open loop
+    system, report = assemble(system, length_scale(system))
+    if system.dimension == 3:
         _check_universal_axes(system)
-        return system, Assembly(scale=length_scale(system))
-    return assemble(system, length_scale(system))
+    return system, report
 
 
 def _check_universal_axes(system: System) -> None:
