@@ -137,7 +137,8 @@ def poses3(system: System, q: dict) -> dict:
             a = sp.Matrix(j.axis)
             m_p = m_p + a / sp.sqrt(a.dot(a)) * c
         elif j.kind == "spherical":
-            d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *(c if isinstance(c, tuple) else (0, 0))))
+            tilt = c if isinstance(c, tuple) else (0, 0)
+            d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *tilt))
             v, cos = sp.Matrix([0, -d[2], d[1]]), d[0]  # x cross d, x . d (d a unit vector)
             K = sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
             Q = sp.eye(3) + K + K * K / (1 + cos)  # the shortest turn of x to d
@@ -153,7 +154,8 @@ def _tilted(direction, a, b) -> list:
     t1 /= np.linalg.norm(t1)
     t2 = np.cross(d0, t1)
     d = [d0[k] + a * t1[k] + b * t2[k] for k in range(3)]
-    n = sp.sqrt(sum(x * x for x in d)) if any(isinstance(x, sp.Basic) for x in d) else math.sqrt(sum(x * x for x in d))
+    n2 = sum(x * x for x in d)
+    n = sp.sqrt(n2) if isinstance(n2, sp.Basic) else math.sqrt(n2)  # symbols (_Loops) or numbers
     return [x / n for x in d]
 
 
