@@ -288,3 +288,14 @@ def test_bench_systems_quick(tmp_path):
         assert 0 < rows[2][f"err_{c}"] < (0.2 if c == "M_mid" else 0.02) * rows[1][f"err_{c}"], c
     assert (tmp_path / "bench_systems.csv").read_text().startswith("system,model,integrator,dt,cpu_s,err_max")
     assert "| pendulum | m3 | genalpha | 0.001 s |" in (tmp_path / "bench_systems.md").read_text()
+
+
+def test_a_zero_written_as_a_float_is_an_expression():
+    """'0.0' (a free-wheeling motor, a torque component that is off) parses to zero: sympy's
+    Float(0.0) == 0 is False, and the magnitude check took its log (it was refused with
+    'cannot be built (TypeError: Cannot convert complex to float)')."""
+    from flexsym.model.maneuver import parse_expression, parse_theta, t
+
+    for text in ("0.0", "-0.0", "0.0*t", "0e5"):
+        assert parse_expression(text, (("t", t),), "torque").is_zero, text
+    assert parse_theta("0.0").is_zero

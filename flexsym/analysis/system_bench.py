@@ -1,4 +1,5 @@
-"""`flexsym bench-systems`: CPU time against integration error on the mechanisms S1-S3.
+"""`flexsym bench-systems`: CPU time against integration error on the mechanisms S1-S3 and
+the spatial S5-S7.
 
 For each system scene x model x case (integrator, step, options), on the scene's own run
 (t_end, rows):
@@ -8,9 +9,11 @@ For each system scene x model x case (integrator, step, options), on the scene's
   err_max      the largest of them
 The reference is the same model at REF_DIVISOR times smaller a step than the smallest of the
 cases, by rk4 for a tree (no cut joint: the smallest error per step of the methods here;
-rk4 at 0.1 ms is within 3e-5 of the peak of rk4 at 10 us on S3) and by the scene's
-integrator for a closed loop (ali3p on S2). Next to it, the total error of the case against
-the geometrically exact `ef` on the same system (EF_REFERENCE: elements, integrator, step):
+rk4 at 0.1 ms is within 3e-5 of the peak of rk4 at 10 us on S3), by the scene's integrator
+for a closed loop (ali3p on S2), and by rk4p (order 4) for the spatial systems with
+constraints (S6's ball joint, S7's loop). Next to it, the total error of the case against
+the geometrically exact `ef` on the same system (EF_REFERENCE: elements, integrator, step;
+none yet for S6 and S7, whose beams hang on free joints):
   ef_<column>  max |y - y_ef| over the rows, divided by the peak |y_ef|
   ef_max       the largest of them (model error + integration error)
 Writes bench_systems.csv and bench_systems.md to --out.
@@ -53,6 +56,7 @@ class Case:
 class SystemCases:
     models: tuple[str, ...]
     cases: tuple[Case, ...]
+    reference: str | None = None  # its integrator; None: rk4 for a tree, the scene's for a loop
 
 
 # Newmark beta = 1/12: fourth-order period error, stable for omega_max dt <= sqrt(6) (S3: the
@@ -73,10 +77,18 @@ SYSTEMS = {
                             + tuple(Case("rk4", dt) for dt in (2.5e-4, 1e-4))
                             + (Case("dopri5", 1e-3, (("tol", 1e-5),)),)
                             + tuple(Case("newmark", dt, FOX_GOODWIN) for dt in (5e-4, 1e-3 / 3, 2.5e-4))),
+    # the spatial S5-S7 (docs/validation/spatial.md)
+    "flap": SystemCases(("m1", "m3", "prestress"),
+                        tuple(Case("genalpha", dt) for dt in (0.01, 0.005, 0.002, 0.001)) + (Case("rk4", 0.001),)),
+    "spherical_pendulum": SystemCases(("m3",), tuple(Case("genalpha3", dt) for dt in (5e-4, 2.5e-4, 1e-4))
+                                      + tuple(Case("rk4p", dt) for dt in (2e-4, 1e-4)), reference="rk4p"),
+    "spatial_slider_crank": SystemCases(("m2", "m3"), tuple(Case("genalpha3", dt) for dt in (4e-5, 2e-5, 1e-5))
+                                        + (Case("rk4p", 1e-5),), reference="rk4p"),
 }
-# The ef reference of each system: (elements, integrator, step); see docs/validation/ef-systems.md.
+# The ef reference of each system: (elements, integrator, step); see docs/validation/ef-systems.md
+# and, for S5, docs/validation/spatial.md (32 elements: 1e-3 to 5e-3 of the peaks from converged).
 EF_REFERENCE = {"hub": (16, "genalpha", 5e-4), "slider_crank": (16, "ali3p", 5e-6),
-                "pendulum": (16, "genalpha", 1.25e-5)}
+                "pendulum": (16, "genalpha", 1.25e-5), "flap": (32, "genalpha", 1e-3)}
 # Columns of an ef reference read from equilibrium rather than from the element curvature:
 # S1's root moment is minus the clamp's reaction moment (the beam's momentum balance), which
 # converges at the rate of the motion (0.2 % of the peak with 4 elements where the root
@@ -175,13 +187,15 @@ def run_system_bench(out: Path | None = None, systems=None, models=None, quick=F
     rows = []
     for name in systems or list(table):
         spec = table[name]
-        ef = ef_reference(name, log, quick) if versus_ef else None
+        ef = ef_reference(name, log, quick) if versus_ef and name in (
+            QUICK_EF_REFERENCE if quick else EF_REFERENCE) else None
         for model in models or spec.models:
             scene = load_scene(SCENES_DIR / f"{name}.toml", model=model)
             built = prepare_system(scene.system)
             columns = list(scene.columns)
             ref_dt = min(case.dt for case in spec.cases) / REF_DIVISOR
-            ref_integrator = "rk4" if not scene.system.tree().cut else scene.options.integrator
+            ref_integrator = spec.reference or ("rk4" if not scene.system.tree().cut
+                                                else scene.options.integrator)
             ref = run_rows(built, scene, ref_integrator, ref_dt)
             if not ref.ok:
                 raise RuntimeError(f"{name} {model}: the reference run stopped: {ref.message}")

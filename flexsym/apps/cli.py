@@ -775,10 +775,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("bench-systems", help="CPU time against integration error on the mechanisms "
-                       "S1-S3 (scenes hub, slider_crank, pendulum)")
+                       "S1-S3 and S5-S7 (scenes hub, slider_crank, pendulum, flap, spherical_pendulum, "
+                       "spatial_slider_crank)")
     p.add_argument("--quick", action="store_true", help="two cases on the pendulum (about 10 s)")
     p.add_argument("--out", default="bench_systems", help="output folder (default: bench_systems)")
-    p.add_argument("--systems", help="comma-separated subset of hub, slider_crank, pendulum")
+    p.add_argument("--systems", help="comma-separated subset of hub, slider_crank, pendulum, flap, "
+                   "spherical_pendulum, spatial_slider_crank (default: all)")
     p.add_argument("--models", help="comma-separated models (default: each system's list)")
     p.add_argument("--repeat", help="timed runs per case (default 5; quick 1)")
     p.set_defaults(func=cmd_bench_systems)

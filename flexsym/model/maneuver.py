@@ -151,13 +151,13 @@ def parse_expression(text: str, names: tuple[tuple[str, sp.Symbol], ...], label:
 
 
 def _log10_abs(x: sp.Number) -> float:
-    if x == 0:
+    if x.is_zero:  # not x == 0: sympy's Float(0.0) == 0 is False
         return -math.inf
     return float(sp.log(abs(x), 10).evalf(15))
 
 
 def _check_magnitude(value, text, label="theta(t)"):
-    if value.is_Number and value.is_finite is not False and value != 0:
+    if value.is_Number and value.is_finite is not False and not value.is_zero:
         if _log10_abs(value) > MAX_MAGNITUDE:
             raise SpecError(f"{label} = '{text}': the constant {sp.Float(value, 3)} is beyond "
                             f"1e{MAX_MAGNITUDE} (double precision)")

@@ -61,7 +61,8 @@ def _numbers(item, label: str):
     slots, anything else in a slot is (and must be a real number)."""
     for f in fields(item):
         v = getattr(item, f.name)
-        if f.name == "model" or isinstance(v, str) or f.type == "bool" or (v is None and "None" in str(f.type)):
+        text = isinstance(v, str) or (isinstance(v, (tuple, list)) and v and all(isinstance(x, str) for x in v))
+        if f.name == "model" or text or f.type == "bool" or (v is None and "None" in str(f.type)):
             continue  # no axis: a revolute or clamp joint (_check_joint decides); fixed: checked there
         if f.name == "params" and isinstance(v, (tuple, list)):
             for p in v:
@@ -387,9 +388,13 @@ class PointForce:
 
 @dataclass(frozen=True)
 class Torque:
+    """A torque on a body: planar, one expression (about z); spatial, three (tx, ty, tz) in the
+    ground's or the body's axes (frame)."""
+
     body: str
-    expression: str
+    expression: str | tuple[str, str, str]
     name: str = ""
+    frame: str = "ground"
 
 
 @dataclass(frozen=True)
@@ -745,9 +750,9 @@ class System:
     def _check_load(self, load) -> None:
         where = f"system '{self.name}': load {getattr(load, 'name', '') or type(load).__name__}"
         n = self.dimension
-        if n == 3 and not isinstance(load, (Gravity, PointForce, SpringDamper)):
+        if n == 3 and not isinstance(load, (Gravity, PointForce, SpringDamper, Torque)):
             raise SpecError(f"{where}: a {type(load).__name__} is not derived for spatial systems "
-                            "yet (gravity, point forces and spring-dampers are)")
+                            "yet (gravity, point forces, torques and spring-dampers are)")
         if isinstance(load, Gravity):
             if len(load.g) != n or not all(_finite(c) for c in load.g):
                 raise SpecError(f"{where}: g {load.g!r} must be {('two', 'three')[n - 2]} finite numbers")
@@ -760,9 +765,19 @@ class System:
             if load.frame not in ("ground", "body"):
                 raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body'")
         elif isinstance(load, Torque):
-            self.body(load.body)
-            if not isinstance(load.expression, str) or not load.expression.strip():
-                raise SpecError(f"{where}: empty torque expression")
+            body = self.body(load.body)
+            if n == 3 and (not isinstance(load.expression, (tuple, list)) or len(load.expression) != 3):
+                raise SpecError(f"{where}: a spatial torque is three expressions [tx, ty, tz] "
+                                f"(got {load.expression!r:.80})")
+            for e in (load.expression if n == 3 else (load.expression,)):
+                if not isinstance(e, str) or not e.strip():
+                    raise SpecError(f"{where}: empty torque expression")
+            if load.frame not in ("ground", "body") or (n == 2 and load.frame != "ground"):
+                raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body' (a "
+                                "spatial torque's axes; a planar torque is about z)")
+            if n == 3 and body.flexible:  # its section forces from equilibrium would need it
+                raise SpecError(f"{where}: a spatial torque acts on a rigid body ('{load.body}' is a "
+                                "beam: put it on the rigid body the beam is clamped to)")
         elif isinstance(load, SpringDamper):
             for end, ref, point in (("a", load.a, load.point_a), ("b", load.b, load.point_b)):
                 if ref != GROUND:

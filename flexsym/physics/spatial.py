@@ -6,8 +6,9 @@ What is derived so far: rigid bodies, uniform modal beams and the geometrically 
 (spatial_ef.py) joined in a tree by revolute and prismatic joints (axes fixed in the parent's
 frame), spherical joints (Euler parameters on |e| = 1, a constraint row) and clamps, with loops
 closed by spherical and universal joints (_cut_rows), guided or motor-driven, under gravity,
-point forces and spring-dampers. What is not (cylindrical joints, torques, structural
-damping, bodies from finite-element data, ...) is refused up front by System._check_spatial.
+point forces, torques on rigid bodies and spring-dampers. What is not (cylindrical joints,
+structural damping, bodies from finite-element data, ...) is refused up front by
+System._check_spatial.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
@@ -60,7 +61,7 @@ from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, SpringDamper,
-                                  System, beam_coordinates, beam_station, length_scale, parse_output)
+                                  System, Torque, beam_coordinates, beam_station, length_scale, parse_output)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
                                       joint_coordinate, spring_force_on_a, start_of, violation)
 from flexsym.physics.integrals import IntegralTable
@@ -526,7 +527,8 @@ class _View:
 
 
 def _applied(der) -> sp.Matrix:
-    """Generalised forces of point forces and motors (virtual power: F . dr/dq)."""
+    """Generalised forces of point forces, motors and torques (virtual power: F . dr/dq,
+    tau . d omega / dq')."""
     system = der.system
     Q = sp.zeros(len(der.q), 1)
     for load in system.loads:
@@ -546,6 +548,14 @@ def _applied(der) -> sp.Matrix:
                                    f"system '{system.name}': driver '{d.name}'")
             k = next(i for i, c in enumerate(der.coords) if c.joint == d.joint)
             Q[k] += tau
+    for load in system.loads:
+        if isinstance(load, Torque):  # virtual power tau . omega, omega in the body's axes
+            fr = der.spatial["frames"][load.body]
+            tau = sp.Matrix([parse_expression(e, tuple(names.items()), f"system '{system.name}': torque "
+                                              f"'{load.name or load.body}'") for e in load.expression])
+            if load.frame == "ground":
+                tau = fr.A.T * tau
+            Q += sp.Matrix([tau.dot(sp.diff(fr.omega, xd)) for xd in der.qd])
     return Q
 
 

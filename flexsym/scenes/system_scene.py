@@ -27,7 +27,8 @@ scene (flexsym/scenes/scene.py), unchanged.
                 "expression of t, J and J_rate for every joint J with a coordinate"
     [gravity]   g = [gx, gy]  (m/s^2)
     [[load]]    kind = "force": marker, fx, fy, frame = ground | body;
-                kind = "torque": body, torque = "expression"; kind = "spring": a, b
+                kind = "torque": body, torque = "expression" (spatial: ["tx", "ty", "tz"], frame =
+                "ground" | "body"); kind = "spring": a, b
                 (body.marker each), k, c, l0
     [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
@@ -82,7 +83,7 @@ KEYS = {
     "motor": {"name", "kind", "joint", "torque", "force"},
     "gravity": {"g"},
     "force": {"kind", "name", "marker", "fx", "fy", "fz", "frame"},
-    "torque": {"kind", "name", "body", "torque"},
+    "torque": {"kind", "name", "body", "torque", "frame"},
     "spring": {"kind", "name", "a", "b", "k", "c", "l0"},
     "solver": {k.split(".")[1] for k in _RUN_KEYS if k.startswith("solver.")},
     "output": {"file", "columns"} | {k.split(".")[1] for k in _RUN_KEYS if k.startswith("output.")},
@@ -491,7 +492,15 @@ def _load(r: _Items, k: int, tab: dict, dim: int = 2):
                           r.number(where, tab, "fy"), r.string(where, tab, "frame", default="ground"), name,
                           r.number(where, tab, "fz", default=0.0))
     if kind == "torque":
-        return Torque(r.string(where, tab, "body"), r.string(where, tab, "torque"), name)
+        if dim == 2:
+            if "frame" in tab:
+                r.fail(f"{where} frame", "applies to spatial torques ([system] dimension = 3): a planar "
+                       "torque is about z")
+            return Torque(r.string(where, tab, "body"), r.string(where, tab, "torque"), name)
+        val = tab.get("torque")
+        if not (isinstance(val, list) and len(val) == 3 and all(isinstance(e, str) for e in val)):
+            r.fail(f"{where} torque", f"must be three expressions [\"tx\", \"ty\", \"tz\"] (got {val!r:.80})")
+        return Torque(r.string(where, tab, "body"), tuple(val), name, r.string(where, tab, "frame", default="ground"))
     for end in ("a", "b"):
         if r.string(where, tab, end) == GROUND:
             r.fail(f"{where} {end}", "a spring ends on a body marker (put a marker on a body fixed "
@@ -537,7 +546,8 @@ def check_system(system: System, t_end: float = 20.0) -> System:
     for load in system.loads:
         if isinstance(load, Torque):
             label = f"{where}: load {load.name or 'torque'} torque"
-            _at_rest(_expression(load.expression, names, label), coords, names, t_end, load.expression, label)
+            for e in (load.expression if system.dimension == 3 else (load.expression,)):
+                _at_rest(_expression(e, names, label), coords, names, t_end, e, label)
     for o in system.outputs:
         _carried(system, o)
     return system
