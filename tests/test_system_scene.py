@@ -299,3 +299,19 @@ def test_a_zero_written_as_a_float_is_an_expression():
     for text in ("0.0", "-0.0", "0.0*t", "0e5"):
         assert parse_expression(text, (("t", t),), "torque").is_zero, text
     assert parse_theta("0.0").is_zero
+
+
+def test_bench_systems_on_a_spatial_scene(tmp_path, monkeypatch):
+    """bench-systems on S5 (flap, prestress), with a system-level reference integrator and no ef
+    reference: genalpha's error falls at second order (10 -> 5 -> 2 ms: measured 1.0e-4,
+    2.6e-5, 4.3e-6), rk4 at 1 ms is far below, and the table has no ef column."""
+    from flexsym.analysis import system_bench as sb
+
+    monkeypatch.setitem(sb.SYSTEMS, "flap", sb.SystemCases(
+        ("prestress",), tuple(sb.Case("genalpha", dt) for dt in (0.01, 0.005, 0.002)) + (sb.Case("rk4", 0.001),),
+        reference="rk4"))
+    monkeypatch.delitem(sb.EF_REFERENCE, "flap")
+    rows = sb.run_system_bench(tmp_path, systems=["flap"], repeat=1, log=lambda m: None)
+    err = [r["err_max"] for r in rows]
+    assert all(r["status"] == "ok" for r in rows) and "ef_max" not in rows[0]
+    assert 3.5 < err[0] / err[1] < 4.5 and 5.5 < err[1] / err[2] < 6.8 and err[3] < 1e-3 * err[2], err

@@ -780,7 +780,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="two cases on the pendulum (about 10 s)")
     p.add_argument("--out", default="bench_systems", help="output folder (default: bench_systems)")
     p.add_argument("--systems", help="comma-separated subset of hub, slider_crank, pendulum, flap, "
-                   "spherical_pendulum, spatial_slider_crank (default: all)")
+                   "spherical_pendulum, spatial_slider_crank (default: the planar hub, slider_crank, "
+                   "pendulum)")
     p.add_argument("--models", help="comma-separated models (default: each system's list)")
     p.add_argument("--repeat", help="timed runs per case (default 5; quick 1)")
     p.set_defaults(func=cmd_bench_systems)
