@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexsym.scenes.system_scene import system_from_dict
+from system_data import built, run_ok
 
 ROOT = Path(__file__).resolve().parent.parent
 PLANAR_ONLY_OUTPUTS = ("reaction(", "torque(", "sigma(", "momentum", "dissipation")
@@ -58,20 +58,6 @@ def spatial_twin(data: dict) -> dict:
     return twin
 
 
-def _built(data: dict):
-    from flexsym.toolchain.pipeline import prepare_system
-
-    return prepare_system(system_from_dict(data, name=data["system"]["name"]), log=lambda m: None)
-
-
-def _run(data: dict, **kw):
-    from flexsym.toolchain.run import run_built
-
-    r = run_built(_built(data), **kw)
-    assert r.ok, r.status
-    return r
-
-
 @pytest.mark.parametrize("scene,kw", [
     ("pendulum", dict(t_end=1.0, dt=1e-4)),
     ("hub", dict(t_end=20.0, dt=1e-3)),
@@ -84,7 +70,7 @@ def test_open_chain_run_as_spatial_reproduces_the_planar_rows(scene, kw):
     beam = next(b["name"] for b in data["body"] if b["kind"] == "beam")
     twin["output"]["columns"] |= {"w_out": f"vz({beam}, tip)", "T_root": f"Mx({beam}, root)",
                                   "z_tip": f"z({beam}.tip)"}
-    planar, spatial = _run(data, **kw), _run(twin, **kw)
+    planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
     worst = {}
     for col, q in data["output"]["columns"].items():
         if col in twin["output"]["columns"]:
@@ -114,7 +100,7 @@ def test_slider_crank_run_as_spatial_reproduces_the_planar_rows():
             j["kind"], j["axis"] = "universal", [0.0, 0.0, 1.0]
     twin["output"]["columns"] |= {"z_mid": "vz(rod, mid)", "viol": "violation"}
     kw = dict(integrator="rk4p", dt=1e-5)
-    planar, spatial = _run(data, **kw), _run(twin, **kw)
+    planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
     for col, tol in (("x_s", 1e-9), ("w_mid", 3e-8), ("N_mid", 1e-6)):
         want = np.abs(planar[col]) if col == "w_mid" else planar[col]
         assert np.abs(spatial[col] - want).max() <= tol * np.abs(want).max(), col

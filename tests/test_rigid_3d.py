@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from flexsym.scenes.system_scene import system_from_dict
+from system_data import built, run_ok
 
 D = 0.5  # the markers' distance from the pivot [m]
 I1C, I3, MASS = 0.02, 0.035, 2.0  # about the centre of mass [kg m^2], [kg]
@@ -41,20 +41,6 @@ def _top(name: str, l: float, g: float, n0, w0) -> dict:
     }
 
 
-def _built(data: dict):
-    from flexsym.toolchain.pipeline import prepare_system
-
-    return prepare_system(system_from_dict(data, name=data["system"]["name"]), log=lambda m: None)
-
-
-def _run(built, **kw):
-    from flexsym.toolchain.run import run_built
-
-    r = run_built(built, **kw)
-    assert r.ok, r.status
-    return r
-
-
 def _turn(k, angle, v):
     """Rodrigues, row-wise: v (n x 3) turned by angle (n) about the unit axis k (n x 3 or 3)."""
     k = np.broadcast_to(k, v.shape)
@@ -75,7 +61,7 @@ FREE_T = 0.5 * (I1C * FREE_W0.dot(FREE_W0) + (I3 - I1C) * FREE_W0.dot(FREE_N0)**
 
 @pytest.fixture(scope="module")
 def free():
-    return _built(_top("free_top", 0.0, 0.0, FREE_N0, FREE_W0))
+    return built(_top("free_top", 0.0, 0.0, FREE_N0, FREE_W0))
 
 
 def _free_closed_form(r):
@@ -107,7 +93,7 @@ def test_torque_free_precession_is_the_closed_form(free):
     start, e' from `rate`, is exact), T and H over the run within 2e-13 and 1e-12 (measured
     1e-13, 3.8e-13), and the Euler parameters stay on |e| = 1 (violation 2.5e-14 m; the
     projection's tolerance is 1e-12)."""
-    r = _run(free, t_end=2.0, dt=1e-3, integrator="rk4p")
+    r = run_ok(free, t_end=2.0, dt=1e-3, integrator="rk4p")
     tip, side = _free_closed_form(r)
     assert np.abs(_points(r) - tip).max() < 5e-11
     assert np.abs(_points(r, "s") - side).max() < 5e-11
@@ -129,7 +115,7 @@ def test_convergence_order_against_the_closed_form(free):
     errs = {}
     for integrator in ("rk4p", "genalpha3"):
         for dt in (2e-3, 1e-3):
-            r = _run(free, t_end=2.0, dt=dt, integrator=integrator)
+            r = run_ok(free, t_end=2.0, dt=dt, integrator=integrator)
             tip, _ = _free_closed_form(r)
             errs[integrator, dt] = np.abs(_points(r) - tip).max()
             if integrator == "genalpha3":
@@ -155,7 +141,7 @@ def _top_start(omega):
 
 @pytest.fixture(scope="module")
 def heavy():
-    return _built(_top("heavy_top", L_, G_, TOP_N0, _top_start(OMEGA)))
+    return built(_top("heavy_top", L_, G_, TOP_N0, _top_start(OMEGA)))
 
 
 def test_heavy_top_in_steady_precession(heavy):
@@ -180,7 +166,7 @@ def test_heavy_top_in_steady_precession(heavy):
     at t = 0), over the run within 6.5e-9 and 3.6e-9 (relative, measured). Each bound is about 3x
     the measured error at 1 ms (the error at 2 ms is 16-30x larger: the bound sits well inside
     one halving of the step)."""
-    r = _run(heavy, t_end=2.0, dt=1e-3, integrator="rk4p")
+    r = run_ok(heavy, t_end=2.0, dt=1e-3, integrator="rk4p")
     theta = np.arccos(r["z"] / D)
     azimuth = np.unwrap(np.arctan2(r["y"], r["x"]))
     assert np.abs(theta - THETA0).max() < 3e-9
@@ -211,8 +197,8 @@ def test_nudged_top_nutates_at_the_linearised_frequency():
     of the nonlinearity) and its mean angle within 6e-7 rad of that equilibrium."""
     from scipy.optimize import brentq, curve_fit
 
-    built = _built(_top("nudged_top", L_, G_, TOP_N0, _top_start(1.05 * OMEGA)))
-    r = _run(built, t_end=2.0, dt=1e-3, integrator="rk4p", interval=0.002)
+    nudged = built(_top("nudged_top", L_, G_, TOP_N0, _top_start(1.05 * OMEGA)))
+    r = run_ok(nudged, t_end=2.0, dt=1e-3, integrator="rk4p", interval=0.002)
     theta = np.arccos(r["z"] / D)
     # the nudged start's equilibrium angle and its steady precession rate (same p_phi)
     s0 = math.sin(THETA0)

@@ -9,24 +9,11 @@ import numpy as np
 import pytest
 
 from flexsym.scenes.system_scene import system_from_dict
+from system_data import built, run_ok
 
 AXIS = np.array([1.0, 2.0, 2.0]) / 3.0  # unit
 M, K, C, G = 0.5, 200.0, 0.8, 9.81
 ANCHOR = [0.3, -0.2, 0.4]  # the spring's fixed end (a marker on a body clamped to ground)
-
-
-def _built(data: dict):
-    from flexsym.toolchain.pipeline import prepare_system
-
-    return prepare_system(system_from_dict(data, name=data["system"]["name"]), log=lambda m: None)
-
-
-def _run(built, **kw):
-    from flexsym.toolchain.run import run_built
-
-    r = run_built(built, **kw)
-    assert r.ok, r.status
-    return r
 
 
 def _slider(c: float, l0: float) -> dict:
@@ -52,7 +39,7 @@ def test_spring_on_a_tilted_slider_is_the_damped_oscillator():
     underdamped oscillator, matched by rk4 at dt = 1e-4 to 1e-10 of the amplitude (measured
     1.1e-12); with c = 0 and l0 > 0 (a nonlinear spring), T + V stays constant (measured
     4.5e-14 of V's range)."""
-    r = _run(_built(_slider(C, 0.0)), integrator="rk4", dt=1e-4, t_end=1.0)
+    r = run_ok(built(_slider(C, 0.0)), integrator="rk4", dt=1e-4, t_end=1.0)
     x_eq = np.dot(ANCHOR, AXIS) + M * np.dot([0.0, 0.0, -G], AXIS) / K
     wn, zeta = np.sqrt(K / M), C / (2 * np.sqrt(K * M))
     wd = wn * np.sqrt(1 - zeta**2)
@@ -60,7 +47,7 @@ def test_spring_on_a_tilted_slider_is_the_damped_oscillator():
     t = r.t
     want = x_eq + np.exp(-zeta * wn * t) * (a0 * np.cos(wd * t) + zeta * wn * a0 / wd * np.sin(wd * t))
     assert np.abs(r["x"] - want).max() < 1e-10 * abs(a0), np.abs(r["x"] - want).max()
-    r = _run(_built(_slider(0.0, 0.25)), integrator="rk4", dt=1e-4, t_end=1.0)
+    r = run_ok(built(_slider(0.0, 0.25)), integrator="rk4", dt=1e-4, t_end=1.0)
     E = r["T"] + r["V"]
     assert np.ptp(E) < 1e-11 * np.ptp(r["V"]) and np.ptp(r["V"]) > 0.1, (np.ptp(E), np.ptp(r["V"]))
 
@@ -94,7 +81,7 @@ def test_spring_on_a_beam_enters_its_equilibrium_section_forces():
     Mz = [...]_z, with F = k (anchor - r_tip) from the run's own tip position (measured: 2e-15
     of the moment; without the spring's term in the equilibrium, N is off by 5 N)."""
     data = _strip_on_a_spring()
-    r = _run(_built(data), integrator="genalpha", dt=1e-4, t_end=0.01)
+    r = run_ok(built(data), integrator="genalpha", dt=1e-4, t_end=0.01)
     tip = np.array([r["x"][0], r["y"][0], r["z"][0]])
     F = 50.0 * (np.array([0.9, 0.03, -0.05]) - tip)
     moment = np.cross(tip, F)
@@ -145,7 +132,7 @@ def test_torque_about_a_tilted_revolute_axis_and_in_the_body_axes():
     marker at (0, 0.4, 0) is at 0.4 (cos alpha, sin alpha) in y, z. rk4 (rk4p) at 1 ms:
     measured 4.5e-15 m (T: 1.3e-14) and 2e-13 m."""
     a = np.array([1.0, 2.0, 2.0]) / 3
-    r = _run(_built(_torqued({"kind": "revolute", "axis": a.tolist()}, ["2.0", "-1.0", "3*sin(t)"], "ground",
+    r = run_ok(built(_torqued({"kind": "revolute", "axis": a.tolist()}, ["2.0", "-1.0", "3*sin(t)"], "ground",
                              "torque_axis")), integrator="rk4", dt=1e-3, t_end=2.0)
     Ia = float(a @ np.diag(I_BODY) @ a)
     t = r.t
@@ -159,7 +146,7 @@ def test_torque_about_a_tilted_revolute_axis_and_in_the_body_axes():
     rate = ((2 * a[0] - a[1]) * t + 3 * a[2] * (1 - np.cos(t))) / Ia
     assert np.abs(r["T"] - Ia * rate**2 / 2).max() < 1e-9 * (Ia * rate**2 / 2).max()
 
-    r = _run(_built(_torqued({"kind": "spherical"}, ["0.3*t", "0.0", "0.0"], "body", "torque_ball")),
+    r = run_ok(built(_torqued({"kind": "spherical"}, ["0.3*t", "0.0", "0.0"], "body", "torque_ball")),
              integrator="rk4p", dt=1e-3, t_end=2.0)
     alpha = 0.05 * r.t**3 / I_BODY[0]
     assert np.abs(r["y"] - 0.4 * np.cos(alpha)).max() < 1e-10
