@@ -603,3 +603,23 @@ def test_flap_ef_c_kernels_against_casadi(flap_ef8):
                             ("dr_dqd", Jv, want[3]), ("energy", en, want[4])):
         ref_ = ref_.reshape(-1)  # row by row, as the C writes it
         assert np.abs(got - ref_).max() <= 1e-11 * np.abs(ref_).max(), name
+
+
+def test_a_ball_joint_pointing_back_along_x_starts_turned_half_about_z():
+    """A ball joint's start is the shortest turn of x to its direction, one decision
+    (scenes/assembly.shortest_turn) for the assembly's frames and the Euler parameters: at
+    -x, where that turn has no unique axis, both take the half turn about z (no nan)."""
+    import sympy as sp
+
+    from flexsym.physics.spatial import euler_rotation, initial_euler
+    from flexsym.scenes.assembly import rotations3
+    from flexsym.scenes.system_scene import system_from_data
+
+    data = tomllib.loads(S6.read_text())
+    ball = next(j for j in data["joint"] if j["kind"] == "spherical")
+    ball["direction"] = [-2.0, 0.0, 0.0]
+    frames = rotations3(system_from_data(data, "s6: ", "s6")[0])
+    body = ball["child"].partition(".")[0]
+    assert np.allclose(frames[body], np.diag([-1.0, -1.0, 1.0]), atol=1e-15)
+    e, _ = initial_euler(ball["direction"], None)
+    assert np.allclose(np.array(euler_rotation(sp.Matrix(e)).evalf(), dtype=float), frames[body], atol=1e-15)

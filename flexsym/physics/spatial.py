@@ -326,12 +326,11 @@ def initial_euler(direction, rate) -> tuple[list[float], list[float]]:
     """A spherical joint's Euler parameters at t = 0: the shortest rotation turning the parent's
     x axis to `direction` (none: the identity), and their rates for the child's angular velocity
     `rate` relative to the parent (parent's frame): e' = G(e)^T A(e)^T omega / 2."""
+    from flexsym.scenes.assembly import shortest_turn
+
     e = np.array([1.0, 0.0, 0.0, 0.0])
     if direction is not None:
-        d = np.asarray(direction, float) / np.linalg.norm(direction)
-        axis = np.cross([1.0, 0.0, 0.0], d)
-        angle = math.atan2(np.linalg.norm(axis), d[0])
-        axis = axis / np.linalg.norm(axis) if np.linalg.norm(axis) > 0 else np.array([0.0, 0.0, 1.0])
+        axis, angle = shortest_turn(direction)
         e = np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
     w = np.asarray(rate if rate is not None else (0.0, 0.0, 0.0), float)
     A = np.array(euler_rotation(sp.Matrix(e)).evalf(), dtype=float)

@@ -136,12 +136,13 @@ def poses3(system: System, q: dict) -> dict:
         elif j.kind == "prismatic":
             a = sp.Matrix(j.axis)
             m_p = m_p + a / sp.sqrt(a.dot(a)) * c
-        elif j.kind == "spherical":
-            tilt = c if isinstance(c, tuple) else (0, 0)
-            d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *tilt))
+        elif j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
+            d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *c))
             v, cos = sp.Matrix([0, -d[2], d[1]]), d[0]  # x cross d, x . d (d a unit vector)
             K = sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-            Q = sp.eye(3) + K + K * K / (1 + cos)  # the shortest turn of x to d
+            Q = sp.eye(3) + K + K * K / (1 + cos)  # the shortest turn of x to d (_Loops: d.x > -0.9)
+        elif j.kind == "spherical" and j.direction is not None:
+            Q = sp.Matrix(_turn(*shortest_turn(j.direction)))
         A = A_p * Q
         out[body] = (A, R_p + A_p * m_p - A * _local3(system, j.child))
     return out
@@ -183,6 +184,16 @@ def cut_rows3(system: System, frames: dict) -> list[tuple[str, object, bool]]:
             ends.append(R + A * _local3(system, ref))
         rows += [(name, ends[0][k] - ends[1][k], True) for k in range(3)]
     return rows
+
+
+def shortest_turn(direction) -> tuple[np.ndarray, float]:
+    """(unit axis, angle) of the rotation that turns x to `direction` about x cross direction
+    (a half turn about z for -x): a ball joint's start, here and in its Euler parameters
+    (physics/spatial.initial_euler)."""
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    axis = np.cross([1.0, 0.0, 0.0], d)
+    n = np.linalg.norm(axis)
+    return (axis / n if n > 0 else np.array([0.0, 0.0, 1.0])), math.atan2(n, d[0])
 
 
 def _turn(axis, angle) -> np.ndarray:
@@ -233,8 +244,12 @@ class _Loops:
         tree = system.tree()
         self.order = [j.name for j in system.joints]
         tree_joints = [system.joint(tree.joint_of(b)) for b in tree.order]
-        # a spherical joint's two coordinates tilt its direction (poses3); the others' their own
-        self.joints = [j for j in tree_joints if j.has_coordinate or j.kind == "spherical"
+        # a spherical joint's two coordinates tilt its direction (poses3), unless it points
+        # within 25 degrees of -x, where the shortest turn from x is near its singularity (it
+        # stays as given); the others' are their own
+        tilted = [j for j in tree_joints if j.kind == "spherical"
+                  and (j.direction is None or j.direction[0] / math.hypot(*j.direction) > -0.9)]
+        self.joints = [j for j in tree_joints if j.has_coordinate or j in tilted
                        for _ in range(2 if j.kind == "spherical" else 1)]
         self.unit = np.array([scale if j.kind == "prismatic" else 1.0 for j in self.joints])
         x = sp.symbols(f"x0:{len(self.joints)}", real=True)
