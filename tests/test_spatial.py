@@ -369,12 +369,12 @@ def test_s6_rigid_limit_is_the_spherical_pendulum_of_a_rod(s6):
 
 def test_s6_bends_and_twists_and_runs_with_the_other_constrained_integrators(s6):
     """The strip bends across its thickness (My, w_mid) far more than across its width and
-    twists a little; rk4p and ali3p (with full Newton: its modified Newton stalls near the
-    tolerance here) give the same motion."""
+    twists a little; rk4p and ali3p (its modified Newton: it crawled near the tolerance here
+    with a stale matrix until it was rebuilt above 1 x tol) give the same motion."""
     r = run_ok(s6, t_end=0.5, dt=1e-4, integrator="genalpha3")
     assert np.abs(r["M_y_mid"]).max() > np.abs(r["M_z_mid"]).max() > 0
     assert 0 < np.abs(r["T_mid"]).max() < 0.01 * np.abs(r["M_y_mid"]).max()
-    for integrator, extra in (("rk4p", {}), ("ali3p", {"newton": "full"})):
+    for integrator, extra in (("rk4p", {}), ("ali3p", {})):
         o = run_ok(s6, t_end=0.5, dt=1e-4, integrator=integrator, **extra)
         assert np.abs(o["z_tip"] - r["z_tip"]).max() < 1e-4, integrator
 
@@ -434,15 +434,18 @@ def test_s7_holds_its_loop_and_tends_to_the_rigid_slider_crank(s7):
 
 
 def test_s7_constrained_integrators_agree(s7):
-    """genalpha3 and rk4p give the same slider motion and axial force: measured 8.5e-9 m and
-    5e-4 of the peak N. (ali3p's Newton fails at t = 0.26 s here even when full: not yet
-    understood, stated in docs/theory/spatial.md.)"""
+    """genalpha3, rk4p and ali3p give the same slider motion and axial force: measured 8.5e-9 m
+    and 5e-4 of the peak N (rk4p), 5.8e-10 m and 3.5e-5 (ali3p). ali3p failed at t = 0.25 s
+    (Newton) when its recursion's velocity defect, a mode at -1 of the trapezoidal rule, was
+    left undamped: it grew like exp(100 t/s) here (docs/theory/spatial.md)."""
     ref = run_ok(s7, t_end=0.3, dt=1e-5, integrator="genalpha3")
     assert np.abs(ref["viol"]).max() < 1e-13
-    for integrator in ("rk4p",):
+    for integrator, tol_x, tol_n in (("rk4p", 1e-7, 2e-3), ("ali3p", 1e-8, 2e-4)):
         r = run_ok(s7, t_end=0.3, dt=1e-5, integrator=integrator)
-        assert np.abs(r["x_s"] - ref["x_s"]).max() < 1e-7, integrator
-        assert np.abs(r["N_mid"] - ref["N_mid"]).max() < 2e-3 * np.abs(ref["N_mid"]).max(), integrator
+        assert r.t[-1] == pytest.approx(0.3)
+        assert np.abs(r["viol"]).max() < 1e-12, integrator
+        assert np.abs(r["x_s"] - ref["x_s"]).max() < tol_x, integrator
+        assert np.abs(r["N_mid"] - ref["N_mid"]).max() < tol_n * np.abs(ref["N_mid"]).max(), integrator
 
 
 def _s7_rounded() -> dict:

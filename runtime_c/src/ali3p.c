@@ -30,6 +30,17 @@
  * angle at 0.5 s against dt = 1/16000 s: observed orders 1.2-1.6 over dt = 5 ... 0.3 ms and
  * 1.1e-4 rad at 0.31 ms, against 2.0-2.1 and 1.8e-5 rad with the projected velocities kept
  * out of the recursion; energy drift likewise 5.3e-5 against 2.3e-5 J at 0.5 ms).
+ * Kept out entirely, though, the recursion's velocity defect d = Phi_q q'* + Phi_t is a mode
+ * of the trapezoidal rule at -1 (d_{n+1} = -d_n + O(h^2): no damping at the Nyquist
+ * frequency): neutral on the planar loops (S2: |d| ~ 1e-4 at 0.1 ms, bounded), it grew
+ * like exp(100 t / s) on S7 (Euler parameters: a q'* off e.e' = 0 turns the rotation
+ * equations' gyroscopic terms, ~ (e.e') omega), from 1e-7 to 1 m/s by t = 0.25 s, where Newton
+ * failed, at any dt and kappa). So the velocity that starts the next step is projected on the
+ * alternating part of the defect only, (d_{n+1} - d_n)/2 (d_n: the previous start's defect):
+ * the mode's factor -1 becomes O(h), while a smooth defect (the trapezoidal rule's own O(h^2)
+ * velocity error, which the positions are consistent with) is left in, its change per step
+ * O(h^3): the four-bar keeps order 2.1-2.2 (errors within 13% of the unfiltered ones) and S7
+ * runs (x_s 6e-10 m, N_mid 4e-5 of the peak from genalpha3's at 0.01 ms).
  * With nc = 0 this is the trapezoidal rule (Newmark 1/2, 1/4) with Newton on q.
  *
  * lambda* starts each step at the last step's value (extrapolating it from the last two
@@ -52,10 +63,12 @@
 #include "constrained.h"
 #include "linalg.h"
 
-/* modified Newton: a new W when an iteration contracts |dq| by less than this (while |dq| is
- * above ALI3P_SLOW_FLOOR x tol: below it the lag of lambda* sets the pace, not W) */
+/* modified Newton: a new W when an iteration contracts |dq| by less than this while |dq| is
+ * above ALI3P_SLOW_FLOOR x tol (the floor was 100: S6 then crawled at |dq| ~ 1e-11 with the
+ * factor -0.98 per iteration on the strip's spin (e1 and torsion, a tiny inertia) with a stale
+ * P and failed at t = 1.7 ms; S7 at dt <= 5 us likewise at 3e-13, 14 ms) */
 #define ALI3P_THETA_MAX 0.02
-#define ALI3P_SLOW_FLOOR 100.0
+#define ALI3P_SLOW_FLOOR 1.0
 
 /* P = M + (h/2) C + (h^2/4) K at (q1, v1, a1) */
 static void build_p(csim* s, double h)
@@ -112,6 +125,14 @@ static fsr_status ali3p_begin(csim* s)
     s->P = s->work;
     s->alpha = fro > 0.0 ? s->o->penalty * 4.0 / (s->o->dt * s->o->dt) * tr / fro : 0.0;
     s->h_mat = 0.0;
+    if (nc) {  /* lam1: the velocity defect Phi_q q' + Phi_t of the q' that starts a step */
+        s->m->constraint_rate(s->q, s->d, s->o->p, s->phit);
+        for (int l = 0; l < nc; ++l) {
+            double e = s->phit[l];
+            for (int i = 0; i < n; ++i) e += s->Pq[l * n + i] * s->v[i];
+            s->lam1[l] = e;
+        }
+    }
     return FSR_OK;
 }
 
@@ -188,6 +209,15 @@ static fsr_status ali3p_step(csim* s)
             s->e1[l] = e;
         }
         memcpy(s->vout, v1, sizeof(double) * (size_t)n);
+        /* the recursion's q': only the alternating part of the defect projected out (see the
+           top); s->lam1 holds the defect of the q' that started this step */
+        for (int l = 0; l < nc; ++l) s->e2[l] = 0.5 * (s->e1[l] - s->lam1[l]);
+        project(s, h, s->e2, v1);
+        for (int l = 0; l < nc; ++l) {
+            double e = s->phit[l];
+            for (int i = 0; i < n; ++i) e += s->Pq[l * n + i] * v1[i];
+            s->lam1[l] = e;
+        }
         project(s, h, s->e1, s->vout);
         m->constraint_acc(q1, s->vout, s->d, o->p, s->gam);
         for (int l = 0; l < nc; ++l) {

@@ -24,7 +24,7 @@ typedef struct csim {
     double* mult;    /* the multipliers the outputs see (genalpha3: lam; ali3p: from q'') */
     double* vout;    /* the velocities the rows see: v projected (v when nc = 0) */
     /* iterates at t_k+1 */
-    double *q1, *v1, *a1, *lam1;
+    double *q1, *v1, *a1, *lam1;  /* ali3p: lam1 the velocity defect of the step's start q' */
     double* d;       /* drive (nd) */
     double* y;       /* outputs */
     double *M, *S, *Jq, *Jv;  /* n x n; S: the LU-factored iteration matrix (ali3p: W) */
