@@ -64,11 +64,13 @@
 #include "linalg.h"
 
 /* modified Newton: a new W when an iteration contracts |dq| by less than this while |dq| is
- * above ALI3P_SLOW_FLOOR x tol (the floor was 100: S6 then crawled at |dq| ~ 1e-11 with the
- * factor -0.98 per iteration on the strip's spin (e1 and torsion, a tiny inertia) with a stale
- * P and failed at t = 1.7 ms; S7 at dt <= 5 us likewise at 3e-13, 14 ms) */
+ * above ALI3P_SLOW_FLOOR x tol (below it the lag of lambda* sets the pace, not W). With the
+ * floor at 1, S6 ran without full Newton (it crawls at |dq| ~ 1e-11, factor -0.98 per
+ * iteration, on the strip's spin, and fails at t = 1.7 ms; so does S7 at dt <= 5 us), but S2
+ * with a #1 rod at 0.05 ms then diverged at t = 0.253 s: the floor stays, and S6 takes
+ * --newton full */
 #define ALI3P_THETA_MAX 0.02
-#define ALI3P_SLOW_FLOOR 1.0
+#define ALI3P_SLOW_FLOOR 100.0
 
 /* P = M + (h/2) C + (h^2/4) K at (q1, v1, a1) */
 static void build_p(csim* s, double h)
