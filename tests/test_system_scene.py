@@ -315,3 +315,18 @@ def test_bench_systems_on_a_spatial_scene(tmp_path, monkeypatch):
     err = [r["err_max"] for r in rows]
     assert all(r["status"] == "ok" for r in rows) and "ef_max" not in rows[0]
     assert 3.5 < err[0] / err[1] < 4.5 and 5.5 < err[1] / err[2] < 6.8 and err[3] < 1e-3 * err[2], err
+
+
+def test_a_planar_torque_has_no_frame(tmp_path, capsys):
+    """frame is a spatial torque's axes: in a planar scene (a torque about z) it is refused in
+    one line naming the file, by the one check in System.validate."""
+    from flexsym.apps.cli import main
+
+    scene = tmp_path / "pendulum_torque.toml"
+    scene.write_text((ROOT / "scenes" / "pendulum.toml").read_text()
+                     + '\n[[load]]\nkind = "torque"\nbody = "beam"\ntorque = "0.1"\nframe = "body"\n')
+    out = tmp_path / "out.csv"
+    assert main(["run", str(scene), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(scene) in err, err
+    assert "frame applies to spatial torques" in err and not out.exists()

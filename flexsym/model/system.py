@@ -772,9 +772,12 @@ class System:
             for e in (load.expression if n == 3 else (load.expression,)):
                 if not isinstance(e, str) or not e.strip():
                     raise SpecError(f"{where}: empty torque expression")
-            if load.frame not in ("ground", "body") or (n == 2 and load.frame != "ground"):
-                raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body' (a "
-                                "spatial torque's axes; a planar torque is about z)")
+            if n == 2 and load.frame != "ground":
+                raise SpecError(f"{where}: frame applies to spatial torques ([system] dimension = 3): "
+                                "a planar torque is about z")
+            if load.frame not in ("ground", "body"):
+                raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body' (the "
+                                "spatial torque's axes)")
             if n == 3 and body.flexible:  # its section forces from equilibrium would need it
                 raise SpecError(f"{where}: a spatial torque acts on a rigid body ('{load.body}' is a "
                                 "beam: put it on the rigid body the beam is clamped to)")

@@ -530,6 +530,10 @@ def _applied(der) -> sp.Matrix:
     tau . d omega / dq')."""
     system = der.system
     Q = sp.zeros(len(der.q), 1)
+    names = {"t": t}
+    for c, x, xd in zip(der.coords, der.q, der.qd):
+        if c.group == "joint":
+            names[c.joint], names[f"{c.joint}_rate"] = x, xd
     for load in system.loads:
         if isinstance(load, PointForce):
             F = _vec((load.fx, load.fy, load.fz))
@@ -537,24 +541,19 @@ def _applied(der) -> sp.Matrix:
                 F = der.spatial["frames"][system.marker(load.marker)[0]].A * F
             p = _marker_point(der, load.marker)
             Q += sp.Matrix([F.dot(sp.diff(p, x)) for x in der.q])
-    names = {"t": t}
-    for c, x, xd in zip(der.coords, der.q, der.qd):
-        if c.group == "joint":
-            names[c.joint], names[f"{c.joint}_rate"] = x, xd
-    for d in system.drivers:
-        if d.kind == "motor":
-            tau = parse_expression(d.expression, tuple(names.items()),
-                                   f"system '{system.name}': driver '{d.name}'")
-            k = next(i for i, c in enumerate(der.coords) if c.joint == d.joint)
-            Q[k] += tau
-    for load in system.loads:
-        if isinstance(load, Torque):  # virtual power tau . omega, omega in the body's axes
+        elif isinstance(load, Torque):  # virtual power tau . omega, omega in the body's axes
             fr = der.spatial["frames"][load.body]
             tau = sp.Matrix([parse_expression(e, tuple(names.items()), f"system '{system.name}': torque "
                                               f"'{load.name or load.body}'") for e in load.expression])
             if load.frame == "ground":
                 tau = fr.A.T * tau
             Q += sp.Matrix([tau.dot(sp.diff(fr.omega, xd)) for xd in der.qd])
+    for d in system.drivers:
+        if d.kind == "motor":
+            tau = parse_expression(d.expression, tuple(names.items()),
+                                   f"system '{system.name}': driver '{d.name}'")
+            k = next(i for i, c in enumerate(der.coords) if c.joint == d.joint)
+            Q[k] += tau
     return Q
 
 
@@ -664,9 +663,17 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
            | dict(zip(a0, der.ddt(fr.V) + _cross(omega, fr.V))))
     out = out.xreplace(now)
     section = _at(der, beam.name, x, "r")
+
+    def beyond(ref):  # a marker of this beam on the part beyond x
+        if ref == GROUND:
+            return None
+        body, m = der.system.marker(ref)
+        on = body == beam.name and (m.x > x or (x >= beam.length and m.x >= beam.length))
+        return m if on else None
+
     for F, tau, ref in cut_loads(der, beam.name):
-        m = der.system.marker(ref)[1]
-        if not (m.x > x or (x >= beam.length and m.x >= beam.length)):
+        m = beyond(ref)
+        if m is None:
             continue
         Floc, tloc = fr.A.T * F, fr.A.T * tau
         if fn == "N":
@@ -676,17 +683,14 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
             out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)[k] + tloc[k]
     for ld in der.system.loads:  # point forces and spring ends on the part beyond x
         if isinstance(ld, PointForce):
-            acting = [(ld.marker, _vec((ld.fx, ld.fy, ld.fz)), ld.frame == "body")]
-        elif isinstance(ld, SpringDamper):
+            acting = [(beyond(ld.marker), _vec((ld.fx, ld.fy, ld.fz)), ld.frame == "body")]
+        elif isinstance(ld, SpringDamper) and (beyond(ld.a) or beyond(ld.b)):
             Fa = spring_force_on_a(der, ld, _spring_ends(der, ld))
-            acting = [(ld.a, Fa, False), (ld.b, -Fa, False)]
+            acting = [(beyond(ld.a), Fa, False), (beyond(ld.b), -Fa, False)]
         else:
             continue
-        for ref, Fv, local in acting:
-            if ref == GROUND:
-                continue
-            body, m = der.system.marker(ref)
-            if body != beam.name or not (m.x > x or (x >= beam.length and m.x >= beam.length)):
+        for m, Fv, local in acting:
+            if m is None:
                 continue
             Floc = Fv if local else fr.A.T * Fv
             if fn == "N":

@@ -42,8 +42,8 @@ expression through the bounded parser of maneuver.py with only its allowed names
 parameters, each requested beam output carried by some mode of the body's model, and the
 assembly at t = 0 (flexsym/scenes/assembly.py: the free joint coordinates and rates are solved
 so that every cut joint closes with undeformed bodies; a loop that cannot close, or is singular
-there, is refused; a spatial system, not assembled yet: a universal joint's axis along its
-parent's x axis at t = 0 is refused).
+there, is refused; in a spatial system, also a universal joint's axis along its parent's x
+axis at t = 0).
 """
 from __future__ import annotations
 
@@ -491,16 +491,14 @@ def _load(r: _Items, k: int, tab: dict, dim: int = 2):
         return PointForce(r.string(where, tab, "marker"), r.number(where, tab, "fx"),
                           r.number(where, tab, "fy"), r.string(where, tab, "frame", default="ground"), name,
                           r.number(where, tab, "fz", default=0.0))
-    if kind == "torque":
+    if kind == "torque":  # a planar torque's frame is refused by System.validate
+        frame = r.string(where, tab, "frame", default="ground")
         if dim == 2:
-            if "frame" in tab:
-                r.fail(f"{where} frame", "applies to spatial torques ([system] dimension = 3): a planar "
-                       "torque is about z")
-            return Torque(r.string(where, tab, "body"), r.string(where, tab, "torque"), name)
+            return Torque(r.string(where, tab, "body"), r.string(where, tab, "torque"), name, frame)
         val = tab.get("torque")
         if not (isinstance(val, list) and len(val) == 3 and all(isinstance(e, str) for e in val)):
             r.fail(f"{where} torque", f"must be three expressions [\"tx\", \"ty\", \"tz\"] (got {val!r:.80})")
-        return Torque(r.string(where, tab, "body"), tuple(val), name, r.string(where, tab, "frame", default="ground"))
+        return Torque(r.string(where, tab, "body"), tuple(val), name, frame)
     for end in ("a", "b"):
         if r.string(where, tab, end) == GROUND:
             r.fail(f"{where} {end}", "a spring ends on a body marker (put a marker on a body fixed "
