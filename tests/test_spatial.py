@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import sympy as sp
 
 from flexsym.scenes.system_scene import system_from_dict
 from system_data import built, run_ok
@@ -291,13 +292,34 @@ def test_spatial_outputs_are_refused_in_a_planar_system():
         system_from_dict(data, name="planar")
 
 
-def test_select_on_a_spatial_scene_is_refused_up_front():
-    """select is not derived for spatial systems yet (its ef reference is S5-shaped only): one
-    line, exit 2, before the first line of its report."""
-    r = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "select", str(FLAP), "--tol", "0.01"],
+def test_select_on_a_free_spatial_beam_is_refused_up_front():
+    """select needs the ef reference, which a spatial beam on a free joint (S6's ball joint)
+    does not have at a usable cost: one line naming the beam, exit 2, before its report."""
+    r = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "select", str(S6), "--tol", "0.01"],
                        capture_output=True, text=True)
     assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
-    assert "select is not derived for spatial systems yet" in r.stderr
+    assert "a spatial ef beam on a joint that moves freely ('strip')" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_frame_driven_is_the_derivations_decision():
+    """System.frame_driven (a structural decision: clamps and guided joints to ground) says
+    which spatial ef beams get their element kinetic energy in C: the frame's motion of those
+    and only those is free of the coordinates in the derivation."""
+    from flexsym.physics.spatial import derive_spatial
+
+    for path, model in ((FLAP, {"variant": "ef", "elements": 2}), (S6, {"variant": "ef", "elements": 1})):
+        data = tomllib.loads(path.read_text())
+        for b in data["body"]:
+            if b["kind"] == "beam":
+                b["model"] = model
+        system = system_from_dict(data, name=data["system"]["name"])
+        der = derive_spatial(system)
+        for body in der.rod_bodies:
+            fr = der.spatial["frames"][body["name"]]
+            moved = sp.Matrix([*fr.omega, *fr.V]).free_symbols & (set(der.q) | set(der.qd))
+            assert body["kinetic_in_c"] == (not moved) == system.frame_driven(body["name"])
+        assert [b["kinetic_in_c"] for b in der.rod_bodies] == [path == FLAP]
 
 
 # ----- S6 spherical_pendulum: a ball joint (Euler parameters on |e| = 1), tumbling

@@ -55,8 +55,7 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
     # elements' kinetic energy is a second element kernel called per element in C (its Lagrange
     # terms by casadi AD within the element); else it joins the system's AD path (der.casadi_T),
     # whose kernels grow by ~2e4 operations per element
-    free = sp.Matrix([*fr.omega, *fr.V]).free_symbols
-    in_c = not free & (set(der.q) | set(der.qd))
+    in_c = der.system.frame_driven(b.name)
     der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c, frame=fr))
     info["kinetic_in_c"] = in_c
     der.terms.append((b.name, "rod3d_elastic", ("node",), None, None))
