@@ -6,8 +6,9 @@ joints' constraints Phi(q, t) = 0 are solved for the *free* joint coordinates on
 the tree joints that are not guided and not `fixed`, starting from their `initial` values
 (guesses; 0 when not given). A guided joint's coordinate and rate are its driver's theta(0),
 theta'(0); a fixed coordinate never moves; a given `rate` never changes. In a spatial system
-a ball joint's coordinates are two tilts of its `direction` across it (poses3); the spatial
-velocity analysis is not derived yet, so a spatial loop must start at rest (refused else).
+a ball joint's coordinates are two tilts of its `direction` across it (poses3), and its rate
+in the velocity analysis is the child's angular velocity relative to the parent (three
+components, the parent's axes: rates3).
 
 Positions: Gauss-Newton with minimum-norm steps (numpy's least squares) on Phi scaled by the
 mechanism's size, coordinates scaled likewise (a prismatic one by the size), each step halved
@@ -17,7 +18,8 @@ coordinate turned by +NUDGE (rad, or NUDGE x the size for a prismatic joint), th
 Refused: a loop that stays open (max |Phi| above CLOSE_TOL x the size), and a closed loop whose
 Jacobian w.r.t. the free coordinates has lower rank there than at a generic configuration (a
 dead point, or dependent joints). Velocities: the minimum-norm change of the free rates with
-Phi_q q' + Phi_t = 0.
+Phi_q q' + Phi_t = 0 (in 3D on the assembled positions, with a universal joint's cross axis
+kept perpendicular: rates3).
 
 Why: the runtime's consistent start (runtime_c/src/constrained.c cs_consistent_start) is a
 Newton on *all* coordinates; given a loop that does not close, it closes it with the elastic
@@ -61,7 +63,8 @@ class Assembly:
             return None
         parts = [f"joint {n} turned {b:.3g} {u} to [{', '.join(f'{c:.10g}' for c in m[0])}]" if m else
                  f"joint {n} moved {b - a:+.3g} {u} to {b:.10g}" for n, u, a, b, *m in self.moved]
-        parts += [f"joint {n} rate set to {b:.10g} {u}/s (from {a:g})" for n, u, a, b in self.rates]
+        parts += [f"joint {n} rate set to [{', '.join(f'{c:.10g}' for c in m[0])}] {u}/s" if m else
+                  f"joint {n} rate set to {b:.10g} {u}/s (from {a:g})" for n, u, a, b, *m in self.rates]
         tol = newton_tol * self.scale
         strain = ("below the runtime's tolerance {:.2g} m: elastic coordinates 0 at t = 0, no "
                   "initial strain energy" if self.residual <= tol else "ABOVE the runtime's "
@@ -143,6 +146,9 @@ def poses3(system: System, q: dict) -> dict:
             Q = sp.eye(3) + K + K * K / (1 + cos)  # the shortest turn of x to d (_Loops: d.x > -0.9)
         elif j.kind == "spherical" and j.direction is not None:
             Q = sp.Matrix(_turn(*shortest_turn(j.direction)))
+        if (j.name, "turn") in q:  # rates3: (I + [w]x) Q turns by w (parent's axes) to first order
+            w = q[(j.name, "turn")]
+            Q = sp.Matrix([[1, -w[2], w[1]], [w[2], 1, -w[0]], [-w[1], w[0], 1]]) * Q
         A = A_p * Q
         out[body] = (A, R_p + A_p * m_p - A * _local3(system, j.child))
     return out
@@ -335,29 +341,6 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
     if rank < generic:
         _singular(system, loops, jac, free, rank)
 
-    # velocities: Phi_q q' = 0 in all tree joint coordinates (Phi_t = Phi_theta theta'(0))
-    spherical = np.array([j.kind == "spherical" for j in loops.joints], dtype=bool)
-    given = np.array([0.0 if s else guided[j.name][1] if j.name in guided else (j.rate or 0.0)
-                      for j, s in zip(loops.joints, spherical)]) / loops.unit
-    rate_free = np.array([j.name not in guided and j.rate is None and not s
-                          for j, s in zip(loops.joints, spherical)], dtype=bool)
-    v = given.copy()
-    rhs = -jac @ given
-    if system.dimension == 3 and (np.max(np.abs(rhs), initial=0.0) > 0
-                                  or any(j.rate is not None for j in loops.joints if j.kind == "spherical")):
-        # a ball joint's rate turns its direction and spins it: not in these coordinates
-        raise SpecError(f"{where}: a spatial loop starts at rest so far (the velocity analysis at "
-                        f"t = 0 is planar only): {_names(loops, ~rate_free)} give rates; start the "
-                        "drivers with theta'(0) = 0 (a maneuver such as spin-up) and no joint rates")
-    if np.max(np.abs(rhs), initial=0.0) > 0:
-        v[rate_free] += np.linalg.lstsq(jac[:, rate_free], rhs, rcond=None)[0]
-        left = np.max(np.abs(jac @ v))
-        if left > 1e-9 * np.max(np.abs(jac @ given)):
-            raise SpecError(f"{where}: the joints' rates at t = 0 cannot satisfy the loops: "
-                            f"{_names(loops, ~rate_free)} are given (drivers' theta'(0), rate = ...)"
-                            " and the free rates cannot close the loops' velocities "
-                            f"(residual {left:.3g}); give fewer rates")
-
     moved, rates, joints = [], [], dict((j.name, j) for j in system.joints)
     for j in {j.name: j for j in loops.joints if j.kind == "spherical"}.values():
         a, b = x[[k for k, jk in enumerate(loops.joints) if jk.name == j.name]]
@@ -367,24 +350,96 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
             turn = math.atan2(np.linalg.norm(np.cross(d0, d)), float(d0 @ d))
             moved.append((f"{j.name} direction", "rad", 0.0, turn, [float(c) for c in d]))
             joints[j.name] = replace(j, direction=tuple(float(c) for c in d))
-    for j, u, a, b, va, vb, own in zip(loops.joints, loops.unit, x0, x, given, v, rate_free):
-        if j.kind == "spherical":
-            continue
+    for j, u, a, b in zip(loops.joints, loops.unit, x0, x):
+        if j.kind != "spherical" and b != a:
+            moved.append((j.name, "m" if j.kind == "prismatic" else "rad", float(a * u), float(b * u)))
+            joints[j.name] = replace(j, initial=float(b * u))
+    placed = replace(system, joints=tuple(joints[j.name] for j in system.joints))
+    if system.dimension == 3:  # at the assembled positions
+        J, slots = rates3(placed, guided, scale)
+    else:
+        J, slots = jac, [(j, None, u) for j, u in zip(loops.joints, loops.unit)]
+    for j, rate in _rates(placed, J, slots, guided).items():
         unit = "m" if j.kind == "prismatic" else "rad"
-        new = {}
-        if b != a:
-            new["initial"] = float(b * u)
-            moved.append((j.name, unit, float(a * u), float(b * u)))
-        if own and vb != 0.0:
-            new["rate"] = float(vb * u)
-            rates.append((j.name, unit, float(va * u), float(vb * u)))
-        if new:
-            joints[j.name] = replace(j, **new)
+        rates.append((j.name, unit, 0.0, float(np.linalg.norm(rate)), [float(c) for c in rate])
+                     if j.kind == "spherical" else (j.name, unit, float(j.rate or 0.0), float(rate)))
+        joints[j.name] = replace(joints[j.name], rate=tuple(float(c) for c in rate)
+                                 if j.kind == "spherical" else float(rate))
     order = [j.name for j in system.joints]
     moved.sort(key=lambda m: order.index(m[0].split()[0]))
     rates.sort(key=lambda m: order.index(m[0]))
     report = Assembly(tuple(moved), tuple(rates), float(res * scale), scale, True)
     return replace(system, joints=tuple(joints[j.name] for j in system.joints)), report
+
+
+def _rates(system: System, J: np.ndarray, slots: list, guided: dict) -> dict:
+    """Velocity analysis at the assembled t = 0: {joint: its new rate} of the free rates, the
+    minimum-norm change that makes Phi_q q' + Phi_t = 0 (refused when it cannot); J: Phi_q
+    (dimensionless) over the rate slots (joint, component, unit)."""
+    given = np.array([guided[j.name][1] if j.name in guided else 0.0 if j.rate is None
+                      else j.rate[k] if k is not None else j.rate for j, k, _ in slots])
+    given /= np.array([u for _, _, u in slots])
+    free = np.array([j.name not in guided and j.rate is None for j, _, _ in slots], dtype=bool)
+    rhs = -J @ given
+    if not np.max(np.abs(rhs), initial=0.0) > 0:
+        return {}
+    v = given.copy()
+    v[free] += np.linalg.lstsq(J[:, free], rhs, rcond=None)[0]
+    left = np.max(np.abs(J @ v))
+    if left > 1e-9 * np.max(np.abs(J)) * np.max(np.abs(given)):  # round-off: consistent
+        names = {j.name for (j, _, _), f in zip(slots, free) if not f}
+        raise SpecError(f"system '{system.name}': the joints' rates at t = 0 cannot satisfy the "
+                        f"loops: {', '.join(j.name for j in system.joints if j.name in names)} are "
+                        "given (drivers' theta'(0), rate = ...) and the free rates cannot close the "
+                        f"loops' velocities (residual {left:.3g}); give fewer rates")
+    out = {}
+    for (j, _, u), f, vi in zip(slots, free, v):
+        if f:
+            out.setdefault(j, []).append(vi * u)
+    return {j: np.array(r) if j.kind == "spherical" else r[0] for j, r in out.items() if any(r)}
+
+
+def _rate_slots(system: System, scale: float) -> list:
+    """(joint, component, unit) of every tree joint rate: a coordinate's (component None; a
+    prismatic one's unit is the size), a ball joint's three turn rates (parent's axes)."""
+    tree = system.tree()
+    slots = []
+    for j in (system.joint(tree.joint_of(b)) for b in tree.order):
+        if j.kind == "spherical":
+            slots += [(j, k, 1.0) for k in range(3)]
+        elif j.has_coordinate:
+            slots.append((j, None, scale if j.kind == "prismatic" else 1.0))
+    return slots
+
+
+def rates3(system: System, guided: dict, scale: float):
+    """(Phi_q, slots) of a spatial system's loops at its assembled coordinates: the derivative
+    of the cut rows (poses3, points / size) w.r.t. each rate slot's small move, a ball joint's
+    as the small turn (I + [w]x) of its child; a universal joint adds d/dt (e1 . e2) with e2
+    fixed in the parent's section, perpendicular to e1 and the parent's x at t = 0 (as
+    physics/spatial.py's row), so the cross's spin is set too."""
+    slots = _rate_slots(system, scale)
+    h = sp.symbols(f"h0:{len(slots)}", real=True)
+    q = {j.name: guided[j.name][0] if j.name in guided else j.initial for j, k, _ in slots if k is None}
+    for (j, k, u), hk in zip(slots, h):
+        if k is None:
+            q[j.name] = q[j.name] + hk * u
+        else:
+            q[(j.name, "turn")] = q.get((j.name, "turn"), (0, 0, 0))[:k] + (hk,) + (0,) * (2 - k)
+    frames = poses3(system, q)
+    rows = [e / scale for _, e, _ in cut_rows3(system, frames)]
+    at0 = {hk: 0 for hk in h}
+    for name in system.tree().cut:
+        j = system.joint(name)
+        if j.kind != "universal":
+            continue
+        e1 = frames[j.child.partition(".")[0]][0] * sp.Matrix(j.axis) / math.sqrt(sum(c * c for c in j.axis))
+        A_p = frames[j.parent.partition(".")[0]][0]  # an undeformed beam's section: its frame
+        e1_0, A_p0 = np.array(e1.xreplace(at0), dtype=float).ravel(), np.array(A_p.xreplace(at0), dtype=float)
+        e2_0 = np.cross(e1_0, A_p0[:, 0])
+        rows.append(e1.dot(A_p * sp.Matrix(A_p0.T @ (e2_0 / np.linalg.norm(e2_0)))))
+    J = sp.Matrix(rows).jacobian(h).xreplace(at0) if h else sp.zeros(len(rows), 0)
+    return np.array(J.evalf(), dtype=float).reshape(len(rows), len(h)), slots
 
 
 def _random(loops: _Loops, k: int) -> np.ndarray:
