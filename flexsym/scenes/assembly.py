@@ -113,15 +113,22 @@ def poses(system: System, q: dict) -> dict:
 def rotations3(system: System) -> dict:
     """Each body's frame of a spatial system at t = 0 (ground <- frame, numpy): the start
     geometry checks' numbers, before anything is derived."""
-    q = {j.name: j.initial for j in system.joints} | {k: v[0] for k, v in theta0(system).items()}
-    return {b: np.array(A.evalf(), dtype=float) for b, (A, _) in poses3(system, q).items()}
+    return {b: np.array(A.evalf(), dtype=float) for b, (A, _) in poses3(system, start3(system)).items()}
+
+
+def start3(system: System) -> dict:
+    """Every joint coordinate's value at t = 0 by its name (Joint.coordinates; a guided joint's
+    theta(0)): poses3's q."""
+    return ({c[0]: c[2] for j in system.joints for c in j.coordinates}
+            | {k: v[0] for k, v in theta0(system).items()})
 
 
 def poses3(system: System, q: dict) -> dict:
     """Each body's frame of a spatial system (A: ground <- frame, R: its origin), composed as
     physics/spatial.py does (A_c = A_p Q, R_c = R_p + A_p m_p - A_c m_c) with undeformed beams:
-    a revolute turned by q[joint] about its axis, a prismatic slid by q[joint] along its axis,
-    a spherical joint by the shortest turn of x to its direction, tilted by q[joint] = (a, b)
+    each coordinate of a revolute, prismatic or cylindrical joint (q by its name,
+    Joint.coordinates) turns the child about the joint's axis or slides it along it, a spherical
+    joint by the shortest turn of x to its direction, tilted by q[joint] = (a, b)
     along two directions across it (the assembly's coordinates; absent: not tilted)."""
     out = {GROUND: (sp.eye(3), sp.zeros(3, 1))}
     tree = system.tree()
@@ -131,12 +138,13 @@ def poses3(system: System, q: dict) -> dict:
         m_p = sp.Matrix(j.point) if j.parent == GROUND else _local3(system, j.parent)
         Q = sp.eye(3)
         c = q.get(j.name, 0)
-        if j.kind == "revolute":
-            Q = _turn3(sp.Matrix(j.axis or (0.0, 0.0, 1.0)), c)
-        elif j.kind == "prismatic":
-            a = sp.Matrix(j.axis)
-            m_p = m_p + a / sp.sqrt(a.dot(a)) * c
-        elif j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
+        for name, motion, _, _ in j.coordinates:  # physics/spatial.axis_motion
+            a = sp.Matrix(j.axis or (0.0, 0.0, 1.0))
+            if motion == "turn":
+                Q = _turn3(a, q.get(name, 0))
+            else:
+                m_p = m_p + a / sp.sqrt(a.dot(a)) * q.get(name, 0)
+        if j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
             d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *c))
             v, cos = sp.Matrix([0, -d[2], d[1]]), d[0]  # x cross d, x . d (d a unit vector)
             K = sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
@@ -249,13 +257,21 @@ class _Loops:
         # stays as given); the others' are their own
         tilted = [j for j in tree_joints if j.kind == "spherical"
                   and (j.direction is None or j.direction[0] / math.hypot(*j.direction) > -0.9)]
-        self.joints = [j for j in tree_joints if j.has_coordinate or j in tilted
-                       for _ in range(2 if j.kind == "spherical" else 1)]
-        self.unit = np.array([scale if j.kind == "prismatic" else 1.0 for j in self.joints])
+        # per coordinate: its joint, its name (Joint.coordinates; None: a tilt), its unit
+        entries = []
+        for j in tree_joints:
+            entries += ([(j, None, 1.0)] * 2 if j in tilted else
+                        [(j, c[0], scale if c[1] == "slide" else 1.0) for c in j.coordinates])
+        self.joints = [j for j, _, _ in entries]
+        self.coords = [c for _, c, _ in entries]
+        self.unit = np.array([u for _, _, u in entries])
         x = sp.symbols(f"x0:{len(self.joints)}", real=True)
         q = {}
-        for j, xi, u in zip(self.joints, x, self.unit):
-            q[j.name] = q.get(j.name, ()) + (xi,) if j.kind == "spherical" else xi * u
+        for j, c, xi, u in zip(self.joints, self.coords, x, self.unit):
+            if c is None:
+                q[j.name] = q.get(j.name, ()) + (xi,)
+            else:
+                q[c] = xi * u
         if system.dimension == 3:
             rows = cut_rows3(system, poses3(system, q))
         else:
@@ -314,10 +330,11 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
     loops = _Loops(system, scale)
     guided = theta0(system)
     where = f"system '{system.name}'"
+    starts = {c[0]: (c[2], c[3]) for j in loops.joints for c in j.coordinates}  # (value, rate)
     fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
     free = ~fixed
-    x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if j.kind == "spherical" else j.initial
-                   for j in loops.joints]) / loops.unit
+    x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if c is None else starts[c][0]
+                   for j, c in zip(loops.joints, loops.coords)]) / loops.unit
     x, res = x0, np.max(np.abs(loops.phi(x0)), initial=0.0)
     if res > CLOSE_TOL:
         for nudge in (0.0, NUDGE, -NUDGE):
@@ -336,11 +353,11 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
         _singular(system, loops, jac, free, rank)
 
     # velocities: Phi_q q' = 0 in all tree joint coordinates (Phi_t = Phi_theta theta'(0))
-    spherical = np.array([j.kind == "spherical" for j in loops.joints], dtype=bool)
-    given = np.array([0.0 if s else guided[j.name][1] if j.name in guided else (j.rate or 0.0)
-                      for j, s in zip(loops.joints, spherical)]) / loops.unit
-    rate_free = np.array([j.name not in guided and j.rate is None and not s
-                          for j, s in zip(loops.joints, spherical)], dtype=bool)
+    spherical = np.array([c is None for c in loops.coords], dtype=bool)
+    given = np.array([0.0 if s else guided[j.name][1] if j.name in guided else (starts[c][1] or 0.0)
+                      for j, c, s in zip(loops.joints, loops.coords, spherical)]) / loops.unit
+    rate_free = np.array([j.name not in guided and not s and starts[c][1] is None
+                          for j, c, s in zip(loops.joints, loops.coords, spherical)], dtype=bool)
     v = given.copy()
     rhs = -jac @ given
     if system.dimension == 3 and (np.max(np.abs(rhs), initial=0.0) > 0
@@ -367,22 +384,26 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
             turn = math.atan2(np.linalg.norm(np.cross(d0, d)), float(d0 @ d))
             moved.append((f"{j.name} direction", "rad", 0.0, turn, [float(c) for c in d]))
             joints[j.name] = replace(j, direction=tuple(float(c) for c in d))
-    for j, u, a, b, va, vb, own in zip(loops.joints, loops.unit, x0, x, given, v, rate_free):
-        if j.kind == "spherical":
+    for j, c, u, a, b, va, vb, own in zip(loops.joints, loops.coords, loops.unit, x0, x, given, v,
+                                          rate_free):
+        if c is None:
             continue
-        unit = "m" if j.kind == "prismatic" else "rad"
+        slide = c != j.name  # a cylindrical joint's second coordinate (Joint.coordinates)
+        unit = "m" if dict((x[0], x[1]) for x in j.coordinates)[c] == "slide" else "rad"
+        label = f"{j.name} slide" if slide else j.name
+        keys = ("slide", "slide_rate") if slide else ("initial", "rate")
         new = {}
         if b != a:
-            new["initial"] = float(b * u)
-            moved.append((j.name, unit, float(a * u), float(b * u)))
+            new[keys[0]] = float(b * u)
+            moved.append((label, unit, float(a * u), float(b * u)))
         if own and vb != 0.0:
-            new["rate"] = float(vb * u)
-            rates.append((j.name, unit, float(va * u), float(vb * u)))
+            new[keys[1]] = float(vb * u)
+            rates.append((label, unit, float(va * u), float(vb * u)))
         if new:
-            joints[j.name] = replace(j, **new)
+            joints[j.name] = replace(joints[j.name], **new)
     order = [j.name for j in system.joints]
     moved.sort(key=lambda m: order.index(m[0].split()[0]))
-    rates.sort(key=lambda m: order.index(m[0]))
+    rates.sort(key=lambda m: order.index(m[0].split()[0]))
     report = Assembly(tuple(moved), tuple(rates), float(res * scale), scale, True)
     return replace(system, joints=tuple(joints[j.name] for j in system.joints)), report
 
