@@ -191,7 +191,7 @@ BAD = [  # (what, scene, edits of its text, what the one line says)
      "joint 'cardan': axis [0.25495097567963926, 0.05, 0.15] lies along the x axis of 'rod.tip' at t = 0"),
     ("universal without an axis", S7, [(CARDAN_AXIS, "")], "joint 'cardan': a universal joint needs its child's axis"),
     ("spherical joint with an axis", S6, [('child = "strip.root"', 'child = "strip.root"\naxis = [0.0, 0.0, 1.0]')],
-     "joint 'ball': axis applies to revolute, prismatic and universal joints only"),
+     "joint 'ball': axis applies to revolute, prismatic, cylindrical and universal joints only"),
     ("spherical joint with an initial angle", S6, [("initial = { rate = [0.0, 0.0, 4.0] }", "initial = 0.3")],
      "[[joint]] 'ball' initial: a spherical joint starts with the child's frame parallel to the parent's"),
     ("spherical joint with an offset", S6, [('child = "strip.root"', 'child = "strip.root"\noffset = 0.5')],

@@ -101,3 +101,29 @@ def test_rates_the_loop_cannot_take_are_refused(tmp_path):
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert "the joints' rates at t = 0 cannot satisfy the loops: crank_joint, ball are given" in r.stderr
     assert not out.exists()
+
+
+def test_a_cylindrical_joint_in_a_loop_takes_both_rates():
+    """A body on a vertical cylindrical joint whose marker meets (ball joint) a post that a
+    guided prismatic joint lifts along z at 0.5 m/s while turning nothing: the slide's rate is
+    0.5 m/s, written as slide_rate, and the angle's 0 (not written)."""
+    from flexsym.scenes.system_scene import checked_system, system_from_data
+
+    data = {"system": {"name": "cyl_loop", "dimension": 3},
+            "body": [{"name": "arm", "kind": "rigid", "mass": 1.0, "inertia": [0.01, 0.01, 0.01],
+                      "markers": {"hole": [0.0, 0.0, 0.0], "end": [0.5, 0.0, 0.0]}},
+                     {"name": "post", "kind": "rigid", "mass": 1.0, "inertia": [0.01, 0.01, 0.01],
+                      "markers": {"base": [0.0, 0.0, 0.0], "top": [0.0, 0.5, 0.3]}}],
+            "joint": [{"name": "c", "kind": "cylindrical", "parent": "ground", "point": [0.0, 0.0, 0.0],
+                       "child": "arm.hole", "axis": [0.0, 0.0, 1.0], "initial": {"value": 1.2, "slide": 0.1}},
+                      {"name": "lift", "kind": "prismatic", "parent": "ground", "point": [0.0, 0.0, 0.0],
+                       "child": "post.base", "axis": [0.0, 0.0, 1.0]},
+                      {"name": "ball", "kind": "spherical", "parent": "post.top", "child": "arm.end"}],
+            "driver": [{"name": "up", "kind": "guided", "joint": "lift", "theta": "0.5*t"}],
+            "output": {"columns": {"s": "slide(c)"}}}
+    system, _, _ = system_from_data(data, "", "cyl_loop")
+    assembled, report = checked_system(system)
+    j = assembled.joint("c")
+    assert j.slide == pytest.approx(0.3, abs=1e-12) and abs(j.slide_rate - 0.5) < 1e-14
+    assert j.rate is None
+    assert "joint c slide rate set to 0.5 m/s" in report.line()

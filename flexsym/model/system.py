@@ -25,9 +25,9 @@ from flexsym.model.modes import ModeRef
 from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
-JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal")
+JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
 DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
-SPATIAL_JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal")
+SPATIAL_JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
 SPATIAL_CUT_KINDS = ("spherical", "universal")  # closing a loop in 3D: their constraint rows  # derived in 3D so far (physics/spatial.py)
 TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
 SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
@@ -35,6 +35,7 @@ STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
 DRIVER_KINDS = ("guided", "motor")
 OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "angle": "joint", "rate": "joint", "reaction": "joint", "torque": "driver",
+    "slide": "joint", "slide_rate": "joint",  # a cylindrical joint's second coordinate (Joint.coordinates)
     "x": "marker", "y": "marker",
     "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam", "sigma": "beam",
     # spatial systems only: the marker's ground z, the deflection along the beam frame's z, and
@@ -336,7 +337,10 @@ class Joint:
     normalisation), child frame angle = parent's + offset; clamp: no coordinate, angle =
     parent's + offset; spherical (spatial systems): three rotations, as Euler parameters, the
     child's frame parallel to the parent's at t = 0, `rate` its angular velocity relative to the
-    parent then (three numbers, parent's frame). `initial`: the coordinate at t = 0, a guess that the assembly at t = 0
+    parent then (three numbers, parent's frame); cylindrical (spatial systems): a revolute's
+    turn about `axis` and a prismatic's slide along it, `initial`/`rate` the angle's and
+    `slide`/`slide_rate` the slide's (Joint.coordinates names them). `initial`: the coordinate
+    at t = 0, a guess that the assembly at t = 0
     (flexsym/scenes/assembly.py) may move to close the loops, unless `fixed`; `rate`: its rate
     at t = 0 when given (None: 0, or what the loops need)."""
 
@@ -351,10 +355,27 @@ class Joint:
     fixed: bool = False
     rate: float | None = None
     direction: tuple | None = None  # spatial spherical: the child's x axis at t = 0 (parent's frame)
+    slide: float = 0.0  # cylindrical: the slide's initial value (m) ...
+    slide_rate: float | None = None  # ... and its rate at t = 0 (m/s; None: 0, or what the loops need)
 
     @property
     def has_coordinate(self) -> bool:
-        return self.kind in ("revolute", "prismatic")
+        return self.kind in ("revolute", "prismatic", "cylindrical")
+
+    @property
+    def coordinates(self) -> tuple[tuple[str, str, float, float | None], ...]:
+        """(name, motion, value at t = 0, rate at t = 0 or None) of each of the joint's
+        coordinates, in the order of q: the one place they are named. A revolute joint's angle
+        ("turn" about its axis) and a prismatic joint's displacement ("slide" along it) carry
+        the joint's name (outputs angle(J), rate(J); initial, rate); a cylindrical joint has
+        both, the turn first: the angle named J as a revolute's, the slide J_slide (outputs
+        slide(J), slide_rate(J); initial slide, slide_rate)."""
+        if self.kind == "cylindrical":
+            return ((self.name, "turn", self.initial, self.rate),
+                    (f"{self.name}_slide", "slide", self.slide, self.slide_rate))
+        if self.kind in ("revolute", "prismatic"):
+            return ((self.name, "turn" if self.kind == "revolute" else "slide", self.initial, self.rate),)
+        return ()
 
 
 @dataclass(frozen=True)
@@ -474,6 +495,8 @@ class System:
         taken = {"t": "the time", "violation": "the constraint violation", "T": "the kinetic energy",
                  "V": "the potential energy", "h": "the energy's step error"}
         taken |= {j.name: f"joint '{j.name}'" for j in self.joints if isinstance(j, Joint)}
+        taken |= {c[0]: f"the slide of joint '{j.name}'" for j in self.joints if isinstance(j, Joint)
+                  for c in j.coordinates if c[0] != j.name}
         taken |= {f"{j.name}_e{k}": f"an Euler parameter of joint '{j.name}'" for j in self.joints
                   if isinstance(j, Joint) and j.kind == "spherical" for k in range(4)}
         for b in self.bodies:
@@ -609,7 +632,7 @@ class System:
 
     def _check_spatial(self) -> None:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
-        before any work: revolute, spherical and clamp joints in a tree, uniform modal beams or
+        before any work: revolute, prismatic, cylindrical, spherical and clamp joints in a tree, uniform modal beams or
         the geometrically exact ef (rod3d), undamped."""
         where = f"system '{self.name}'"
         for j in self.joints:
@@ -673,8 +696,8 @@ class System:
         if bodies[0] == bodies[1]:
             raise SpecError(f"{where}: joins body '{bodies[0]}' to itself")
         n = self.dimension
-        if n == 2 and j.kind == "universal":
-            raise SpecError(f"{where}: a universal joint applies to spatial systems (dimension = 3) only")
+        if n == 2 and j.kind in ("universal", "cylindrical"):  # a planar cylindrical: a revolute or a prismatic
+            raise SpecError(f"{where}: a {j.kind} joint applies to spatial systems (dimension = 3) only")
         if j.direction is not None:
             d = j.direction
             if j.kind != "spherical" or n != 3:
@@ -683,7 +706,8 @@ class System:
                     or math.hypot(*d) < MIN_AXIS):
                 raise SpecError(f"{where}: direction {d!r} must be three finite numbers, not all 0 "
                                 "(the child's x axis at t = 0, in the parent's frame)")
-        if j.kind == "prismatic" or (n == 3 and j.kind in ("revolute", "universal") and j.axis is not None):
+        if j.kind in ("prismatic", "cylindrical") or (n == 3 and j.kind in ("revolute", "universal")
+                                                       and j.axis is not None):
             ax, count = j.axis, ("two", "three")[n - 2]
             frame = "child's" if j.kind == "universal" else "parent's"  # e1 turns with the child
             if ax is None or len(ax) != n or not all(_finite(a) for a in ax) or not any(ax):
@@ -694,16 +718,21 @@ class System:
                                 f"direction, normalised: write e.g. {[1] + [0] * (n - 1)})")
         elif j.axis is not None:
             raise SpecError(f"{where}: axis applies to prismatic joints only" if n == 2 else
-                            f"{where}: axis applies to revolute, prismatic and universal joints only")
+                            f"{where}: axis applies to revolute, prismatic, cylindrical and universal "
+                            "joints only")
         if n == 3 and j.kind == "universal" and j.axis is None:
             raise SpecError(f"{where}: a universal joint needs its child's axis (three numbers, in the "
                             "child's frame)")
         if n == 3 and j.offset != 0:
             raise SpecError(f"{where}: offset (a planar angle) does not apply to spatial joints: "
                             "the child's frame starts parallel to the parent's")
-        for key in ("offset", "initial"):
+        for key in ("offset", "initial", "slide"):
             if not _finite(getattr(j, key)):
                 raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
+        if j.kind != "cylindrical" and (j.slide != 0 or j.slide_rate is not None):
+            raise SpecError(f"{where}: slide and slide_rate apply to cylindrical joints only")
+        if j.slide_rate is not None and not _finite(j.slide_rate):
+            raise SpecError(f"{where}: slide_rate {j.slide_rate!r} must be a finite number")
         if j.kind == "spherical":
             if n == 2:
                 raise SpecError(f"{where}: a spherical joint applies to spatial systems "
@@ -737,6 +766,9 @@ class System:
         j = self.joint(d.joint)
         if not j.has_coordinate:
             raise SpecError(f"{where}: joint '{d.joint}' is a {j.kind} (no coordinate to drive)")
+        if j.kind == "cylindrical":  # a law per coordinate, and which one: not derived
+            raise SpecError(f"{where}: joint '{d.joint}' is cylindrical: a driver on it is not derived "
+                            "yet (drive a revolute or prismatic joint)")
         if d.joint in tree.cut:
             raise SpecError(f"{where}: joint '{d.joint}' is a cut joint (it closes a loop); drive "
                             "a tree joint")
@@ -817,7 +849,7 @@ class System:
 
 
 _SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2,
-                     "direction": None}
+                     "direction": None, "slide": 0.0, "slide_rate": None}
 
 
 def system_to_dict(system: System) -> dict:
@@ -913,6 +945,10 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
             raise SpecError(f"{where}: needs one joint name")
         if fn in ("angle", "rate") and not system.joint(args[0]).has_coordinate:
             raise SpecError(f"{where}: joint '{args[0]}' has no coordinate")
+        if fn in ("slide", "slide_rate") and system.joint(args[0]).kind != "cylindrical":
+            raise SpecError(f"{where}: {fn}(J) is a cylindrical joint's slide, and '{args[0]}' is a "
+                            f"{system.joint(args[0]).kind} joint (a prismatic joint's displacement "
+                            "is angle(J), its rate rate(J))")
     elif kind == "driver":
         if len(args) != 1 or args[0] not in {d.name for d in system.drivers}:
             raise SpecError(f"{where}: needs one driver name")
@@ -976,6 +1012,8 @@ def output_unit(system: System, quantity: str) -> str:
         return {"angle": ("rad", "m"), "rate": ("rad/s", "m/s"), "torque": ("N m", "N")}[fn][linear]
     if fn == "reaction":
         return "N m" if args[1] == "moment" else "N"
+    if fn in ("slide", "slide_rate"):
+        return "m" if fn == "slide" else "m/s"
     if fn in ("Hx", "Hy", "Hz"):
         return "kg m^2/s"
     return {"x": "m", "y": "m", "z": "m", "v": "m", "vz": "m", "u": "m", "w": "m", "N": "N", "M": "N m",

@@ -3,12 +3,12 @@ spanning tree (sympy): the 3D sibling of assemble.py, producing the same SystemD
 that sysgen.py, the templates and the runtime take it unchanged.
 
 What is derived so far: rigid bodies, uniform modal beams and the geometrically exact `ef`
-(spatial_ef.py) joined in a tree by revolute and prismatic joints (axes fixed in the parent's
-frame), spherical joints (Euler parameters on |e| = 1, a constraint row) and clamps, with loops
-closed by spherical and universal joints (_cut_rows), guided or motor-driven, under gravity,
-point forces, torques on rigid bodies and spring-dampers. What is not (cylindrical joints,
-structural damping, bodies from finite-element data, ...) is refused up front by
-System._check_spatial.
+(spatial_ef.py) joined in a tree by revolute, prismatic and cylindrical joints (axes fixed in
+the parent's frame; axis_motion), spherical joints (Euler parameters on |e| = 1, a constraint
+row) and clamps, with loops closed by spherical and universal joints (_cut_rows), guided or
+motor-driven, under gravity, point forces, torques on rigid bodies and spring-dampers. What is
+not (structural damping, bodies from finite-element data, ...) is refused up front by
+System.validate.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
@@ -17,10 +17,12 @@ modal fields in sympy makes kernels too large to compile. Strain energies, gravi
 generalised forces stay in sympy.
 
 Kinematics, composed joint by joint in each body's own frame components (no trigonometric
-identity ever has to be simplified): with Q = Rot(a, q) the joint's rotation (Rodrigues),
-m_p and m_c the joint's marker on parent and child,
-    omega_c = Q^T omega_p + a q',    V_c = Q^T (V_p + omega_p x m_p) - omega_c x m_c,
-    g_c = Q^T g_p,   A_c = A_p Q,   R_c = R_p + A_p m_p - A_c m_c     (a clamp: Q = I, q = 0).
+identity ever has to be simplified): with a the joint's unit axis, Q = Rot(a, theta) its
+rotation (Rodrigues) and s its slide along a, m_p and m_c the joint's marker on parent and
+child, m = m_p + a s,
+    omega_c = Q^T omega_p + a theta',    V_c = Q^T (V_p + omega_p x m) + a s' - omega_c x m_c,
+    g_c = Q^T g_p,   A_c = A_p Q,   R_c = R_p + A_p m - A_c m_c
+(revolute: s = 0; prismatic: theta = 0; cylindrical: both; a clamp: Q = I, s = 0; Q a = a).
 A beam's floating frame is its root section's; on it the beam carries, per unit s = x/L,
     r = (L s + u, v, vz),   u = axial modes (+ u_fs = -1/2 int (v_x^2 + vz_x^2) for #3),
     v, vz = the model's bending modes in the frame's x-y (I = I_z) and x-z (I_y) planes,
@@ -187,8 +189,8 @@ def derive_spatial(system: System) -> SystemDerivation:
     coords: list[Coordinate] = []
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
-        if j.has_coordinate and j.name not in guided_by_joint:
-            coords.append(Coordinate(j.name, "joint", body, j.name))
+        if j.has_coordinate and j.name not in guided_by_joint:  # a cylindrical joint's two
+            coords += [Coordinate(c[0], "joint", body, j.name) for c in j.coordinates]
         elif j.kind == "spherical":  # Euler parameters: e(0) turns x to direction, e' = G^T omega/2
             e0, ed0 = initial_euler(j.direction, j.rate)
             coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
@@ -233,25 +235,13 @@ def derive_spatial(system: System) -> SystemDerivation:
             scale = sp.nsimplify(length_scale(system))
             der.constraints.append((f"{j.name}.norm", scale * (e.dot(e) - 1) / 2))
             der.T += 2 * _spin_inertia(system, body, psyms) * e.dot(ed)**2
-        elif j.kind == "revolute":
-            x, xd = joint_sym[j.name][0]
-            axis = j.axis or (0.0, 0.0, 1.0)
-            a = _vec(axis)
-            a = a / sp.sqrt(a.dot(a))
-            Q = rotation(axis, x)
-            rel = a * xd
-        elif j.kind == "prismatic":  # the child slides along the unit axis (parent's frame)
-            x, xd = joint_sym[j.name][0]
-            a = _vec(j.axis)
-            a = a / sp.sqrt(a.dot(a))
-            Q, rel = sp.eye(3), sp.zeros(3, 1)
-            m_p = m_p + a * x
+            slide, v_rel = sp.zeros(3, 1), sp.zeros(3, 1)
         else:
-            Q, rel = sp.eye(3), sp.zeros(3, 1)
+            Q, rel, slide, v_rel = axis_motion(j, joint_sym.get(j.name, ()))
+        m_p = m_p + slide
         omega = Q.T * fp.omega + rel
-        V = Q.T * (fp.V + _cross(fp.omega, m_p)) - _cross(omega, m_c)
-        if j.kind == "prismatic":
-            V += a * xd
+        # v_rel = a s' needs no Q^T: Q turns about a itself (a cylindrical joint), or is I
+        V = Q.T * (fp.V + _cross(fp.omega, m_p)) - _cross(omega, m_c) + v_rel
         A_ = fp.A * Q
         R = fp.R + fp.A * m_p - A_ * m_c
         frames[body] = Frame(A_, R, omega, V, Q.T * fp.g)
@@ -320,6 +310,28 @@ def derive_spatial(system: System) -> SystemDerivation:
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
     return der
+
+
+def axis_motion(j, coordinates) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Matrix]:
+    """A joint's motion along its unit axis a (parent's frame), composed of its coordinates'
+    (Joint.coordinates: each a "turn" or a "slide", symbols (x, x')): (Q, the parent marker's
+    shift, the child's angular velocity relative to the parent, the shifted marker's velocity
+    relative to the parent), the last two in the child's components. A turn by theta: Q =
+    Rot(a, theta), a theta'; a slide by s: a s, a s' (a clamp: none of them, Q = I). A
+    cylindrical joint is both, about and along one axis (Q a = a: the slide's direction is the
+    same in both frames)."""
+    Q, rel, slide, v_rel = sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1)
+    if not j.coordinates:
+        return Q, rel, slide, v_rel
+    axis = j.axis or (0.0, 0.0, 1.0)  # a revolute's default (System.validate: the others need one)
+    a = _vec(axis)
+    a = a / sp.sqrt(a.dot(a))
+    for (_, motion, _, _), (x, xd) in zip(j.coordinates, coordinates):
+        if motion == "turn":
+            Q, rel = rotation(axis, x), a * xd
+        else:
+            slide, v_rel = a * x, a * xd
+    return Q, rel, slide, v_rel
 
 
 def initial_euler(direction, rate) -> tuple[list[float], list[float]]:
@@ -532,8 +544,8 @@ def _applied(der) -> sp.Matrix:
     Q = sp.zeros(len(der.q), 1)
     names = {"t": t}
     for c, x, xd in zip(der.coords, der.q, der.qd):
-        if c.group == "joint":
-            names[c.joint], names[f"{c.joint}_rate"] = x, xd
+        if c.group == "joint":  # its name: the joint's, or J_slide (Joint.coordinates)
+            names[c.name], names[f"{c.name}_rate"] = x, xd
     for load in system.loads:
         if isinstance(load, PointForce):
             F = _vec((load.fx, load.fy, load.fz))
@@ -563,6 +575,10 @@ def _output(der, quantity: str) -> sp.Expr:
     where = f"system '{system.name}': output '{quantity}'"
     if fn in ("angle", "rate"):
         return joint_coordinate(der, args[0], fn == "rate", where)
+    if fn in ("slide", "slide_rate"):  # a cylindrical joint's second coordinate
+        name = system.joint(args[0]).coordinates[1][0]
+        k = next(i for i, c in enumerate(der.coords) if c.name == name)
+        return der.qd[k] if fn == "slide_rate" else der.q[k]
     if fn in ("x", "y", "z"):
         return _marker_point(der, args[0])["xyz".index(fn)]
     if fn == "T":  # EF_T: what casadi adds (the bodies' T in their frame's motion)

@@ -116,15 +116,22 @@ def poses(system: System, q: dict) -> dict:
 def rotations3(system: System) -> dict:
     """Each body's frame of a spatial system at t = 0 (ground <- frame, numpy): the start
     geometry checks' numbers, before anything is derived."""
-    q = {j.name: j.initial for j in system.joints} | {k: v[0] for k, v in theta0(system).items()}
-    return {b: np.array(A.evalf(), dtype=float) for b, (A, _) in poses3(system, q).items()}
+    return {b: np.array(A.evalf(), dtype=float) for b, (A, _) in poses3(system, start3(system)).items()}
+
+
+def start3(system: System) -> dict:
+    """Every joint coordinate's value at t = 0 by its name (Joint.coordinates; a guided joint's
+    theta(0)): poses3's q."""
+    return ({c[0]: c[2] for j in system.joints for c in j.coordinates}
+            | {k: v[0] for k, v in theta0(system).items()})
 
 
 def poses3(system: System, q: dict) -> dict:
     """Each body's frame of a spatial system (A: ground <- frame, R: its origin), composed as
     physics/spatial.py does (A_c = A_p Q, R_c = R_p + A_p m_p - A_c m_c) with undeformed beams:
-    a revolute turned by q[joint] about its axis, a prismatic slid by q[joint] along its axis,
-    a spherical joint by the shortest turn of x to its direction, tilted by q[joint] = (a, b)
+    each coordinate of a revolute, prismatic or cylindrical joint (q by its name,
+    Joint.coordinates) turns the child about the joint's axis or slides it along it, a spherical
+    joint by the shortest turn of x to its direction, tilted by q[joint] = (a, b)
     along two directions across it (the assembly's coordinates; absent: not tilted)."""
     out = {GROUND: (sp.eye(3), sp.zeros(3, 1))}
     tree = system.tree()
@@ -134,12 +141,13 @@ def poses3(system: System, q: dict) -> dict:
         m_p = sp.Matrix(j.point) if j.parent == GROUND else _local3(system, j.parent)
         Q = sp.eye(3)
         c = q.get(j.name, 0)
-        if j.kind == "revolute":
-            Q = _turn3(sp.Matrix(j.axis or (0.0, 0.0, 1.0)), c)
-        elif j.kind == "prismatic":
-            a = sp.Matrix(j.axis)
-            m_p = m_p + a / sp.sqrt(a.dot(a)) * c
-        elif j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
+        for name, motion, _, _ in j.coordinates:  # physics/spatial.axis_motion
+            a = sp.Matrix(j.axis or (0.0, 0.0, 1.0))
+            if motion == "turn":
+                Q = _turn3(a, q.get(name, 0))
+            else:
+                m_p = m_p + a / sp.sqrt(a.dot(a)) * q.get(name, 0)
+        if j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
             d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *c))
             v, cos = sp.Matrix([0, -d[2], d[1]]), d[0]  # x cross d, x . d (d a unit vector)
             K = sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
@@ -255,13 +263,21 @@ class _Loops:
         # stays as given); the others' are their own
         tilted = [j for j in tree_joints if j.kind == "spherical"
                   and (j.direction is None or j.direction[0] / math.hypot(*j.direction) > -0.9)]
-        self.joints = [j for j in tree_joints if j.has_coordinate or j in tilted
-                       for _ in range(2 if j.kind == "spherical" else 1)]
-        self.unit = np.array([scale if j.kind == "prismatic" else 1.0 for j in self.joints])
+        # per coordinate: its joint, its name (Joint.coordinates; None: a tilt), its unit
+        entries = []
+        for j in tree_joints:
+            entries += ([(j, None, 1.0)] * 2 if j in tilted else
+                        [(j, c[0], scale if c[1] == "slide" else 1.0) for c in j.coordinates])
+        self.joints = [j for j, _, _ in entries]
+        self.coords = [c for _, c, _ in entries]
+        self.unit = np.array([u for _, _, u in entries])
         x = sp.symbols(f"x0:{len(self.joints)}", real=True)
         q = {}
-        for j, xi, u in zip(self.joints, x, self.unit):
-            q[j.name] = q.get(j.name, ()) + (xi,) if j.kind == "spherical" else xi * u
+        for j, c, xi, u in zip(self.joints, self.coords, x, self.unit):
+            if c is None:
+                q[j.name] = q.get(j.name, ()) + (xi,)
+            else:
+                q[c] = xi * u
         if system.dimension == 3:
             rows = cut_rows3(system, poses3(system, q))
         else:
@@ -320,10 +336,11 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
     loops = _Loops(system, scale)
     guided = theta0(system)
     where = f"system '{system.name}'"
+    starts = {c[0]: (c[2], c[3]) for j in loops.joints for c in j.coordinates}  # (value, rate)
     fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
     free = ~fixed
-    x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if j.kind == "spherical" else j.initial
-                   for j in loops.joints]) / loops.unit
+    x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if c is None else starts[c][0]
+                   for j, c in zip(loops.joints, loops.coords)]) / loops.unit
     x, res = x0, np.max(np.abs(loops.phi(x0)), initial=0.0)
     if res > CLOSE_TOL:
         for nudge in (0.0, NUDGE, -NUDGE):
@@ -350,36 +367,56 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
             turn = math.atan2(np.linalg.norm(np.cross(d0, d)), float(d0 @ d))
             moved.append((f"{j.name} direction", "rad", 0.0, turn, [float(c) for c in d]))
             joints[j.name] = replace(j, direction=tuple(float(c) for c in d))
-    for j, u, a, b in zip(loops.joints, loops.unit, x0, x):
-        if j.kind != "spherical" and b != a:
-            moved.append((j.name, "m" if j.kind == "prismatic" else "rad", float(a * u), float(b * u)))
-            joints[j.name] = replace(j, initial=float(b * u))
+    for j, c, u, a, b in zip(loops.joints, loops.coords, loops.unit, x0, x):
+        if c is not None and b != a:
+            moved.append((_label(j, c), _unit(j, c), float(a * u), float(b * u)))
+            joints[j.name] = replace(joints[j.name], **{_key(j, c, 0): float(b * u)})
     placed = replace(system, joints=tuple(joints[j.name] for j in system.joints))
     if system.dimension == 3:  # at the assembled positions
         J, slots = rates3(placed, guided, scale)
     else:
-        J, slots = jac, [(j, None, u) for j, u in zip(loops.joints, loops.unit)]
-    for j, rate in _rates(placed, J, slots, guided).items():
-        unit = "m" if j.kind == "prismatic" else "rad"
-        rates.append((j.name, unit, 0.0, float(np.linalg.norm(rate)), [float(c) for c in rate])
-                     if j.kind == "spherical" else (j.name, unit, float(j.rate or 0.0), float(rate)))
-        joints[j.name] = replace(joints[j.name], rate=tuple(float(c) for c in rate)
-                                 if j.kind == "spherical" else float(rate))
+        J, slots = jac, list(zip(loops.joints, loops.coords, loops.unit))
+    for (j, c), rate in _rates(placed, J, slots, guided).items():
+        if c is None:  # a ball joint's turn rates
+            rates.append((j.name, "rad", 0.0, float(np.linalg.norm(rate)), [float(w) for w in rate]))
+            joints[j.name] = replace(joints[j.name], rate=tuple(float(w) for w in rate))
+        else:
+            rates.append((_label(j, c), _unit(j, c), 0.0, float(rate)))
+            joints[j.name] = replace(joints[j.name], **{_key(j, c, 1): float(rate)})
     order = [j.name for j in system.joints]
     moved.sort(key=lambda m: order.index(m[0].split()[0]))
-    rates.sort(key=lambda m: order.index(m[0]))
+    rates.sort(key=lambda m: order.index(m[0].split()[0]))
     report = Assembly(tuple(moved), tuple(rates), float(res * scale), scale, True)
     return replace(system, joints=tuple(joints[j.name] for j in system.joints)), report
 
 
+def _label(j, c: str) -> str:
+    return j.name if c == j.name else f"{j.name} slide"  # a cylindrical joint's second
+
+
+def _unit(j, c: str) -> str:
+    return "m" if dict((x[0], x[1]) for x in j.coordinates)[c] == "slide" else "rad"
+
+
+def _key(j, c: str, rate: int) -> str:
+    """The Joint field of coordinate c's value (rate 0) or rate (1) (Joint.coordinates)."""
+    return (("initial", "rate") if c == j.name else ("slide", "slide_rate"))[rate]
+
+
 def _rates(system: System, J: np.ndarray, slots: list, guided: dict) -> dict:
-    """Velocity analysis at the assembled t = 0: {joint: its new rate} of the free rates, the
-    minimum-norm change that makes Phi_q q' + Phi_t = 0 (refused when it cannot); J: Phi_q
-    (dimensionless) over the rate slots (joint, component, unit)."""
-    given = np.array([guided[j.name][1] if j.name in guided else 0.0 if j.rate is None
-                      else j.rate[k] if k is not None else j.rate for j, k, _ in slots])
-    given /= np.array([u for _, _, u in slots])
-    free = np.array([j.name not in guided and j.rate is None for j, _, _ in slots], dtype=bool)
+    """Velocity analysis at the assembled t = 0: {(joint, coordinate name or None for a ball
+    joint's turn): its new rate} of the free rates, the minimum-norm change that makes
+    Phi_q q' + Phi_t = 0 (refused when it cannot); J: Phi_q (dimensionless) over the rate
+    slots (joint, coordinate name or a ball joint's component 0-2, unit)."""
+    def given_rate(j, c):
+        if j.name in guided:
+            return guided[j.name][1]
+        if isinstance(c, int):
+            return None if j.rate is None else j.rate[c]
+        return dict((x[0], x[3]) for x in j.coordinates)[c]
+
+    given = np.array([given_rate(j, c) or 0.0 for j, c, _ in slots]) / np.array([u for _, _, u in slots])
+    free = np.array([j.name not in guided and given_rate(j, c) is None for j, c, _ in slots], dtype=bool)
     rhs = -J @ given
     if not np.max(np.abs(rhs), initial=0.0) > 0:
         return {}
@@ -393,22 +430,22 @@ def _rates(system: System, J: np.ndarray, slots: list, guided: dict) -> dict:
                         "given (drivers' theta'(0), rate = ...) and the free rates cannot close the "
                         f"loops' velocities (residual {left:.3g}); give fewer rates")
     out = {}
-    for (j, _, u), f, vi in zip(slots, free, v):
+    for (j, c, u), f, vi in zip(slots, free, v):
         if f:
-            out.setdefault(j, []).append(vi * u)
-    return {j: np.array(r) if j.kind == "spherical" else r[0] for j, r in out.items() if any(r)}
+            out.setdefault((j, None if isinstance(c, int) else c), []).append(vi * u)
+    return {k: np.array(r) if k[1] is None else r[0] for k, r in out.items() if any(r)}
 
 
 def _rate_slots(system: System, scale: float) -> list:
-    """(joint, component, unit) of every tree joint rate: a coordinate's (component None; a
-    prismatic one's unit is the size), a ball joint's three turn rates (parent's axes)."""
+    """(joint, coordinate name or component, unit) of every tree joint rate: each coordinate's
+    (Joint.coordinates; a slide's unit is the size), a ball joint's three turn rates (parent's
+    axes)."""
     tree = system.tree()
     slots = []
     for j in (system.joint(tree.joint_of(b)) for b in tree.order):
         if j.kind == "spherical":
             slots += [(j, k, 1.0) for k in range(3)]
-        elif j.has_coordinate:
-            slots.append((j, None, scale if j.kind == "prismatic" else 1.0))
+        slots += [(j, c[0], scale if c[1] == "slide" else 1.0) for c in j.coordinates]
     return slots
 
 
@@ -420,12 +457,12 @@ def rates3(system: System, guided: dict, scale: float):
     physics/spatial.py's row), so the cross's spin is set too."""
     slots = _rate_slots(system, scale)
     h = sp.symbols(f"h0:{len(slots)}", real=True)
-    q = {j.name: guided[j.name][0] if j.name in guided else j.initial for j, k, _ in slots if k is None}
-    for (j, k, u), hk in zip(slots, h):
-        if k is None:
-            q[j.name] = q[j.name] + hk * u
+    q = start3(system)
+    for (j, c, u), hk in zip(slots, h):
+        if isinstance(c, int):
+            q[(j.name, "turn")] = q.get((j.name, "turn"), (0, 0, 0))[:c] + (hk,) + (0,) * (2 - c)
         else:
-            q[(j.name, "turn")] = q.get((j.name, "turn"), (0, 0, 0))[:k] + (hk,) + (0,) * (2 - k)
+            q[c] = q[c] + hk * u
     frames = poses3(system, q)
     rows = [e / scale for _, e, _ in cut_rows3(system, frames)]
     at0 = {hk: 0 for hk in h}

@@ -20,7 +20,9 @@ scene (flexsym/scenes/scene.py), unchanged.
                 (then point = [x, y]), child = "body.marker", axis = [ax, ay] (prismatic, in
                 the parent's frame), offset (rad, child frame angle relative to the parent's),
                 initial = x (a guess of the coordinate at t = 0) or { value = x, fixed = true,
-                rate = v } (fixed: never moved by the assembly; rate: the rate at t = 0)
+                rate = v } (fixed: never moved by the assembly; rate: the rate at t = 0);
+                spatial (dimension = 3) also spherical, universal and cylindrical, whose
+                initial table adds slide = s, slide_rate = v (Joint.coordinates)
     [[driver]]  name, kind = "guided", joint, and maneuver = "spin-up" (omega, duration) |
                 "constant" (omega) or theta = "expression of t";
                 name, kind = "motor", joint, torque (revolute) | force (prismatic) =
@@ -32,7 +34,7 @@ scene (flexsym/scenes/scene.py), unchanged.
                 (body.marker each), k, c, l0
     [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
-                grammar: angle(J), rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
+                grammar: angle(J), rate(J), slide(J), slide_rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
                 M(B, x), reaction(J), torque(D), T, V, momentum, violation, dissipation)
 
 Checks, each one line naming the file and the item, before anything is derived or written:
@@ -414,6 +416,7 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
     if kind == "clamp" and "initial" in tab:
         r.fail(f"{where} initial", "applies to revolute and prismatic joints only (a clamp has no "
                "coordinate; use offset for its angle)")
+    slide, slide_rate = 0.0, None
     if kind == "spherical":  # its one start datum: the angular velocity, a vector
         given = tab.get("initial", {})
         if not isinstance(given, dict):  # an angle: it has three, and starts at its direction
@@ -423,24 +426,30 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
         r.table(f"{where} initial", given, {"rate"})
         initial, fixed, rate = 0.0, False, r.pair(f"{where} initial", given, "rate", n=3)
     else:
-        initial, fixed, rate = _initial(r, where, tab)
+        initial, fixed, rate = _initial(r, where, tab, kind == "cylindrical")
+        given = tab.get("initial")
+        if kind == "cylindrical" and isinstance(given, dict):
+            slide = r.number(f"{where} initial", given, "slide", default=0.0)
+            slide_rate = r.number(f"{where} initial", given, "slide_rate") if "slide_rate" in given else None
     return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
                  axis=r.pair(where, tab, "axis", n=dim), offset=r.number(where, tab, "offset", default=0.0),
                  point=point or (0.0,) * dim, initial=initial, fixed=fixed, rate=rate,
-                 direction=r.pair(where, tab, "direction", n=3) if "direction" in tab else None)
+                 direction=r.pair(where, tab, "direction", n=3) if "direction" in tab else None,
+                 slide=slide, slide_rate=slide_rate)
 
 
-def _initial(r: _Items, where: str, tab: dict) -> tuple[float, bool, float | None]:
-    """initial = 0.5 (a guess) or { value = 0.5, fixed = true, rate = 2.0 } (see assembly.py)."""
+def _initial(r: _Items, where: str, tab: dict, slides: bool = False) -> tuple[float, bool, float | None]:
+    """initial = 0.5 (a guess) or { value = 0.5, fixed = true, rate = 2.0 } (see assembly.py); a
+    cylindrical joint's (slides) also slide = 0.1, slide_rate = 0.3 (value and rate: its angle)."""
     given = tab.get("initial", 0.0)
     if not isinstance(given, dict):
         return r.number(where, tab, "initial", default=0.0), False, None
     at = f"{where} initial"
-    r.table(at, given, {"value", "fixed", "rate"})
+    r.table(at, given, {"value", "fixed", "rate"} | ({"slide", "slide_rate"} if slides else set()))
     fixed = given.get("fixed", False)
     if not isinstance(fixed, bool):
         r.fail(f"{at} fixed", f"must be true or false (got {fixed!r})")
-    if fixed and "value" not in given:
+    if fixed and not {"value", "slide"} & set(given):
         r.fail(f"{at} fixed", "fixes the value: give value = ...")
     rate = r.number(at, given, "rate") if "rate" in given else None
     return r.number(at, given, "value", default=0.0), fixed, rate
@@ -514,15 +523,16 @@ def check_system(system: System, t_end: float = 20.0) -> System:
     system.validate()
     tree = system.tree()
     where = f"system '{system.name}'"
-    coords = {j.name: j for j in system.joints if j.has_coordinate and j.name not in tree.cut}
+    joints = {j.name: j for j in system.joints if j.has_coordinate and j.name not in tree.cut}
+    coords = {c[0]: c[2] for j in joints.values() for c in j.coordinates}  # name -> initial value
     names = {"t": t}
-    for j in coords:
-        names[j] = sp.Symbol(j, real=True)
-        names[f"{j}_rate"] = sp.Symbol(f"{j}_rate", real=True)
+    for c in coords:  # the names an expression may use: J and J_rate of every joint coordinate
+        names[c] = sp.Symbol(c, real=True)
+        names[f"{c}_rate"] = sp.Symbol(f"{c}_rate", real=True)
     for d in system.drivers:
         label = f"{where}: driver '{d.name}'"
         if d.kind == "motor":
-            law = f"{label} {'torque' if coords[d.joint].kind == 'revolute' else 'force'}"
+            law = f"{label} {'torque' if joints[d.joint].kind == 'revolute' else 'force'}"
             _at_rest(_expression(d.expression, names, law), coords, names, t_end, d.expression, law)
         elif d.expression:
             try:
@@ -560,7 +570,7 @@ def _at_rest(expr, coords: dict, names: dict, t_end: float, text: str, label: st
     """A motor's law on [0, t_end] with every joint at its initial value and at rest: a pole
     or an overflow in t (e.g. 1/(t - 1), exp(100 t)) is refused here, naming the driver,
     rather than stopping the run."""
-    at_rest = {names[j]: coords[j].initial for j in coords} | {names[f"{j}_rate"]: 0.0 for j in coords}
+    at_rest = {names[c]: value for c, value in coords.items()} | {names[f"{c}_rate"]: 0.0 for c in coords}
     expr = expr.xreplace(at_rest)
     if expr.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
         raise SpecError(f"{label} = '{text}' is infinite or undefined with every joint at its initial "
@@ -747,7 +757,8 @@ def _summary3(system: System) -> str:
     lines += ["", "joints (a tree, from ground):"]
     for j in system.joints:
         parent = f"ground at ({', '.join(f'{c:g}' for c in j.point)})" if j.parent == GROUND else j.parent
-        axis = f", axis ({', '.join(f'{a:g}' for a in (j.axis or (0, 0, 1)))})" if j.kind == "revolute" else ""
+        axis = (f", axis ({', '.join(f'{a:g}' for a in (j.axis or (0, 0, 1)))})"
+                if j.kind in ("revolute", "cylindrical") else "")
         lines.append(f"  {j.name}: {j.kind} {parent} -> {j.child}{axis}"
                      + (" [guided]" if j.name in guided else ""))
     lines += ["", "elastic coordinates: " + "; ".join(
