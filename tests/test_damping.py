@@ -62,6 +62,21 @@ def energy_balance(r) -> float:
     return float(np.max(np.abs(E_ - E_[0] + W)) / W[-1])
 
 
+def decay_rate(t, q, dt: float) -> float:
+    """The fitted rate of q's exponential envelope about its mean: the extremes of the rows
+    (parabolic refinement of each), the peak-to-peak of successive ones, a line through their
+    logarithm (those above 1e-3 of the first)."""
+    k = np.flatnonzero((np.diff(np.sign(np.diff(q))) != 0)) + 1  # extremes
+    k = k[k < len(q) - 1]
+    a, b, c = q[k - 1], q[k], q[k + 1]
+    den = a - 2 * b + c
+    shift = np.where(den != 0, 0.5 * (a - c) / np.where(den != 0, den, 1), 0.0)
+    tk, qk = t[k] + shift * dt, b - 0.25 * (a - c) * shift
+    amp = np.abs(np.diff(qk))
+    keep = amp > 1e-3 * amp[0]
+    return float(-np.polyfit(tk[1:][keep], np.log(amp[keep]), 1)[0])
+
+
 # ----- the damping the derivation builds ------------------------------------------------------
 def test_modal_dissipation_is_the_analytic_damping_matrix():
     """D = 1/2 q'^T C q' with C = beta K + alpha M + diag(2 zeta_i omega_i m_i) on cf1, cf2: for
@@ -131,17 +146,7 @@ def test_free_vibration_decays_at_the_modal_rate():
                    interval=dt)
     assert r.status == "ok", r.message
     for i, name in enumerate(("beam_v_cf1", "beam_v_cf2")):
-        q = r[name]
-        k = np.flatnonzero((np.diff(np.sign(np.diff(q))) != 0)) + 1  # extremes
-        k = k[k < len(q) - 1]
-        # parabolic refinement of each extreme, then peak-to-peak of successive extremes
-        a, b, c = q[k - 1], q[k], q[k + 1]
-        den = a - 2 * b + c
-        shift = np.where(den != 0, 0.5 * (a - c) / np.where(den != 0, den, 1), 0.0)
-        tk, qk = r.t[k] + shift * dt, b - 0.25 * (a - c) * shift
-        amp = np.abs(np.diff(qk))
-        keep = amp > 1e-3 * amp[0]
-        rate = -np.polyfit(tk[1:][keep], np.log(amp[keep]), 1)[0]
+        rate = decay_rate(r.t, r[name], dt)
         want = zeta[i] * omega(i + 1)
         assert abs(rate - want) < 0.01 * want, (name, rate, want)
 

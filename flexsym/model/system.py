@@ -43,7 +43,7 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam",
 }
 SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Hx", "Hy", "Hz")  # H: angular momentum about the origin
-PLANAR_ONLY = ("M", "sigma", "reaction", "torque", "momentum", "dissipation")  # not in 3D yet
+PLANAR_ONLY = ("M", "sigma", "reaction", "torque", "momentum")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
 REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
@@ -135,7 +135,8 @@ class Damping:
     alpha (1/s): mass-proportional, D = alpha/2 q_e'^T M_ee q_e' (M_ee: the undeformed mass
         matrix of the elastic coordinates, their motion relative to the floating frame);
     zeta: modal damping ratios, one number for every mode or a list with one per coordinate
-        of the model (in its order: axial modes, then bending): a dashpot 2 zeta_i omega_i m_i
+        of the model (in its order: axial modes, then bending; a spatial beam's: axial, bending
+        v, bending vz, torsion, as beam_coordinates): a dashpot 2 zeta_i omega_i m_i
         on coordinate i, omega_i = sqrt(k_ii / m_ii) of the undeformed modal stiffness and
         mass (exact for natural modes, e.g. cf1, cf2; an approximation for a basis whose
         modes couple, e.g. static + cp1). Modal models only: ef has no modes (refused)."""
@@ -154,9 +155,10 @@ class Damping:
             return tuple(float(z) for z in self.zeta)
         return (float(self.zeta),) * n
 
-    def check(self, where: str, model) -> None:
+    def check(self, where: str, model, coordinates=None) -> None:
         """The one place damping values are checked: finite numbers >= 0, zeta a number or
-        one per coordinate of a modal model."""
+        one per coordinate of a modal model (coordinates: a spatial beam's names, else the
+        model's)."""
         for key in ("alpha", "beta"):
             v = getattr(self, key)
             if not _finite(v) or v < 0:
@@ -167,8 +169,8 @@ class Damping:
                 raise SpecError(f"{where}: damping zeta = {_show(self.zeta)} must be a finite "
                                 "number >= 0 or a list of them")
         modal = getattr(model, "kind", None) == "modal"
-        if modal and isinstance(self.zeta, (tuple, list)) and len(self.zeta) != len(model.coordinates):
-            coords = tuple(model.coordinates)
+        coords = tuple(coordinates if coordinates is not None else getattr(model, "coordinates", ()))
+        if modal and isinstance(self.zeta, (tuple, list)) and len(self.zeta) != len(coords):
             raise SpecError(f"{where}: damping zeta has {len(self.zeta)} values, model "
                             f"'{model.name}' has {len(coords)} coordinates ({', '.join(coords)}): "
                             "give one per coordinate, or one number for all")
@@ -287,7 +289,8 @@ class FlexibleBeam:
         if self.damping is not None:
             if not isinstance(self.damping, Damping):
                 raise SpecError(f"{where}: damping must be a Damping(zeta, alpha, beta) or None")
-            self.damping.check(where, self.model)
+            spatial = dimension == 3 and getattr(self.model, "kind", None) == "modal"
+            self.damping.check(where, self.model, [n for n, _, _ in beam_coordinates(self)] if spatial else None)
         _check_markers(where, self.markers, dimension)
         for m in self.markers:
             if m.y != 0 or m.z != 0:
@@ -633,7 +636,7 @@ class System:
     def _check_spatial(self) -> None:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
         before any work: revolute, prismatic, cylindrical, spherical and clamp joints in a tree, uniform modal beams or
-        the geometrically exact ef (rod3d), undamped."""
+        the geometrically exact ef (rod3d, undamped)."""
         where = f"system '{self.name}'"
         for j in self.joints:
             if j.kind not in SPATIAL_JOINT_KINDS:
@@ -645,10 +648,11 @@ class System:
             if b.model.body is not None:
                 raise SpecError(f"{where}: body '{b.name}': a beam from finite-element data is "
                                 "planar only so far")
-            if b.damping is not None and b.damping.active:
-                raise SpecError(f"{where}: body '{b.name}': structural damping is planar only so far")
             if getattr(b.model, "kind", None) == "fe":
-                continue  # the geometrically exact rod (physics/rod3d.py), uniform, undamped
+                if b.damped:
+                    raise SpecError(f"{where}: body '{b.name}': structural damping of a spatial ef "
+                                    "beam is not derived yet (a modal beam's is)")
+                continue  # the geometrically exact rod (physics/rod3d.py), uniform
             if b.model.strain not in SPATIAL_STRAINS:
                 raise SpecError(f"{where}: body '{b.name}': strain model '{b.model.strain}' is not "
                                 f"derived in 3D (derived: {', '.join(SPATIAL_STRAINS)})")

@@ -498,11 +498,16 @@ def _modal_dissipation(b: FlexibleBeam, part: FlexPart, body_expr) -> sp.Expr:
                       [part.modes[r.coordinate] for r in spec.bending], rate, rate, tab, False)
     K2 = body_expr(tab.integrate(ENERGY_TERMS["axial"].density(rf) + ENERGY_TERMS["bending"].density(rf)))
     M2 = body_expr(tab.integrate(kinetic_density(rf, FrameMotion(sp.Integer(0)))))
-    d = b.damping
+    return damping_dissipation(b.damping, K2, M2, [rate[n] for n in part.coords])
+
+
+def damping_dissipation(d, K2: sp.Expr, M2: sp.Expr, rates: list) -> sp.Expr:
+    """D of a damped modal beam in both dimensions (module doc) from its strain-rate and
+    relative kinetic energies K2, M2 (the undeformed beam's, quadratic in its elastic rates):
+    beta K2 + alpha M2 + a dashpot 2 zeta_i omega_i m_i on each rate."""
     D = _exact_number(d.beta) * K2 + _exact_number(d.alpha) * M2
-    for n, z in zip(part.coords, d.zetas(len(part.coords))):
+    for qd, z in zip(rates, d.zetas(len(rates))):
         if z:
-            qd = rate[n]
             c = 2 * _exact_number(z) * sp.sqrt(sp.diff(K2, qd, 2) * sp.diff(M2, qd, 2))
             D += c * qd**2 / 2
     return sp.expand(D)

@@ -65,7 +65,8 @@ from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, SpringDamper,
                                   System, Torque, beam_coordinates, beam_station, length_scale, parse_output)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
-                                      joint_coordinate, spring_force_on_a, start_of, violation)
+                                      damping_dissipation, joint_coordinate, spring_force_on_a,
+                                      start_of, violation)
 from flexsym.physics.integrals import IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
@@ -295,6 +296,9 @@ def derive_spatial(system: System) -> SystemDerivation:
             der.terms.append((b.name, term_name, wrt, Vt, Qk))
             der.V += Vt
             Q_ += Qk
+        if b.damped:  # D in the elastic rates (assemble.damping_dissipation), Q -= dD/dq'
+            der.dissipation[b.name] = _dissipation(b, P, table, integral)
+            Q_ -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
                                    integral=integral, om=om, vf=vf, actual=actual)
     der.V += V_grav
@@ -332,6 +336,18 @@ def axis_motion(j, coordinates) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Mat
         else:
             slide, v_rel = a * x, a * xd
     return Q, rel, slide, v_rel
+
+
+def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral) -> sp.Expr:
+    """D of a damped spatial modal beam: as in the plane, from the strain-rate energy (axial,
+    both bending planes, torsion) and the relative kinetic energy (translation and the
+    section's spin, as T holds them) of the undeformed beam's elastic rates."""
+    rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n, _, _ in beam_coordinates(b)}
+    R = _fields(b, rate, rate, rate, table, False)  # fields linear in the rates
+    K2 = integral(sum(_strain_density(t, R, P, None) for t in ("axial", "bending", "torsion")))
+    M2 = integral(P["rho"] * P["A"] * P["L"] / 2 * (R["u"]**2 + R["v"]**2 + R["vz"]**2)
+                  + P["rho"] * (P["Iy"] + P["I"]) * P["L"] / 2 * R["phi"]**2)
+    return damping_dissipation(b.damping, K2, M2, list(rate.values()))
 
 
 def initial_euler(direction, rate) -> tuple[list[float], list[float]]:
@@ -588,6 +604,8 @@ def _output(der, quantity: str) -> sp.Expr:
         return der.V + (ef_elastic_output(der) if ef else 0)
     if fn == "violation":
         return violation(der)
+    if fn == "dissipation":  # 2 D: the power of the damped modal beams
+        return 2 * sp.Add(*der.dissipation.values())
     if fn in ("Hx", "Hy", "Hz"):  # modal beams only (System.validate)
         return _momentum(der)["xyz".index(fn[1])]
     beam = system.body(args[0])

@@ -79,7 +79,7 @@ KEYS = {
     "system": {"name", "description", "start", "dimension"},
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
     "beam": {"name", "kind", "model", "markers", "damping", *UNIFORM_KEYS, *FE_KEYS},
-    "beam3": {"name", "kind", "model", "markers", *SPATIAL_KEYS},
+    "beam3": {"name", "kind", "model", "markers", "damping", *SPATIAL_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial", "direction"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
@@ -270,7 +270,8 @@ def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path, dim: int 
         num = {key: r.number(where, tab, key, positive=True) for key in SPATIAL_KEYS}
         section = Section(num["density"], num["youngs_modulus"], num["area"], num["inertia_z"],
                           Iy=num["inertia_y"], J=num["torsion_constant"], G=num["shear_modulus"])
-        return FlexibleBeam(name, num["length"], section, spec, _markers(r, where, tab, True))
+        return FlexibleBeam(name, num["length"], section, spec, _markers(r, where, tab, True),
+                            _damping(r, where, tab))
     spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
                   "--model" if model is not None else None)
     markers = _markers(r, where, tab, True)
@@ -703,11 +704,7 @@ def summary(system: System) -> str:
             if getattr(b.model, "body", None) is not None:
                 what = what.replace(", rho", ", root section rho").replace(
                     "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
-            if b.damped:
-                d = b.damping
-                zeta = (", ".join(f"{z:g}" for z in d.zeta) if isinstance(d.zeta, (tuple, list))
-                        else f"{d.zeta:g}")
-                what += f"; damping zeta {zeta}, alpha {d.alpha:g} 1/s, beta {d.beta:g} s"
+            what += _damping_text(b)
         else:
             what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
         lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")
@@ -738,6 +735,15 @@ def summary(system: System) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _damping_text(b) -> str:
+    """'; damping zeta ..., alpha ..., beta ...' of a damped beam (empty if undamped)."""
+    if not b.damped:
+        return ""
+    d = b.damping
+    zeta = ", ".join(f"{z:g}" for z in d.zeta) if isinstance(d.zeta, (tuple, list)) else f"{d.zeta:g}"
+    return f"; damping zeta {zeta}, alpha {d.alpha:g} 1/s, beta {d.beta:g} s"
+
+
 def _summary3(system: System) -> str:
     """summary() of a spatial system: bodies, joints, coordinates, loads, outputs."""
     guided = {d.joint for d in system.drivers if d.kind == "guided"}
@@ -749,7 +755,7 @@ def _summary3(system: System) -> str:
             s_ = b.section
             what = (f"beam L = {b.length:g} m, rho {s_.rho:g}, E {s_.E:g}, G {s_.G:g}, A {s_.A:g}, "
                     f"I_z {s_.I:g}, I_y {s_.Iy:g}, J {s_.J:g}; model {b.model.name} "
-                    f"(N {b.model.axial_force}, M {b.model.moment})")
+                    f"(N {b.model.axial_force}, M {b.model.moment})") + _damping_text(b)
         else:
             what = (f"rigid m = {b.mass:g} kg, principal inertia ({', '.join(f'{v:g}' for v in b.inertia)}) "
                     f"kg m^2, com ({', '.join(f'{c:g}' for c in b.com)})")
