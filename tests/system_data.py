@@ -20,3 +20,17 @@ def run_ok(built_system, **kw):
     r = run_built(built_system, **kw)
     assert r.ok, r.status
     return r
+
+
+def refused_in_one_line(capsys, path, says: str) -> None:
+    """`flexsym run path` (in-process: the CLI's own main) is refused in one line naming the
+    file and saying `says`, exit 2, nothing written."""
+    from flexsym.apps.cli import main
+
+    out = path.parent / "out.csv"
+    code = main(["run", str(path), "--out", str(out)])
+    std = capsys.readouterr()
+    assert code == 2, std.err
+    assert std.out == "" and std.err.count("\n") == 1 and f"flexsym: error: {path}: " in std.err, std
+    assert says in std.err, std.err
+    assert not out.exists()

@@ -11,7 +11,7 @@ import pytest
 import sympy as sp
 
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, run_ok
+from system_data import built, refused_in_one_line, run_ok
 
 ROOT = Path(__file__).resolve().parent.parent
 FLAP = ROOT / "scenes" / "flap.toml"
@@ -267,15 +267,7 @@ def _bad_scene(tmp_path, what, scene, edits) -> Path:
 def test_bad_spatial_scenes_are_refused(tmp_path, capsys, what, scene, edits, says):
     """Refused in one line naming the file and the item, exit 2, nothing written (in-process:
     the CLI's own main, as the command runs it)."""
-    from flexsym.apps.cli import main
-
-    path, out = _bad_scene(tmp_path, what, scene, edits), tmp_path / "out.csv"
-    code = main(["run", str(path), "--out", str(out)])
-    std = capsys.readouterr()
-    assert code == 2, std.err
-    assert std.out == "" and std.err.count("\n") == 1 and f"flexsym: error: {path}: " in std.err, std
-    assert says in std.err, std.err
-    assert not out.exists()
+    refused_in_one_line(capsys, _bad_scene(tmp_path, what, scene, edits), says)
 
 
 def test_a_bad_spatial_scene_is_refused_by_the_command(tmp_path):

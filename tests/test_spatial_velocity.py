@@ -12,6 +12,7 @@ import pytest
 
 from flexsym.scenes.system_scene import system_from_dict
 from system_data import built, run_ok
+from test_cylindrical import cylinder_loop
 
 S7 = Path(__file__).resolve().parent.parent / "scenes" / "spatial_slider_crank.toml"
 R, L, Y, Z, W = 0.1, 0.3, 0.05, 0.15, 150.0  # crank, rod, the slider axis' offsets, crank speed
@@ -109,18 +110,8 @@ def test_a_cylindrical_joint_in_a_loop_takes_both_rates():
     0.5 m/s, written as slide_rate, and the angle's 0 (not written)."""
     from flexsym.scenes.system_scene import checked_system, system_from_data
 
-    data = {"system": {"name": "cyl_loop", "dimension": 3},
-            "body": [{"name": "arm", "kind": "rigid", "mass": 1.0, "inertia": [0.01, 0.01, 0.01],
-                      "markers": {"hole": [0.0, 0.0, 0.0], "end": [0.5, 0.0, 0.0]}},
-                     {"name": "post", "kind": "rigid", "mass": 1.0, "inertia": [0.01, 0.01, 0.01],
-                      "markers": {"base": [0.0, 0.0, 0.0], "top": [0.0, 0.5, 0.3]}}],
-            "joint": [{"name": "c", "kind": "cylindrical", "parent": "ground", "point": [0.0, 0.0, 0.0],
-                       "child": "arm.hole", "axis": [0.0, 0.0, 1.0], "initial": {"value": 1.2, "slide": 0.1}},
-                      {"name": "lift", "kind": "prismatic", "parent": "ground", "point": [0.0, 0.0, 0.0],
-                       "child": "post.base", "axis": [0.0, 0.0, 1.0]},
-                      {"name": "ball", "kind": "spherical", "parent": "post.top", "child": "arm.end"}],
-            "driver": [{"name": "up", "kind": "guided", "joint": "lift", "theta": "0.5*t"}],
-            "output": {"columns": {"s": "slide(c)"}}}
+    data = cylinder_loop({"name": "lift", "kind": "prismatic", "axis": [0.0, 0.0, 1.0]},
+                         [{"name": "up", "kind": "guided", "joint": "lift", "theta": "0.5*t"}])
     system, _, _ = system_from_data(data, "", "cyl_loop")
     assembled, report = checked_system(system)
     j = assembled.joint("c")
