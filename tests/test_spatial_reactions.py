@@ -111,3 +111,190 @@ def test_hanging_chain_joints_carry_the_weight_beyond_them(chain):
     for j, mass, moment in (("j1", M1 + M2 + M3, 0.0), ("j2", M2 + M3, 0.0), ("j3", M3, 0.2 * M3 * G)):
         assert np.abs(_vector(r, j) - mass * G * up).max() < 1e-12 * mass * G, j
         assert np.abs(_vector(r, j, MOMENT) - moment * np.array([0.0, 1.0, 0.0])).max() < 1e-12 * 40, j
+
+
+# ----- (c) a motor's torque is in its joint's reaction
+AXIS = np.array([0.0, 0.6, 0.8])
+TAU = "0.5*cos(3*t)"
+
+
+@pytest.fixture(scope="module")
+def motored():
+    """A block on a revolute joint to ground about the tilted axis a, its centre of mass off
+    the axis, under gravity, a motor on the joint and an external torque on the block."""
+    return built({
+        "system": {"name": "reaction_motor", "dimension": 3},
+        "body": [{"name": "block", "kind": "rigid", "mass": 1.5, "inertia": [0.01, 0.02, 0.025],
+                  "com": [0.2, 0.1, 0.05], "markers": {"pin": [0.0, 0.0, 0.0], "g": [0.2, 0.1, 0.05]}}],
+        "joint": [{"name": "j", "kind": "revolute", "parent": "ground", "point": [0.1, 0.0, 0.3],
+                   "axis": AXIS.tolist(), "child": "block.pin"}],
+        "driver": [{"name": "m", "kind": "motor", "joint": "j", "torque": TAU}],
+        "load": [{"kind": "torque", "body": "block", "torque": ["0.3", "-0.2", "0.4"], "frame": "ground"}],
+        "gravity": {"g": [0.0, 0.0, -G]},
+        "output": {"interval": 0.01, "columns": {"x": "x(block.g)", "y": "y(block.g)", "z": "z(block.g)"}
+                   | _reaction_columns("j")},
+    })
+
+
+def test_motor_torque_is_the_reaction_moment_about_its_axis(motored):
+    """The joint's moment about its (ground-fixed) axis is the motor's torque, 0.5 cos(3 t), to
+    round-off (measured 2.5e-15 N m): gravity's and the external torque's moments about the
+    axis move the block, the motor's is transmitted by the joint. Its force is m (a_G - g) from
+    the centre of mass's positions by central differences every 0.5 ms within 6.6e-5 N of 29 N
+    (measured; 2.7e-4 N every 1 ms: the differences' truncation, h^2 a''''/12). rk4, 0.1 ms, 2 s."""
+    r = run_ok(motored, t_end=2.0, dt=1e-4, integrator="rk4", interval=5e-4)
+    M = _vector(r, "j", MOMENT)
+    assert np.abs(M @ AXIS - 0.5 * np.cos(3 * r.t)).max() < 1e-13
+    G_pos = np.column_stack([r["x"], r["y"], r["z"]])
+    F = _vector(r, "j")
+    assert np.abs(F[1:-1] - _m_a_minus_g(r.t, G_pos, 1.5)).max() < 1.5e-4
+    assert np.abs(np.linalg.norm(M, axis=1)).max() > 1.0  # the joint carries bending moments too
+
+
+# ----- (d) a closed loop: S7's spatial slider-crank with a rigid rod, under gravity
+M_CRANK, M_ROD, M_SLIDER = 0.1, 0.0668, 0.0334
+X_S0 = 0.1 + math.sqrt(0.3**2 - 0.05**2 - 0.15**2)
+
+
+@pytest.fixture(scope="module")
+def loop():
+    """A guided crank (r = 0.1 m) about the ground's z, a rigid rod on a ball joint at its pin,
+    a universal joint (cut: closing the loop) from the rod's tip to a slider on a prismatic
+    joint along x; gravity along -z."""
+    rod_dir = [X_S0 - 0.1, 0.05, 0.15]
+    return built({
+        "system": {"name": "reaction_loop", "dimension": 3},
+        "body": [{"name": "crank", "kind": "rigid", "mass": M_CRANK, "inertia": [1e-4, 1e-4, 1e-4],
+                  "com": [0.05, 0.0, 0.0],
+                  "markers": {"axis": [0.0, 0.0, 0.0], "pin": [0.1, 0.0, 0.0], "g": [0.05, 0.0, 0.0]}},
+                 {"name": "rod", "kind": "rigid", "mass": M_ROD, "inertia": [1e-6, 5e-4, 5e-4],
+                  "com": [0.15, 0.0, 0.0],
+                  "markers": {"root": [0.0, 0.0, 0.0], "tip": [0.3, 0.0, 0.0], "g": [0.15, 0.0, 0.0]}},
+                 {"name": "slider", "kind": "rigid", "mass": M_SLIDER, "inertia": [1e-6, 1e-6, 1e-6],
+                  "markers": {"pin": [0.0, 0.0, 0.0]}}],
+        "joint": [{"name": "crank_joint", "kind": "revolute", "parent": "ground", "point": [0.0, 0.0, 0.0],
+                   "axis": [0.0, 0.0, 1.0], "child": "crank.axis"},
+                  {"name": "slide", "kind": "prismatic", "parent": "ground", "point": [0.0, 0.05, 0.15],
+                   "axis": [1.0, 0.0, 0.0], "child": "slider.pin", "initial": X_S0},
+                  {"name": "ball", "kind": "spherical", "parent": "crank.pin", "child": "rod.root",
+                   "direction": rod_dir},
+                  {"name": "cardan", "kind": "universal", "parent": "rod.tip", "child": "slider.pin",
+                   "axis": [1.0, 0.0, 0.0]}],
+        "driver": [{"name": "drive", "kind": "guided", "joint": "crank_joint", "maneuver": "spin-up",
+                    "omega": 20.0, "duration": 0.2}],
+        "gravity": {"g": [0.0, 0.0, -G]},
+        "output": {"interval": 0.01, "columns": {
+            f"{b}_{c}": f"{c}({b}.{'pin' if b == 'slider' else 'g'})" for b in ("crank", "rod", "slider")
+            for c in "xyz"} | _reaction_columns("crank_joint", "slide", "ball", "cardan")},
+    })
+
+
+def _positions(r, body):
+    return np.column_stack([r[f"{body}_{c}"] for c in "xyz"])
+
+
+def test_loop_reactions_balance_each_body(loop):
+    """Every body's momentum balance from its joints' reactions (tree joints: the subtree's
+    momentum; the universal joint, cut: its multipliers), against m (a_G - g) from central
+    differences of its centre of mass's positions every 0.2 ms: the crank between its guided
+    joint and the ball joint, the rod between the ball joint and the cardan, the slider between
+    its slide and the cardan (it is the cardan's child). Measured 5.9e-6, 9.6e-6 and 5.7e-6 N
+    of forces up to 6.6 N (the differences' truncation: 1.5e-4, 2.4e-4, 1.4e-4 N every 1 ms,
+    25x less at 5x the rate). About the crank's axis, its guided joint's moment (the drive's
+    torque, up to 0.28 N m) minus the ball joint's force's moment is I_O theta'' (theta'' by
+    differences; up to 0.07 N m, measured 1.2e-7 N m off). A prismatic joint without a drive
+    carries no force along its axis (round-off: the slider's equation of motion), a ball joint
+    no moment (1.4e-14 N m: the rod's angular momentum balance with the universal joint's
+    torque). rk4p at 0.1 ms, 0.4 s, a spin-up to 20 rad/s (genalpha3's ball joint moment is
+    5.9e-7 N m at 0.1 ms, 1.5e-7 at 0.05 ms: its multipliers and accelerations agree to O(dt^2)
+    only)."""
+    r = run_ok(loop, t_end=0.4, dt=1e-4, integrator="rk4p", interval=2e-4)
+    F = {j: _vector(r, j) for j in ("crank_joint", "slide", "ball", "cardan")}
+    for body, mass, net in (("crank", M_CRANK, F["crank_joint"] - F["ball"]),
+                            ("rod", M_ROD, F["ball"] - F["cardan"]),
+                            ("slider", M_SLIDER, F["slide"] + F["cardan"])):
+        assert np.abs(net[1:-1] - _m_a_minus_g(r.t, _positions(r, body), mass)).max() < 2e-5, body
+    assert min(np.abs(f).max() for f in F.values()) > 2.0
+    crank = _positions(r, "crank")
+    theta = np.unwrap(np.arctan2(crank[:, 1], crank[:, 0]))
+    h = r.t[1] - r.t[0]
+    theta_dd = (theta[2:] - 2 * theta[1:-1] + theta[:-2]) / h**2
+    pin = 2 * crank
+    about_axis = r["crank_joint_mz"] - np.cross(pin, F["ball"])[:, 2]
+    I_O = 1e-4 + M_CRANK * 0.05**2
+    assert np.abs(about_axis[1:-1] - I_O * theta_dd).max() < 5e-7
+    assert np.abs(r["crank_joint_mz"]).max() > 0.2
+    assert np.abs(F["slide"][:, 0]).max() < 1e-14
+    assert np.abs(_vector(r, "ball", MOMENT)).max() < 1e-13
+
+
+# ----- (e) a planar system run as a spatial one: the same reactions
+def test_planar_reactions_are_the_spatial_twins():
+    """S1 (the motor-driven hub with a flexible m3 beam clamped to it, 5 s of its spin-up) and
+    its spatial twin (test_planar_as_spatial.spatial_twin): reaction(j, x), (j, y), (j, moment)
+    of the planar system are the twin's reaction(j, x), (j, y), (j, mz), at the motored hub
+    joint (the motor's torque, up to 264 N m) and at the clamp (the beam's root: its first
+    moment and angular momentum, up to 83 N and 240 N m), within 1e-12 of each column's peak
+    (measured 4e-16 to 1.1e-15: sympy's planar derivation against the spatial one, casadi's T);
+    the out-of-plane z, mx, my are exactly 0."""
+    import tomllib
+
+    from test_planar_as_spatial import ROOT, spatial_twin
+
+    data = tomllib.loads((ROOT / "scenes" / "hub.toml").read_text())
+    data["output"]["columns"] = {f"{j}_{c}": f"reaction({j}, {c})" for j in ("hub_joint", "clamp")
+                                 for c in ("x", "y", "moment")}
+    twin = spatial_twin(data)
+    twin["output"]["columns"] = _reaction_columns("hub_joint", "clamp")
+    kw = dict(t_end=5.0, dt=1e-3)
+    planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
+    for j in ("hub_joint", "clamp"):
+        for c, c3 in (("x", "x"), ("y", "y"), ("moment", "mz")):
+            want = planar[f"{j}_{c}"]
+            assert np.abs(spatial[f"{j}_{c3}"] - want).max() < 1e-12 * np.abs(want).max(), (j, c)
+            assert np.abs(want).max() > 50.0
+        for c in ("z", "mx", "my"):
+            assert np.all(spatial[f"{j}_{c}"] == 0), (j, c)
+
+
+# ----- (f) malformed reactions: one line naming the output, exit 2, before any work
+ROOT_ = __import__("pathlib").Path(__file__).resolve().parent.parent
+S6 = ROOT_ / "scenes" / "spherical_pendulum.toml"
+PLANAR = ROOT_ / "scenes" / "double_pendulum.toml"
+S6_COLUMNS = 'T_mid = "Mx(strip, mid)" }'
+PLANAR_COLUMNS = 'M_mid = "M(strip, mid)" }'
+BAD = [  # (what, scene, edits of its text, what the one line says)
+    ("a spatial component in a planar system", PLANAR,
+     [(PLANAR_COLUMNS, PLANAR_COLUMNS[:-1] + ', R = "reaction(elbow, z)" }')],
+     "output 'reaction(elbow, z)': needs (joint, component) with component one of x, y, moment "
+     "(dimension = 2)"),
+    ("moment in a spatial system", S6, [(S6_COLUMNS, S6_COLUMNS[:-1] + ', R = "reaction(ball, moment)" }')],
+     "output 'reaction(ball, moment)': needs (joint, component) with component one of x, y, z, mx, my, "
+     "mz (dimension = 3)"),
+    ("no component", S6, [(S6_COLUMNS, S6_COLUMNS[:-1] + ', R = "reaction(ball)" }')],
+     "output 'reaction(ball)': needs (joint, component)"),
+    ("an unknown joint", S6, [(S6_COLUMNS, S6_COLUMNS[:-1] + ', R = "reaction(hinge, mx)" }')],
+     "output 'reaction(hinge, mx)': 'hinge' is not a joint of the system"),
+    ("an ef beam beyond a tree joint", S6, [('model = "m3"', 'model = "ef"'),
+                                            (S6_COLUMNS, S6_COLUMNS[:-1] + ', R = "reaction(ball, z)" }')],
+     "output 'reaction(ball, z)': angular momentum is not derived for a spatial ef beam yet ('strip'): "
+     "use a modal model beyond joint 'ball'"),
+]
+
+
+@pytest.mark.parametrize("what,scene,edits,says", BAD, ids=[b[0] for b in BAD])
+def test_bad_reactions_are_refused(tmp_path, capsys, what, scene, edits, says):
+    from flexsym.apps.cli import main
+
+    text = scene.read_text()
+    for old, new in edits:
+        assert text.count(old) == 1, what
+        text = text.replace(old, new)
+    path, out = tmp_path / "bad.toml", tmp_path / "out.csv"
+    path.write_text(text)
+    code = main(["run", str(path), "--out", str(out)])
+    std = capsys.readouterr()
+    assert code == 2, std.err
+    assert std.out == "" and std.err.count("\n") == 1 and f"flexsym: error: {path}: " in std.err, std
+    assert says in std.err, std.err
+    assert not out.exists()
