@@ -105,7 +105,8 @@ def chain():
 def test_hanging_chain_joints_carry_the_weight_beyond_them(chain):
     """At rest (rk4, 1 ms, 0.5 s): j1 carries (m1 + m2 + m3) g = 39.24 N, j2 (m2 + m3) g, the
     clamp j3 m3 g and the moment of b3's weight about its root, 0.2 m3 g = 1.962 N m about +y;
-    everything else 0, to 1e-12 of the loads."""
+    everything else 0, within 1e-12 of the loads (measured: exact, but 2.2e-16 N m on j3's
+    moment; the run stays at rest, q'' = 0)."""
     r = run_ok(chain, t_end=0.5, dt=1e-3, integrator="rk4")
     up = np.array([0.0, 0.0, 1.0])
     for j, mass, moment in (("j1", M1 + M2 + M3, 0.0), ("j2", M2 + M3, 0.0), ("j3", M3, 0.2 * M3 * G)):
@@ -116,38 +117,52 @@ def test_hanging_chain_joints_carry_the_weight_beyond_them(chain):
 # ----- (c) a motor's torque is in its joint's reaction
 AXIS = np.array([0.0, 0.6, 0.8])
 TAU = "0.5*cos(3*t)"
+PUSH, K_SPRING, ANCHOR = np.array([0.5, -0.3, 1.0]), 20.0, np.array([0.4, 0.3, 0.0])
 
 
 @pytest.fixture(scope="module")
 def motored():
     """A block on a revolute joint to ground about the tilted axis a, its centre of mass off
-    the axis, under gravity, a motor on the joint and an external torque on the block."""
+    the axis, under gravity, a motor on the joint and, on the block, an external torque, a
+    point force (ground axes) and a spring (l0 = 0) to an anchor on a clamped base."""
     return built({
         "system": {"name": "reaction_motor", "dimension": 3},
         "body": [{"name": "block", "kind": "rigid", "mass": 1.5, "inertia": [0.01, 0.02, 0.025],
-                  "com": [0.2, 0.1, 0.05], "markers": {"pin": [0.0, 0.0, 0.0], "g": [0.2, 0.1, 0.05]}}],
+                  "com": [0.2, 0.1, 0.05],
+                  "markers": {"pin": [0.0, 0.0, 0.0], "g": [0.2, 0.1, 0.05], "tip": [0.3, -0.1, 0.0]}},
+                 {"name": "base", "kind": "rigid", "mass": 1.0, "inertia": [1.0, 1.0, 1.0],
+                  "markers": {"o": [0.0, 0.0, 0.0], "anchor": ANCHOR.tolist()}}],
         "joint": [{"name": "j", "kind": "revolute", "parent": "ground", "point": [0.1, 0.0, 0.3],
-                   "axis": AXIS.tolist(), "child": "block.pin"}],
+                   "axis": AXIS.tolist(), "child": "block.pin"},
+                  {"name": "fix", "kind": "clamp", "parent": "ground", "point": [0.0, 0.0, 0.0],
+                   "child": "base.o"}],
         "driver": [{"name": "m", "kind": "motor", "joint": "j", "torque": TAU}],
-        "load": [{"kind": "torque", "body": "block", "torque": ["0.3", "-0.2", "0.4"], "frame": "ground"}],
+        "load": [{"kind": "torque", "body": "block", "torque": ["0.3", "-0.2", "0.4"], "frame": "ground"},
+                 {"kind": "force", "name": "push", "marker": "block.tip", "fx": PUSH[0], "fy": PUSH[1],
+                  "fz": PUSH[2]},
+                 {"kind": "spring", "name": "s", "a": "base.anchor", "b": "block.tip", "k": K_SPRING,
+                  "l0": 0.0}],
         "gravity": {"g": [0.0, 0.0, -G]},
-        "output": {"interval": 0.01, "columns": {"x": "x(block.g)", "y": "y(block.g)", "z": "z(block.g)"}
+        "output": {"interval": 0.01, "columns": {f"{c}{w}": f"{c}(block.{w})" for c in "xyz" for w in ("g", "tip")}
                    | _reaction_columns("j")},
     })
 
 
 def test_motor_torque_is_the_reaction_moment_about_its_axis(motored):
     """The joint's moment about its (ground-fixed) axis is the motor's torque, 0.5 cos(3 t), to
-    round-off (measured 2.5e-15 N m): gravity's and the external torque's moments about the
-    axis move the block, the motor's is transmitted by the joint. Its force is m (a_G - g) from
-    the centre of mass's positions by central differences every 0.5 ms within 6.6e-5 N of 29 N
-    (measured; 2.7e-4 N every 1 ms: the differences' truncation, h^2 a''''/12). rk4, 0.1 ms, 2 s."""
-    r = run_ok(motored, t_end=2.0, dt=1e-4, integrator="rk4", interval=5e-4)
+    round-off (measured 5e-15 N m): gravity's, the external torque's, the point force's and the
+    spring's moments about the axis move the block, the motor's is transmitted by the joint.
+    Its force (up to 35 N) plus the point force and the spring's, -k (tip - anchor), is
+    m (a_G - g) from the centre of mass's positions by central differences every 0.2 ms within
+    3.0e-5 N (measured; 1.9e-4 N every 0.5 ms, 7.5e-4 N every 1 ms: the differences'
+    truncation, h^2). rk4, 0.1 ms, 2 s."""
+    r = run_ok(motored, t_end=2.0, dt=1e-4, integrator="rk4", interval=2e-4)
     M = _vector(r, "j", MOMENT)
     assert np.abs(M @ AXIS - 0.5 * np.cos(3 * r.t)).max() < 1e-13
-    G_pos = np.column_stack([r["x"], r["y"], r["z"]])
-    F = _vector(r, "j")
-    assert np.abs(F[1:-1] - _m_a_minus_g(r.t, G_pos, 1.5)).max() < 1.5e-4
+    tip = np.column_stack([r[f"{c}tip"] for c in "xyz"])
+    net = _vector(r, "j") + PUSH - K_SPRING * (tip - ANCHOR)
+    G_pos = np.column_stack([r[f"{c}g"] for c in "xyz"])
+    assert np.abs(net[1:-1] - _m_a_minus_g(r.t, G_pos, 1.5)).max() < 6e-5
     assert np.abs(np.linalg.norm(M, axis=1)).max() > 1.0  # the joint carries bending moments too
 
 
