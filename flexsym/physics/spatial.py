@@ -44,9 +44,10 @@ Outputs: angle/rate of a joint, x/y/z of a marker, u/v/vz and w (distance from t
 a station, N, Mx (torsion), My, Mz at a station, constitutive or from equilibrium of the
 part beyond the station (the variant's axial_force / moment), in the beam frame's
 components, the moments turned into the deformed section's axes to first order; T, V,
-violation, Hx/Hy/Hz (angular momentum about the origin). Section moments: Mz = EI_z v_xx,
-My = -EI_y vz_xx, Mx = GJ phi_x (the moment of the part beyond the station on the part
-before it).
+violation, Hx/Hy/Hz (angular momentum about the origin), joint reactions (joint_reaction: a
+cut joint's from its multipliers, a tree joint's from the momentum balance of the bodies
+beyond it). Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx, Mx = GJ phi_x (the moment of
+the part beyond the station on the part before it).
 """
 from __future__ import annotations
 
