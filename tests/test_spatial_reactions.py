@@ -5,12 +5,15 @@ joint_reaction: a tree joint's from the momentum balance of the bodies beyond it
 joint's from its multipliers). Checked against closed forms and against m (a_G - g) from the
 run's own marker positions."""
 import math
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from system_data import built, run_ok
 
+ROOT = Path(__file__).resolve().parent.parent
 G = 9.81
 FORCE = ("x", "y", "z")
 MOMENT = ("mx", "my", "mz")
@@ -83,10 +86,6 @@ def test_ball_joint_of_the_flexible_strip_carries_no_moment():
     0.5 s (measured 1.0e-14 N m; the force is up to 7.4 N): the beam's momenta are those its
     equations of motion balance. (genalpha3 on S6 with m3: 1.4e-6 N m at 0.1 ms and 4.4e-7 at
     0.05 ms, its accelerations satisfying the equations to O(dt^2) only.)"""
-    import tomllib
-
-    from test_planar_as_spatial import ROOT
-
     data = tomllib.loads((ROOT / "scenes" / "spherical_pendulum.toml").read_text())
     data["output"]["columns"] = _reaction_columns("ball") | {"w_mid": "w(strip, mid)"}
     r = run_ok(built(data, "m0"), t_end=0.5, dt=2e-5, interval=1e-3, integrator="rk4p")
@@ -272,9 +271,7 @@ def test_planar_reactions_are_the_spatial_twins():
     moment and angular momentum, up to 83 N and 240 N m), within 1e-12 of each column's peak
     (measured 4e-16 to 1.1e-15: sympy's planar derivation against the spatial one, casadi's T);
     the out-of-plane z, mx, my are exactly 0."""
-    import tomllib
-
-    from test_planar_as_spatial import ROOT, spatial_twin
+    from test_planar_as_spatial import spatial_twin
 
     data = tomllib.loads((ROOT / "scenes" / "hub.toml").read_text())
     data["output"]["columns"] = {f"{j}_{c}": f"reaction({j}, {c})" for j in ("hub_joint", "clamp")
@@ -295,9 +292,8 @@ def test_planar_reactions_are_the_spatial_twins():
 
 
 # ----- (f) malformed reactions: one line naming the output, exit 2, before any work
-ROOT_ = __import__("pathlib").Path(__file__).resolve().parent.parent
-S6 = ROOT_ / "scenes" / "spherical_pendulum.toml"
-PLANAR = ROOT_ / "scenes" / "double_pendulum.toml"
+S6 = ROOT / "scenes" / "spherical_pendulum.toml"
+PLANAR = ROOT / "scenes" / "double_pendulum.toml"
 S6_COLUMNS = 'T_mid = "Mx(strip, mid)" }'
 PLANAR_COLUMNS = 'M_mid = "M(strip, mid)" }'
 BAD = [  # (what, scene, edits of its text, what the one line says)
