@@ -15,14 +15,14 @@ import pytest
 from system_data import built, run_ok
 
 ROOT = Path(__file__).resolve().parent.parent
-PLANAR_ONLY_OUTPUTS = ("reaction(", "torque(", "sigma(", "momentum")
+PLANAR_ONLY_OUTPUTS = ("torque(", "sigma(", "momentum")
 
 
 def spatial_twin(data: dict) -> dict:
     """The planar scene `data` as a spatial one: points get z = 0, revolute axes are z, beams
     get a second bending plane (the same I: motion stays in the plane) and torsion, a rigid
-    body's polar inertia I becomes [I/2, I/2, I] (a plate in the plane), g gets g_z = 0, and a
-    bending moment M is Mz."""
+    body's polar inertia I becomes [I/2, I/2, I] (a plate in the plane), g gets g_z = 0, a
+    bending moment M is Mz and a joint's reaction moment is its mz."""
     twin = {k: v for k, v in data.items() if k not in ("body", "joint", "gravity", "output")}
     twin["system"] = dict(data["system"], name=data["system"]["name"] + "_3d", dimension=3)
     bodies = []
@@ -53,9 +53,16 @@ def spatial_twin(data: dict) -> dict:
     if "gravity" in data:
         twin["gravity"] = {"g": [*data["gravity"]["g"], 0.0]}
     columns = {c: q for c, q in data["output"]["columns"].items() if not q.startswith(PLANAR_ONLY_OUTPUTS)}
-    twin["output"] = dict(data["output"], columns={c: ("Mz" + q[1:] if q.startswith("M(") else q)
-                                                    for c, q in columns.items()})
+    twin["output"] = dict(data["output"], columns={c: _spatial_quantity(q) for c, q in columns.items()})
     return twin
+
+
+def _spatial_quantity(q: str) -> str:
+    if q.startswith("M("):
+        return "Mz" + q[1:]
+    if q.startswith("reaction(") and q.replace(" ", "").endswith(",moment)"):
+        return q[:q.rindex(",")] + ", mz)"
+    return q
 
 
 @pytest.mark.parametrize("scene,kw", [

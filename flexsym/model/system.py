@@ -43,10 +43,12 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam",
 }
 SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Hx", "Hy", "Hz")  # H: angular momentum about the origin
-PLANAR_ONLY = ("M", "sigma", "reaction", "torque", "momentum")  # not in 3D yet
+PLANAR_ONLY = ("M", "sigma", "torque", "momentum")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
-REACTION_COMPONENTS = ("x", "y", "moment")  # ground components; moment about the child point
+# reaction(joint, c) per dimension: the force's ground components, then the moment about the
+# joint's child point (the plane's one, or its ground components)
+REACTION_COMPONENTS = {2: ("x", "y", "moment"), 3: ("x", "y", "z", "mx", "my", "mz")}
 _OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
 
 
@@ -454,6 +456,21 @@ class Tree:
     def joint_of(self, body: str) -> str:
         return dict(self.parent_joint)[body]
 
+    def subtree(self, system: "System", joint: str) -> set[str]:
+        """The bodies whose path to ground passes through tree joint `joint`."""
+        out = set()
+        for body in self.order:
+            b = body
+            while True:
+                j = system.joint(self.joint_of(b))
+                if j.name == joint:
+                    out.add(body)
+                    break
+                if j.parent == GROUND:
+                    break
+                b = system.marker(j.parent)[0]
+        return out
+
 
 @dataclass(frozen=True)
 class System:
@@ -604,16 +621,21 @@ class System:
                 raise SpecError(f"{where}: output column '{o.column}' is already the name of "
                                 f"{taken[o.column]} in the results (choose another name)")
             columns.add(o.column)
-            fn, _ = parse_output(self, o.quantity)
+            fn, args = parse_output(self, o.quantity)
             if n == 2 and fn in SPATIAL_ONLY:
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} applies to spatial systems "
                                 "(dimension = 3) only")
-            ef = next((b.name for b in self.bodies
-                       if b.flexible and getattr(b.model, "kind", None) == "fe"), None) \
-                if n == 3 and fn in ("Hx", "Hy", "Hz") else None
+            # Hx/Hy/Hz and a tree joint's reaction (the momentum balance of the bodies beyond
+            # it) need the angular momentum, not derived for a spatial ef beam
+            moving = ({b.name for b in self.bodies} if fn in ("Hx", "Hy", "Hz") else
+                      tree.subtree(self, args[0]) if fn == "reaction" and args[0] not in tree.cut
+                      else set()) if n == 3 else set()
+            ef = next((b.name for b in self.bodies if b.name in moving and b.flexible
+                       and getattr(b.model, "kind", None) == "fe"), None)
             if ef:
+                use = f"for {fn}" if fn != "reaction" else f"beyond joint '{args[0]}'"
                 raise SpecError(f"{where}: output '{o.quantity}': angular momentum is not derived for "
-                                f"a spatial ef beam yet ('{ef}'): use a modal model for {fn}")
+                                f"a spatial ef beam yet ('{ef}'): use a modal model {use}")
             if n == 3 and fn in PLANAR_ONLY:
                 hint = " (use Mx, My or Mz: the torsion and bending moments)" if fn == "M" else ""
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} is not derived for spatial "
@@ -941,10 +963,12 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
     kind = OUTPUT_FUNCTIONS[fn]
     if kind == "joint":
         if fn == "reaction":
-            if (len(args) != 2 or args[0] not in {j.name for j in system.joints}
-                    or args[1] not in REACTION_COMPONENTS):
+            allowed = REACTION_COMPONENTS[system.dimension]
+            if len(args) != 2 or args[1] not in allowed:
                 raise SpecError(f"{where}: needs (joint, component) with component one of "
-                                f"{', '.join(REACTION_COMPONENTS)}")
+                                f"{', '.join(allowed)} (dimension = {system.dimension})")
+            if args[0] not in {j.name for j in system.joints}:
+                raise SpecError(f"{where}: '{args[0]}' is not a joint of the system")
         elif len(args) != 1 or args[0] not in {j.name for j in system.joints}:
             raise SpecError(f"{where}: needs one joint name")
         if fn in ("angle", "rate") and not system.joint(args[0]).has_coordinate:
@@ -1015,7 +1039,7 @@ def output_unit(system: System, quantity: str) -> str:
         linear = joint.kind == "prismatic"
         return {"angle": ("rad", "m"), "rate": ("rad/s", "m/s"), "torque": ("N m", "N")}[fn][linear]
     if fn == "reaction":
-        return "N m" if args[1] == "moment" else "N"
+        return "N" if args[1] in ("x", "y", "z") else "N m"
     if fn in ("slide", "slide_rate"):
         return "m" if fn == "slide" else "m/s"
     if fn in ("Hx", "Hy", "Hz"):

@@ -782,22 +782,6 @@ def _cut_loads(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Mat
     return -sp.Matrix([lam[f"{n}.x"], lam[f"{n}.y"]]), tau, pc, pp
 
 
-def _subtree(der: SystemDerivation, joint) -> set[str]:
-    """The bodies whose path to ground passes through tree joint `joint`."""
-    system, out = der.system, set()
-    for body in der.tree.order:
-        b = body
-        while True:
-            j = system.joint(der.tree.joint_of(b))
-            if j.name == joint.name:
-                out.add(body)
-                break
-            if j.parent == GROUND:
-                break
-            b = system.marker(j.parent)[0]
-    return out
-
-
 def _external_loads(der: SystemDerivation, bodies: set[str]) -> tuple[sp.Matrix, sp.Expr]:
     """Resultant force and moment about the ground origin of the loads on `bodies` from outside
     the set, except the tree joint that carries it: gravity, point forces, torques,
@@ -868,7 +852,7 @@ def joint_reaction(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp
     if joint.name in der.tree.cut:
         force, tau, at_c, _ = _cut_loads(der, joint)
         return force, tau, at_c
-    bodies = _subtree(der, joint)
+    bodies = der.tree.subtree(der.system, joint.name)
     P = _side(der, joint, "child")[0]
     Fe, Me = _external_loads(der, bodies)
     S = sum((der.first_moment[b] for b in bodies), sp.zeros(2, 1))

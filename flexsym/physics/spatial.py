@@ -46,9 +46,10 @@ Outputs: angle/rate of a joint, x/y/z of a marker, u/v/vz and w (distance from t
 a station, N, Mx (torsion), My, Mz at a station, constitutive or from equilibrium of the
 part beyond the station (the variant's axial_force / moment), in the beam frame's
 components, the moments turned into the deformed section's axes to first order; T, V,
-violation, Hx/Hy/Hz (angular momentum about the origin). Section moments: Mz = EI_z v_xx,
-My = -EI_y vz_xx, Mx = GJ phi_x (the moment of the part beyond the station on the part
-before it).
+violation, Hx/Hy/Hz (angular momentum about the origin), joint reactions (joint_reaction: a
+cut joint's from its multipliers, a tree joint's from the momentum balance of the bodies
+beyond it). Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx, Mx = GJ phi_x (the moment of
+the part beyond the station on the part before it).
 """
 from __future__ import annotations
 
@@ -444,22 +445,28 @@ def _unit(v):
 
 def cut_loads(der, beam: str) -> list[tuple[sp.Matrix, sp.Matrix, str]]:
     """(force, torque) in ground components that each cut joint exerts on `beam`, and the
-    marker: minus Phi_q^T lambda split by side (rows parent - child: the parent gets -lambda,
-    the child +lambda; a universal joint's row e1.e2 gives the torques)."""
+    marker (cut_load, per side)."""
     out = []
-    for name, (first, axes) in der.spatial.get("cuts", {}).items():
+    for name in der.spatial.get("cuts", {}):
         j = der.system.joint(name)
-        lam = der.lam[first:first + 3, 0]
-        for side, ref, sign in (("parent", j.parent, -1), ("child", j.child, 1)):
-            if ref == GROUND or der.system.marker(ref)[0] != beam:
-                continue
-            torque = sp.zeros(3, 1)
-            if axes is not None:
-                e1, e2, scale = axes
-                mu = der.lam[first + 3, 0] * scale
-                torque = -mu * (_cross(e2, e1) if side == "parent" else _cross(e1, e2))
-            out.append((sign * lam, torque, ref))
+        for side, ref in (("parent", j.parent), ("child", j.child)):
+            if ref != GROUND and der.system.marker(ref)[0] == beam:
+                out.append((*cut_load(der, name, side), ref))
     return out
+
+
+def cut_load(der, name: str, side: str) -> tuple[sp.Matrix, sp.Matrix]:
+    """(force, torque) in ground components that cut joint `name` exerts on its `side`:
+    minus Phi_q^T lambda split by side (rows parent - child: the parent gets -lambda, the
+    child +lambda; a universal joint's row e1.e2 gives the torques)."""
+    first, axes = der.spatial["cuts"][name]
+    lam = der.lam[first:first + 3, 0]
+    torque = sp.zeros(3, 1)
+    if axes is not None:
+        e1, e2, scale = axes
+        mu = der.lam[first + 3, 0] * scale
+        torque = -mu * (_cross(e2, e1) if side == "parent" else _cross(e1, e2))
+    return (-lam if side == "parent" else lam), torque
 
 
 def _motion_symbols(body: str) -> tuple[sp.Matrix, sp.Matrix]:
@@ -489,13 +496,15 @@ def _spin_inertia(system: System, body: str, psyms: dict) -> sp.Expr:
     return sp.nsimplify(max(b.inertia))
 
 
-def _momentum(der) -> sp.Matrix:
-    """Angular momentum about the ground origin, ground components: per rigid body
-    m G x v_G + A (I omega); per beam A [int rho A (A^T R + r) x v dx + int rho (I_y + I_z)
-    spin t dx] (the momentum conjugate to this T's rotation: conserved about an axis about
-    which nothing acts)."""
+def _momentum(der, bodies=None) -> sp.Matrix:
+    """Angular momentum about the ground origin of `bodies` (None: all), ground components:
+    per rigid body m G x v_G + A (I omega); per beam A [int rho A (A^T R + r) x v dx + int rho
+    (I_y + I_z) spin t dx] (the momentum conjugate to this T's rotation: conserved about an
+    axis about which nothing acts)."""
     H = sp.zeros(3, 1)
     for b in der.system.bodies:
+        if bodies is not None and b.name not in bodies:
+            continue
         fr = der.spatial["frames"][b.name]
         if not b.flexible:
             c, m = _vec(b.com), sp.nsimplify(b.mass)
@@ -513,6 +522,74 @@ def _momentum(der) -> sp.Matrix:
         now = d["actual"] | dict(zip(Rl, fr.A.T * fr.R))  # substituted after integrating
         H += fr.A * sp.Matrix([d["integral"](e).xreplace(now) for e in dens])
     return H
+
+
+def _first_moment(der, bodies) -> tuple[sp.Expr, sp.Matrix]:
+    """(mass, first moment about the ground origin, ground components) of `bodies`: per rigid
+    body m (R + A c), per modal beam m R + A int rho A r dx."""
+    mass, S = sp.Integer(0), sp.zeros(3, 1)
+    for name in sorted(bodies):
+        b, fr = der.system.body(name), der.spatial["frames"][name]
+        if not b.flexible:
+            m = sp.nsimplify(b.mass)
+            mass, S = mass + m, S + m * (fr.R + fr.A * _vec(b.com))
+            continue
+        d = der.spatial[name]
+        m = d["P"]["rho"] * d["P"]["A"] * d["P"]["L"]
+        mass += m
+        S += m * fr.R + fr.A * sp.Matrix([d["integral"](m * e) for e in d["r"]])
+    return mass, S
+
+
+def joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
+    """(F, M): the force and the moment about the joint's child point P (ground components)
+    that the joint's parent side exerts on its child side, constraint and drive loads together
+    (as assemble.joint_reaction in the plane). A cut joint: its multipliers (cut_load). A tree
+    joint: the momentum balance of the subtree beyond it, F = d^2/dt^2 (first moment) -
+    external forces, M = dH_O/dt - external moments about O - P x F; a motor or guide on a
+    joint inside the subtree is internal, on this joint it is part of the reaction."""
+    if joint.name in der.tree.cut:
+        return cut_load(der, joint.name, "child")
+    system = der.system
+    bodies = der.tree.subtree(system, joint.name)
+    mass, S = _first_moment(der, bodies)
+    F, Mo = sp.zeros(3, 1), sp.zeros(3, 1)  # external loads, moment about O
+
+    def add(force, at):
+        nonlocal F, Mo
+        F, Mo = F + force, Mo + _cross(at, force)
+
+    def inside(ref):
+        return ref != GROUND and system.marker(ref)[0] in bodies
+
+    gvec = _vec(next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0)))
+    F, Mo = F + mass * gvec, Mo + _cross(S, gvec)
+    for load in system.loads:
+        if isinstance(load, PointForce) and inside(load.marker):
+            Fv = _vec((load.fx, load.fy, load.fz))
+            if load.frame == "body":
+                Fv = der.spatial["frames"][system.marker(load.marker)[0]].A * Fv
+            add(Fv, _marker_point(der, load.marker))
+        elif isinstance(load, Torque) and load.body in bodies:
+            tau = _torque(der, load)
+            Mo += der.spatial["frames"][load.body].A * tau if load.frame == "body" else tau
+        elif isinstance(load, SpringDamper) and inside(load.a) != inside(load.b):
+            ends = _spring_ends(der, load)
+            Fa = spring_force_on_a(der, load, ends)
+            if inside(load.a):
+                add(Fa, ends[0])
+            else:
+                add(-Fa, ends[1])
+    for name in der.tree.cut:
+        j = system.joint(name)
+        if inside(j.child) != inside(j.parent):
+            side, ref = ("child", j.child) if inside(j.child) else ("parent", j.parent)
+            Fc, tc = cut_load(der, name, side)
+            add(Fc, _marker_point(der, ref))
+            Mo += tc
+    P = _marker_point(der, joint.child)
+    Fr = der.ddt(S, 2) - F
+    return Fr, der.ddt(_momentum(der, bodies)) - Mo - _cross(P, Fr)
 
 
 def _marker_point(der, ref: str) -> sp.Matrix:
@@ -558,10 +635,7 @@ def _applied(der) -> sp.Matrix:
     tau . d omega / dq')."""
     system = der.system
     Q = sp.zeros(len(der.q), 1)
-    names = {"t": t}
-    for c, x, xd in zip(der.coords, der.q, der.qd):
-        if c.group == "joint":  # its name: the joint's, or J_slide (Joint.coordinates)
-            names[c.name], names[f"{c.name}_rate"] = x, xd
+    names = _names(der)
     for load in system.loads:
         if isinstance(load, PointForce):
             F = _vec((load.fx, load.fy, load.fz))
@@ -571,8 +645,7 @@ def _applied(der) -> sp.Matrix:
             Q += sp.Matrix([F.dot(sp.diff(p, x)) for x in der.q])
         elif isinstance(load, Torque):  # virtual power tau . omega, omega in the body's axes
             fr = der.spatial["frames"][load.body]
-            tau = sp.Matrix([parse_expression(e, tuple(names.items()), f"system '{system.name}': torque "
-                                              f"'{load.name or load.body}'") for e in load.expression])
+            tau = _torque(der, load, names)
             if load.frame == "ground":
                 tau = fr.A.T * tau
             Q += sp.Matrix([tau.dot(sp.diff(fr.omega, xd)) for xd in der.qd])
@@ -583,6 +656,22 @@ def _applied(der) -> sp.Matrix:
             k = next(i for i, c in enumerate(der.coords) if c.joint == d.joint)
             Q[k] += tau
     return Q
+
+
+def _names(der) -> dict:
+    """What a load's expression may name: t, each joint coordinate and its rate."""
+    names = {"t": t}
+    for c, x, xd in zip(der.coords, der.q, der.qd):
+        if c.group == "joint":  # its name: the joint's, or J_slide (Joint.coordinates)
+            names[c.name], names[f"{c.name}_rate"] = x, xd
+    return names
+
+
+def _torque(der, load: Torque, names=None) -> sp.Matrix:
+    """A torque load's vector, in its frame's components."""
+    return sp.Matrix([parse_expression(e, tuple((names or _names(der)).items()),
+                                       f"system '{der.system.name}': torque '{load.name or load.body}'")
+                      for e in load.expression])
 
 
 def _output(der, quantity: str) -> sp.Expr:
@@ -608,6 +697,9 @@ def _output(der, quantity: str) -> sp.Expr:
         return 2 * sp.Add(*der.dissipation.values())
     if fn in ("Hx", "Hy", "Hz"):  # modal beams only (System.validate)
         return _momentum(der)["xyz".index(fn[1])]
+    if fn == "reaction":  # x, y, z: the force; mx, my, mz: the moment (REACTION_COMPONENTS)
+        F, M = joint_reaction(der, system.joint(args[0]))
+        return (F if len(args[1]) == 1 else M)["xyz".index(args[1][-1])]
     beam = system.body(args[0])
     x = beam_station(system, beam, args[1], where)
     if is_ef(beam):
