@@ -33,7 +33,9 @@ scene (flexsym/scenes/scene.py), unchanged.
     [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
                 grammar: angle(J), rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
-                M(B, x), reaction(J), torque(D), T, V, momentum, violation, dissipation)
+                M(B, x), sigma(B, x, y), reaction(J), torque(D), T, V, momentum, violation,
+                dissipation; spatial: z(B.m), vz, Mx, My, Mz, Qy, Qz (B, x), sigma(B, x, y, z),
+                Hx, Hy, Hz)
 
 Checks, each one line naming the file and the item, before anything is derived or written:
 the TOML's types and keys here; names, references, masses, the spanning tree, drivers,
