@@ -136,6 +136,7 @@ def test_planar_sigma_is_the_spatial_sigma_at_z_0_and_the_moment_changes_by_the_
 
 FLAP = (ROOT / "scenes" / "flap.toml").read_text()
 PLANAR = (ROOT / "scenes" / "pendulum.toml").read_text()
+FLAP_N_CONSTITUTIVE = FLAP.replace('model = "m3"', 'model = { variant = "m3", axial_force = "constitutive" }')
 FLAP_COLUMNS = FLAP[FLAP.index("columns = {"):].splitlines()[0]
 PLANAR_COLUMNS = PLANAR[PLANAR.index("columns = {"):].splitlines()[0]
 
@@ -149,12 +150,14 @@ PLANAR_COLUMNS = PLANAR[PLANAR.index("columns = {"):].splitlines()[0]
     (FLAP, "sigma(blade, 1.0, 0.0, top)", "z = 'top' is not a number"),
     (FLAP, "Qz(blade, 1.0, 0.0)", "needs (beam, x) with x a marker name"),
     (FLAP, "Qy(hub, 1.0)", "'hub' is not a flexible body"),
+    (FLAP_N_CONSTITUTIVE, "sigma(blade, 1.0, 0.0, 0.01)", "has no axial mode to carry N"),
 ])
 def test_bad_section_outputs_are_refused_in_one_line(tmp_path, capsys, scene, quantity, says):
-    """Exit 2, one line naming the file and the output, nothing written, before any work."""
+    """Exit 2, one line naming the file and the output, nothing written, before any work (sigma
+    in 3D needs N: a model without axial modes whose N is constitutive cannot give it)."""
     from flexsym.apps.cli import main
 
-    columns = FLAP_COLUMNS if scene is FLAP else PLANAR_COLUMNS
+    columns = PLANAR_COLUMNS if scene is PLANAR else FLAP_COLUMNS
     path, out = tmp_path / "bad.toml", tmp_path / "out.csv"
     path.write_text(scene.replace(columns, f'columns = {{ q = "{quantity}" }}'))
     assert main(["run", str(path), "--out", str(out)]) == 2

@@ -42,7 +42,8 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     # forces along its y and z axes; sigma takes (beam, x, y) in the plane, (beam, x, y, z) in 3D
     "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam", "Qy": "beam", "Qz": "beam",
 }
-SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "Hx", "Hy", "Hz")  # H: angular momentum about the origin
+# H: the angular momentum about the origin; Q: the shear forces
+SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "Hx", "Hy", "Hz")
 PLANAR_ONLY = ("M", "reaction", "torque", "momentum", "dissipation")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
@@ -949,7 +950,8 @@ def section_point(beam: FlexibleBeam, x: float, texts, where: str) -> tuple[floa
     and sqrt(I_y/A) for z (farther is outside any section with this A and I: a typing error)."""
     A, I = section_at(beam, x)
     point = []
-    for axis, text, Ik, name in zip("yz", texts, (I, beam.section.Iy), ("I", "Iy")):
+    names = ("I",) if len(texts) == 1 else ("Iz", "Iy")  # the planar I is the spatial I_z
+    for axis, text, Ik, name in zip("yz", texts, (I, beam.section.Iy), names):
         try:
             c = float(text)
         except ValueError:

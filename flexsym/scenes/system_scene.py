@@ -579,7 +579,7 @@ def _expression(text: str, names: dict, label: str) -> sp.Expr:
 def _carried(system: System, o: Output) -> None:
     """A beam output that no mode of the body's model can make non-zero is refused."""
     fn, args = parse_output(system, o.quantity)
-    if fn not in ("v", "u", "w", "N", "M", "vz", "Mx", "My", "Mz"):
+    if fn not in ("v", "u", "w", "N", "M", "vz", "Mx", "My", "Mz", "sigma"):
         return
     beam = system.body(args[0])
     model = beam.model
@@ -603,7 +603,7 @@ def _carried(system: System, o: Output) -> None:
             what = "deflection" if order == 0 else "curvature"
             raise SpecError(f"{where}: no bending mode of model '{model.name}' has {what} at "
                             f"x = {x:g} m, so the output would be identically zero")
-    elif fn == "N" and not axial_force_available(model):
+    elif (fn == "N" or (fn == "sigma" and system.dimension == 3)) and not axial_force_available(model):
         raise SpecError(f"{where}: model '{model.name}' (strain {model.strain}) has no axial mode to "
                         "carry N (choose a model with axial modes, e.g. m2)")
     elif fn == "u" and not model.axial and model.strain != "foreshortening":
