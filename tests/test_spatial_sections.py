@@ -141,7 +141,7 @@ FLAP_COLUMNS = FLAP[FLAP.index("columns = {"):].splitlines()[0]
 PLANAR_COLUMNS = PLANAR[PLANAR.index("columns = {"):].splitlines()[0]
 
 
-@pytest.mark.parametrize("scene,quantity,says", [
+BAD = [  # (scene, output, what the one line says)
     (PLANAR, "Qy(beam, mid)", "Qy applies to spatial systems (dimension = 3) only"),
     (PLANAR, "sigma(beam, mid, 0.001, 0.0)", "needs (beam, x, y):"),
     (FLAP, "sigma(blade, 1.0, 0.01)", "needs (beam, x, y, z) in a spatial system"),
@@ -151,7 +151,11 @@ PLANAR_COLUMNS = PLANAR[PLANAR.index("columns = {"):].splitlines()[0]
     (FLAP, "Qz(blade, 1.0, 0.0)", "needs (beam, x) with x a marker name"),
     (FLAP, "Qy(hub, 1.0)", "'hub' is not a flexible body"),
     (FLAP_N_CONSTITUTIVE, "sigma(blade, 1.0, 0.0, 0.01)", "has no axial mode to carry N"),
-])
+]
+
+
+@pytest.mark.parametrize("scene,quantity,says", BAD,
+                         ids=[("planar " if b[0] is PLANAR else "spatial ") + b[1] for b in BAD])
 def test_bad_section_outputs_are_refused_in_one_line(tmp_path, capsys, scene, quantity, says):
     """Exit 2, one line naming the file and the output, nothing written, before any work (sigma
     in 3D needs N: a model without axial modes whose N is constitutive cannot give it)."""

@@ -632,7 +632,18 @@ def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
 
 def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     """N, Mx, My, Mz at station x: constitutive, or from equilibrium in the frame's components;
-    Sx, Sy, Sz: the force of the part beyond x, from equilibrium (N from equilibrium is Sx)."""
+    Sx, Sy, Sz: the force of the part beyond x, from equilibrium (N from equilibrium is Sx).
+    Each once per derivation: the turned moments, Q and sigma at one station share them (the
+    integrals take seconds each)."""
+    if fn == "N" and beam.model.axial_force == "equilibrium":
+        fn = "Sx"
+    memo = der.spatial[beam.name].setdefault("sections", {})
+    if (x, fn) not in memo:
+        memo[(x, fn)] = _frame_section_of(der, beam, x, fn)
+    return memo[(x, fn)]
+
+
+def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     d = der.spatial[beam.name]
     P = d["P"]
     source = "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment
@@ -665,7 +676,6 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     acc = a0 + _cross(al, r) + _cross(om, _cross(om, r)) + 2 * _cross(om, rd) + rdd
     L, rho, A = P["L"], P["rho"], P["A"]
     load = rho * A * L * (gl - acc)
-    fn = "Sx" if fn == "N" else fn
     force, k = fn[0] == "S", "xyz".index(fn[1])
     if force:
         out = d["integral"](load[k], at, 1)
