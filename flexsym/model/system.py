@@ -39,11 +39,13 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "x": "marker", "y": "marker",
     "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam", "sigma": "beam",
     # spatial systems only: the marker's ground z, the deflection along the beam frame's z, and
-    # the section moments about the section's own x (torsion), y and z axes
-    "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam",
+    # the section moments about the section's own x (torsion), y and z axes, and the shear
+    # forces along its y and z axes; sigma takes (beam, x, y) in the plane, (beam, x, y, z) in 3D
+    "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam", "Qy": "beam", "Qz": "beam",
 }
-SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Hx", "Hy", "Hz")  # H: angular momentum about the origin
-PLANAR_ONLY = ("M", "sigma", "torque", "momentum")  # not in 3D yet
+# H: the angular momentum about the origin; Q: the shear forces
+SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "Hx", "Hy", "Hz")
+PLANAR_ONLY = ("M", "torque", "momentum")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
 # reaction(joint, c) per dimension: the force's ground components, then the moment about the
@@ -985,18 +987,23 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
             raise SpecError(f"{where}: needs one 'body.marker'")
         system._ref(where, args[0])
     else:
-        if fn == "sigma" and len(args) != 3:
-            raise SpecError(f"{where}: needs (beam, x, y): x a marker name or a position in m, y "
-                            "the section point's distance from the beam's axis in m (+ toward the "
-                            "beam frame's +y)")
-        if fn != "sigma" and len(args) != 2:
-            raise SpecError(f"{where}: needs (beam, x) with x a marker name or a position in m")
+        want = (3 if system.dimension == 2 else 4) if fn == "sigma" else 2
+        if len(args) != want:
+            if fn != "sigma":
+                raise SpecError(f"{where}: needs (beam, x) with x a marker name or a position in m")
+            if want == 3:
+                raise SpecError(f"{where}: needs (beam, x, y): x a marker name or a position in m, y "
+                                "the section point's distance from the beam's axis in m (+ toward the "
+                                "beam frame's +y)")
+            raise SpecError(f"{where}: needs (beam, x, y, z) in a spatial system: x a marker name or "
+                            "a position in m, (y, z) the section point in m along the section's y "
+                            "and z axes")
         b = system.body(args[0]) if args[0] in {b.name for b in system.bodies} else None
         if b is None or not b.flexible:
             raise SpecError(f"{where}: '{args[0]}' is not a flexible body")
         x = beam_station(system, b, args[1], where)
         if fn == "sigma":
-            section_point(b, x, args[2], where)
+            section_point(b, x, args[2:], where)
     return fn, args
 
 
@@ -1013,21 +1020,26 @@ def section_at(beam: FlexibleBeam, x: float) -> tuple[float, float]:
     return (beam.section.A * body.sections[k].A / ref.A, beam.section.I * body.sections[k].I / ref.I)
 
 
-def section_point(beam: FlexibleBeam, x: float, text: str, where: str) -> float:
-    """y of sigma(beam, x, y): a number (m) within SIGMA_REACH radii of gyration of the axis
-    (farther is outside any section with this A and I: a typing error)."""
-    try:
-        y = float(text)
-    except ValueError:
-        raise SpecError(f"{where}: y = '{text}' is not a number (the section point's distance "
-                        "from the axis, in m)") from None
+def section_point(beam: FlexibleBeam, x: float, texts, where: str) -> tuple[float, ...]:
+    """(y,) of sigma(beam, x, y) or (y, z) of sigma(beam, x, y, z): numbers (m), each within
+    SIGMA_REACH radii of gyration of the axis in its bending plane, sqrt(I/A) for y (I_z in 3D)
+    and sqrt(I_y/A) for z (farther is outside any section with this A and I: a typing error)."""
     A, I = section_at(beam, x)
-    reach = SIGMA_REACH * math.sqrt(I / A)
-    if not (math.isfinite(y) and abs(y) <= reach):
-        raise SpecError(f"{where}: y = {text} m is farther from the axis than any section with "
-                        f"A = {A:g} m^2 and I = {I:g} m^4 reaches ({SIGMA_REACH:g} sqrt(I/A) = "
-                        f"{reach:.3g} m)")
-    return y
+    point = []
+    names = ("I",) if len(texts) == 1 else ("Iz", "Iy")  # the planar I is the spatial I_z
+    for axis, text, Ik, name in zip("yz", texts, (I, beam.section.Iy), names):
+        try:
+            c = float(text)
+        except ValueError:
+            raise SpecError(f"{where}: {axis} = '{text}' is not a number (the section point's distance "
+                            "from the axis, in m)") from None
+        reach = SIGMA_REACH * math.sqrt(Ik / A)
+        if not (math.isfinite(c) and abs(c) <= reach):
+            raise SpecError(f"{where}: {axis} = {text} m is farther from the axis than any section with "
+                            f"A = {A:g} m^2 and {name} = {Ik:g} m^4 reaches ({SIGMA_REACH:g} "
+                            f"sqrt({name}/A) = {reach:.3g} m)")
+        point.append(c)
+    return tuple(point)
 
 
 def output_unit(system: System, quantity: str) -> str:
@@ -1045,7 +1057,7 @@ def output_unit(system: System, quantity: str) -> str:
     if fn in ("Hx", "Hy", "Hz"):
         return "kg m^2/s"
     return {"x": "m", "y": "m", "z": "m", "v": "m", "vz": "m", "u": "m", "w": "m", "N": "N", "M": "N m",
-            "Mx": "N m", "My": "N m", "Mz": "N m", "sigma": "Pa", "T": "J",
+            "Mx": "N m", "My": "N m", "Mz": "N m", "Qy": "N", "Qz": "N", "sigma": "Pa", "T": "J",
             "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)", "dissipation": "W"}[fn]
 
 

@@ -715,7 +715,7 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
     if fn == "sigma":  # sigma = N/A - M y/I (M = EI v'' > 0 shortens the fibres at y > 0)
         beam = system.body(args[0])
         x = beam_station(system, beam, args[1], where)
-        y = sp.nsimplify(section_point(beam, x, args[2], where))
+        y = sp.nsimplify(section_point(beam, x, args[2:], where)[0])
         A_x, I_x = section_at(beam, x)  # the section there, as run-time parameters A, I scaled
         A_ = BEAM_PARAMS[2].symbol * sp.nsimplify(A_x / beam.section.A)
         I_ = BEAM_PARAMS[3].symbol * sp.nsimplify(I_x / beam.section.I)

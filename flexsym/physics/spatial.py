@@ -45,11 +45,12 @@ the bending planes (second order).
 Outputs: angle/rate of a joint, x/y/z of a marker, u/v/vz and w (distance from the chord) at
 a station, N, Mx (torsion), My, Mz at a station, constitutive or from equilibrium of the
 part beyond the station (the variant's axial_force / moment), in the beam frame's
-components, the moments turned into the deformed section's axes to first order; T, V,
-violation, Hx/Hy/Hz (angular momentum about the origin), joint reactions (joint_reaction: a
-cut joint's from its multipliers, a tree joint's from the momentum balance of the bodies
-beyond it). Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx, Mx = GJ phi_x (the moment of
-the part beyond the station on the part before it).
+components, the moments turned into the deformed section's axes to first order; the shear
+forces Qy, Qz (always from equilibrium, turned likewise); sigma(beam, x, y, z) = N/A - Mz y/I_z
++ My z/I_y; T, V, violation, Hx/Hy/Hz (angular momentum about the origin), joint reactions
+(joint_reaction: a cut joint's from its multipliers, a tree joint's from the momentum balance
+of the bodies beyond it). Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx, Mx = GJ phi_x (the
+loads of the part beyond the station on the part before it).
 """
 from __future__ import annotations
 
@@ -64,7 +65,8 @@ from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, SpringDamper,
-                                  System, Torque, beam_coordinates, beam_station, length_scale, parse_output)
+                                  System, Torque, beam_coordinates, beam_station, length_scale, parse_output,
+                                  section_point)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
                                       damping_dissipation, joint_coordinate, spring_force_on_a,
                                       start_of, violation)
@@ -702,6 +704,8 @@ def _output(der, quantity: str) -> sp.Expr:
         return (F if len(args[1]) == 1 else M)["xyz".index(args[1][-1])]
     beam = system.body(args[0])
     x = beam_station(system, beam, args[1], where)
+    if fn == "sigma":
+        return _sigma(der, beam, x, args[2:], where)
     if is_ef(beam):
         if fn in ("u", "v", "vz"):
             r = ef_at(der, beam.name, x)
@@ -724,25 +728,51 @@ def _output(der, quantity: str) -> sp.Expr:
     return _section(der, beam, x, fn)
 
 
+def _sigma(der, beam: FlexibleBeam, x: float, point, where: str) -> sp.Expr:
+    """The normal stress at the section point (y, z): E eps with eps = u' - y v'' - z vz'',
+    and Mz = E I_z v'', My = -E I_y vz'' (a fibre at y > 0 shortens under Mz > 0, as in the
+    plane; one at z > 0 stretches under My > 0), so sigma = N/A - Mz y/I_z + My z/I_y, with the
+    beam's N, My and Mz (constitutive or from equilibrium, modal or ef)."""
+    y, z = (sp.nsimplify(c) for c in section_point(beam, x, point, where))
+    P = der.spatial[beam.name]["P"]
+    section = ef_section if is_ef(beam) else _section
+    N, My, Mz = (section(der, beam, x, f) for f in ("N", "My", "Mz"))
+    return N / P["A"] - Mz * y / P["I"] + My * z / P["Iy"]
+
+
 def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
-    """N (along the frame's x, as in the plane), Mx, My, Mz at station x in the deformed
-    section's axes, constitutive or from equilibrium. The equilibrium moment, found in the
-    frame's components, is turned by the section's rotation theta = (phi, -vz_x, v_x) to first
-    order, M_section = M - theta x M, the order of the modal kinematics."""
-    if fn != "N" and beam.model.moment == "equilibrium":
-        M = sp.Matrix([_frame_section(der, beam, x, f"M{k}") for k in "xyz"])
+    """N (along the frame's x, as in the plane), Qy, Qz, Mx, My, Mz at station x in the deformed
+    section's axes, constitutive or from equilibrium (Q: always from equilibrium, the
+    Euler-Bernoulli beam has no shear strain). The equilibrium force S and moment M, found in the
+    frame's components, are turned by the section's rotation theta = (phi, -vz_x, v_x) to first
+    order, X_section = X - theta x X, the order of the modal kinematics; N stays S_x (the planar
+    N; the turn would add v_x S_y + vz_x S_z, slope times shear)."""
+    if fn[0] == "Q" or (fn != "N" and beam.model.moment == "equilibrium"):
+        X = sp.Matrix([_frame_section(der, beam, x, ("S" if fn[0] == "Q" else "M") + k) for k in "xyz"])
         L = der.spatial[beam.name]["P"]["L"]
         theta = sp.Matrix([_at(der, beam.name, x, "phi"), -_at(der, beam.name, x, "vz_s") / L,
                            _at(der, beam.name, x, "v_s") / L])
-        return (M - _cross(theta, M))["xyz".index(fn[1])]
+        return (X - _cross(theta, X))["xyz".index(fn[1])]
     return _frame_section(der, beam, x, fn)
 
 
 def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
-    """N, Mx, My, Mz at station x: constitutive, or from equilibrium in the frame's components."""
+    """N, Mx, My, Mz at station x: constitutive, or from equilibrium in the frame's components;
+    Sx, Sy, Sz: the force of the part beyond x, from equilibrium (N from equilibrium is Sx).
+    Each once per derivation: the turned moments, Q and sigma at one station share them (the
+    integrals take seconds each)."""
+    if fn == "N" and beam.model.axial_force == "equilibrium":
+        fn = "Sx"
+    memo = der.spatial[beam.name].setdefault("sections", {})
+    if (x, fn) not in memo:
+        memo[(x, fn)] = _frame_section_of(der, beam, x, fn)
+    return memo[(x, fn)]
+
+
+def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     d = der.spatial[beam.name]
     P = d["P"]
-    source = beam.model.axial_force if fn == "N" else beam.model.moment
+    source = "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment
     if source != "equilibrium":
         L = P["L"]
         if fn == "N":
@@ -772,13 +802,13 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     acc = a0 + _cross(al, r) + _cross(om, _cross(om, r)) + 2 * _cross(om, rd) + rdd
     L, rho, A = P["L"], P["rho"], P["A"]
     load = rho * A * L * (gl - acc)
-    if fn == "N":
-        out = d["integral"](load[0], at, 1)
+    force, k = fn[0] == "S", "xyz".index(fn[1])
+    if force:
+        out = d["integral"](load[k], at, 1)
     else:
         rx = sp.Matrix([field_at(_View(d["table"], d["modes"]), e, at).xreplace({s: at})
                         for e in r])
         mom = _cross(r - rx, load)
-        k = "xyz".index(fn[1])
         out = d["integral"](mom[k], at, 1)
         if fn == "Mx":  # minus the rate of the torsional angular momentum beyond x
             spin_rate = F["phi_dd"] + al[0] + (al[1] * F["v_s"] + om[1] * F["v_d_s"]
@@ -802,10 +832,9 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
         if m is None:
             continue
         Floc, tloc = fr.A.T * F, fr.A.T * tau
-        if fn == "N":
-            out += Floc[0]
+        if force:
+            out += Floc[k]
         else:
-            k = "xyz".index(fn[1])
             out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)[k] + tloc[k]
     for ld in der.system.loads:  # point forces and spring ends on the part beyond x
         if isinstance(ld, PointForce):
@@ -819,8 +848,8 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
             if m is None:
                 continue
             Floc = Fv if local else fr.A.T * Fv
-            if fn == "N":
-                out += Floc[0]
+            if force:
+                out += Floc[k]
             else:
-                out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)["xyz".index(fn[1])]
+                out += _cross(_at(der, beam.name, m.x, "r") - section, Floc)[k]
     return out

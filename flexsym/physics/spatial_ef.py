@@ -105,13 +105,14 @@ def ef_at(der, body: str, x: float) -> sp.Matrix:
 
 
 def ef_section(der, beam, x: float, fn: str) -> sp.Expr:
-    """N, Mx, My, Mz at x: rod3d's constitutive section forces (deformed section axes) at the
+    """N, Qy, Qz, Mx, My, Mz at x: rod3d's constitutive section forces (deformed section axes:
+    the Simo-Reissner element has shear strains, so Q is GA Gamma_y, GA Gamma_z) at the
     element midpoints, linear in x between them and extrapolated over the end half-elements
     (rod3d.ClampedBeam.section_forces_at), as a placeholder given its casadi value by sysgen."""
     info = der.spatial[beam.name]
     n = info["n"]
     sym = sp.Symbol(f"rod_{beam.name}_{fn}_{len(der.casadi_outputs)}", real=True)
-    comp = {"N": 0, "Mx": 3, "My": 4, "Mz": 5}[fn]
+    comp = {"N": 0, "Qy": 1, "Qz": 2, "Mx": 3, "My": 4, "Mz": 5}[fn]
     s_ = float(x) / float(info["length"]) * n  # in element lengths
     k = min(max(int(np.floor(s_ - 0.5)), 0), max(n - 2, 0))
     tt = s_ - (k + 0.5)

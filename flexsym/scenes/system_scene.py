@@ -34,8 +34,10 @@ scene (flexsym/scenes/scene.py), unchanged.
                 (body.marker each), k, c, l0
     [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
-                grammar: angle(J), rate(J), slide(J), slide_rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
-                M(B, x), reaction(J), torque(D), T, V, momentum, violation, dissipation)
+                grammar: angle(J), rate(J), slide(J), slide_rate(J), x(B.m), y(B.m), v(B, x), u(B, x),
+                w(B, x), N(B, x), M(B, x), sigma(B, x, y), reaction(J), torque(D), T, V, momentum,
+                violation, dissipation; spatial: z(B.m), vz, Mx, My, Mz, Qy, Qz (B, x),
+                sigma(B, x, y, z), Hx, Hy, Hz)
 
 Checks, each one line naming the file and the item, before anything is derived or written:
 the TOML's types and keys here; names, references, masses, the spanning tree, drivers,
@@ -588,7 +590,7 @@ def _expression(text: str, names: dict, label: str) -> sp.Expr:
 def _carried(system: System, o: Output) -> None:
     """A beam output that no mode of the body's model can make non-zero is refused."""
     fn, args = parse_output(system, o.quantity)
-    if fn not in ("v", "u", "w", "N", "M", "vz", "Mx", "My", "Mz"):
+    if fn not in ("v", "u", "w", "N", "M", "vz", "Mx", "My", "Mz", "sigma"):
         return
     beam = system.body(args[0])
     model = beam.model
@@ -612,7 +614,7 @@ def _carried(system: System, o: Output) -> None:
             what = "deflection" if order == 0 else "curvature"
             raise SpecError(f"{where}: no bending mode of model '{model.name}' has {what} at "
                             f"x = {x:g} m, so the output would be identically zero")
-    elif fn == "N" and not axial_force_available(model):
+    elif (fn == "N" or (fn == "sigma" and system.dimension == 3)) and not axial_force_available(model):
         raise SpecError(f"{where}: model '{model.name}' (strain {model.strain}) has no axial mode to "
                         "carry N (choose a model with axial modes, e.g. m2)")
     elif fn == "u" and not model.axial and model.strain != "foreshortening":
