@@ -46,6 +46,7 @@ from types import SimpleNamespace
 
 import sympy as sp
 
+from flexsym.model.exact_numbers import exact
 from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
                      gravity_density, kinetic_density, momentum_density, w)
 from flexsym.physics.efbody import EfPart, ef_part
@@ -380,27 +381,27 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
         if j.parent == GROUND:
-            P, phiP = sp.Matrix(j.point).applyfunc(sp.nsimplify), sp.Integer(0)
+            P, phiP = sp.Matrix(j.point).applyfunc(exact), sp.Integer(0)
         else:
             P, phiP = marker_pose(der, j.parent)
         c = joint_sym.get(j.name, (sp.Integer(0),))[0]
-        off = sp.nsimplify(j.offset)
+        off = exact(j.offset)
         b = system.body(body)
         mc = system.marker(j.child)[1]
-        mloc = sp.Matrix([sp.nsimplify(mc.x), sp.nsimplify(mc.y)])
+        mloc = sp.Matrix([exact(mc.x), exact(mc.y)])
         if j.kind == "revolute":
             phi = phiP + off + c
         else:
             phi = phiP + off
         if j.kind == "prismatic":
-            ax = sp.Matrix([sp.nsimplify(a) for a in j.axis])
+            ax = sp.Matrix([exact(a) for a in j.axis])
             P = P + _rot(phiP) * ax / sp.sqrt(ax.dot(ax)) * c
         R = P - (_rot(phi) * mloc if not b.flexible else sp.zeros(2, 1))
         der.poses[body] = Pose(phi, R)
 
     # energies and forces
     g = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), None)
-    gvec = sp.Matrix([sp.nsimplify(x) for x in g]) if g is not None else sp.zeros(2, 1)
+    gvec = sp.Matrix([exact(x) for x in g]) if g is not None else sp.zeros(2, 1)
     V_grav = sp.Integer(0)
     Q = sp.zeros(len(coords), 1)
     for b in system.bodies:
@@ -409,9 +410,9 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
         omega = der.ddt(pose.angle)
         Rdot = der.ddt(pose.R)
         if not b.flexible:
-            G = pose.R + A_ * sp.Matrix([sp.nsimplify(x) for x in b.com])
+            G = pose.R + A_ * sp.Matrix([exact(x) for x in b.com])
             vG = der.ddt(G)
-            m, J = sp.nsimplify(b.mass), sp.nsimplify(b.inertia)
+            m, J = exact(b.mass), exact(b.inertia)
             der.T += m * vG.dot(vG) / 2 + J * omega**2 / 2
             V_grav += -m * gvec.dot(G)
             der.momentum += m * _cross(G, vG) + J * omega
@@ -522,7 +523,7 @@ def _record_body(der, name, mass, pose, A_, local_moment, H) -> None:
 def _side(der: SystemDerivation, joint, side: str) -> tuple[sp.Matrix, sp.Expr]:
     ref = getattr(joint, side)
     if ref == GROUND:
-        return sp.Matrix([sp.nsimplify(c) for c in joint.point]), sp.Integer(0)
+        return sp.Matrix([exact(c) for c in joint.point]), sp.Integer(0)
     return marker_pose(der, ref)
 
 
@@ -531,10 +532,10 @@ def cut_joint_rows(der: SystemDerivation, joint) -> list[tuple[str, sp.Expr]]:
     differ by the offset), prismatic (the child point on the parent's axis line, angles differ
     by the offset). On a beam, a point's angle is its tangent's."""
     (pp, ap), (pc, ac) = _side(der, joint, "parent"), _side(der, joint, "child")
-    off = sp.nsimplify(joint.offset)
+    off = exact(joint.offset)
     n = joint.name
     if joint.kind == "prismatic":
-        ax = sp.Matrix([sp.nsimplify(a) for a in joint.axis])
+        ax = sp.Matrix([exact(a) for a in joint.axis])
         normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
         return [(f"{n}.normal", (pc - pp).dot(normal)), (f"{n}.angle", ac - ap - off)]
     rows = [(f"{n}.x", pc[0] - pp[0]), (f"{n}.y", pc[1] - pp[1])]
@@ -565,7 +566,7 @@ def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
         if isinstance(load, PointForce):
             body, _ = system.marker(load.marker)
             r, _phi = marker_pose(der, load.marker)
-            F = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
+            F = sp.Matrix([exact(load.fx), exact(load.fy)])
             if load.frame == "body":
                 F = _rot(der.poses[body].angle) * F
             Q += sp.Matrix([F.dot(r.diff(x)) for x in wrt])
@@ -577,7 +578,7 @@ def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
 
 
 def _spring_ends(der: SystemDerivation, load) -> list[sp.Matrix]:
-    return [sp.Matrix([sp.nsimplify(c) for c in point]) if ref == GROUND else marker_pose(der, ref)[0]
+    return [sp.Matrix([exact(c) for c in point]) if ref == GROUND else marker_pose(der, ref)[0]
             for ref, point in ((load.a, load.point_a), (load.b, load.point_b))]
 
 
@@ -586,7 +587,7 @@ def spring_force_on_a(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.
     line from a to b, k (l - l0) + c l' (l0 = 0: k delta + c delta'), as add_spring's Q."""
     a, b = ends
     delta = b - a
-    k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
+    k, c, l0 = (exact(v) for v in (load.k, load.c, load.l0))
     if l0 == 0:
         return k * delta + c * der.ddt(delta)
     length = sp.sqrt(delta.dot(delta))
@@ -598,7 +599,7 @@ def add_spring(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.Matrix:
     V = k (l - l0)^2 / 2 added to der.V and to der.terms, and its Q = -dV/dq - c l' dl/dq
     returned."""
     delta = ends[1] - ends[0]
-    k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
+    k, c, l0 = (exact(v) for v in (load.k, load.c, load.l0))
     if l0 == 0:  # no square root: smooth when the ends meet
         V = k * delta.dot(delta) / 2
         rate = der.ddt(delta)
@@ -637,14 +638,14 @@ def marker_pose(der: SystemDerivation, ref: str) -> tuple[sp.Matrix, sp.Expr]:
     pose = der.poses[body]
     b = der.system.body(body)
     if not b.flexible:
-        return pose.R + _rot(pose.angle) * sp.Matrix([sp.nsimplify(m.x), sp.nsimplify(m.y)]), pose.angle
+        return pose.R + _rot(pose.angle) * sp.Matrix([exact(m.x), exact(m.y)]), pose.angle
     u, v, slope = beam_fields_at(der, body, m.x)
     return pose.R + _rot(pose.angle) * sp.Matrix([_x(der, body, m.x) + u, v]), pose.angle + slope
 
 
 def _x(der, body, x):
     part = der.flex[body]
-    return sp.nsimplify(x) / sp.nsimplify(part.beam.length) * part.psyms[BEAM_PARAMS[4].symbol]
+    return exact(x) / exact(part.beam.length) * part.psyms[BEAM_PARAMS[4].symbol]
 
 
 def beam_fields_at(der: SystemDerivation, body: str, x: float):
@@ -653,7 +654,7 @@ def beam_fields_at(der: SystemDerivation, body: str, x: float):
     if isinstance(part, EfPart):
         rx, ry, slope = part.position(x)
         return rx - _x(der, body, x), ry, slope
-    at = sp.nsimplify(x) / sp.nsimplify(part.beam.length)
+    at = exact(x) / exact(part.beam.length)
     view = part.view()
     L_ = part.psyms[BEAM_PARAMS[4].symbol]
 
@@ -715,10 +716,10 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
     if fn == "sigma":  # sigma = N/A - M y/I (M = EI v'' > 0 shortens the fibres at y > 0)
         beam = system.body(args[0])
         x = beam_station(system, beam, args[1], where)
-        y = sp.nsimplify(section_point(beam, x, args[2:], where)[0])
+        y = exact(section_point(beam, x, args[2:], where)[0])
         A_x, I_x = section_at(beam, x)  # the section there, as run-time parameters A, I scaled
-        A_ = BEAM_PARAMS[2].symbol * sp.nsimplify(A_x / beam.section.A)
-        I_ = BEAM_PARAMS[3].symbol * sp.nsimplify(I_x / beam.section.I)
+        A_ = BEAM_PARAMS[2].symbol * exact(A_x / beam.section.A)
+        I_ = BEAM_PARAMS[3].symbol * exact(I_x / beam.section.I)
         psyms = der.flex[beam.name].psyms
         N, M = (_stress(der, beam, x, q, where) for q in ("N", "M"))
         return N / A_.xreplace(psyms) - M * y / I_.xreplace(psyms)
@@ -729,7 +730,7 @@ def _stress(der, beam, x, fn, where):
     part = der.flex[beam.name]
     if isinstance(part, EfPart):
         return part.stress(fn, x)
-    frac = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    frac = exact(x) / exact(beam.length)
     spec = replace(beam.model, points=(("o", str(frac)),))
     if (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium":
         return _equilibrium_stress(der, beam, x, fn)
@@ -776,7 +777,7 @@ def _cut_loads(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Mat
     n = joint.name
     tau = -lam.get(f"{n}.angle", sp.Integer(0))
     if joint.kind == "prismatic":
-        ax = sp.Matrix([sp.nsimplify(a) for a in joint.axis])
+        ax = sp.Matrix([exact(a) for a in joint.axis])
         normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
         return -lam[f"{n}.normal"] * normal, tau, pc, pc
     return -sp.Matrix([lam[f"{n}.x"], lam[f"{n}.y"]]), tau, pc, pp
@@ -803,25 +804,25 @@ def _external_loads(der: SystemDerivation, bodies: set[str]) -> tuple[sp.Matrix,
 
     g = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), None)
     if g is not None:
-        gvec = sp.Matrix([sp.nsimplify(x) for x in g])
+        gvec = sp.Matrix([exact(x) for x in g])
         for b in bodies:
             F += der.mass[b] * gvec
             Mo += _cross(der.first_moment[b], gvec)
     for load in system.loads:
         if isinstance(load, PointForce) and inside(load.marker):
             body, _ = system.marker(load.marker)
-            force = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
+            force = sp.Matrix([exact(load.fx), exact(load.fy)])
             if load.frame == "body":
                 force = _rot(der.poses[body].angle) * force
             add(force, marker_pose(der, load.marker)[0])
         elif isinstance(load, Torque) and load.body in bodies:
             Mo += parse_expression(load.expression, tuple(env), f"torque on '{load.body}'")
         elif isinstance(load, SpringDamper) and inside(load.a) != inside(load.b):
-            ends = [sp.Matrix([sp.nsimplify(c) for c in pt]) if ref == GROUND
+            ends = [sp.Matrix([exact(c) for c in pt]) if ref == GROUND
                     else marker_pose(der, ref)[0]
                     for ref, pt in ((load.a, load.point_a), (load.b, load.point_b))]
             delta = ends[1] - ends[0]
-            k, c, l0 = (sp.nsimplify(v) for v in (load.k, load.c, load.l0))
+            k, c, l0 = (exact(v) for v in (load.k, load.c, load.l0))
             if l0 == 0:
                 on_b = -k * delta - c * der.ddt(delta)
             else:
@@ -884,7 +885,7 @@ def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix
                 out.append((F, tau, P))
     for load in system.loads:
         if isinstance(load, PointForce) and beyond(load.marker):
-            F = sp.Matrix([sp.nsimplify(load.fx), sp.nsimplify(load.fy)])
+            F = sp.Matrix([exact(load.fx), exact(load.fy)])
             if load.frame == "body":
                 F = _rot(der.poses[beam.name].angle) * F
             out.append((F, sp.Integer(0), marker_pose(der, load.marker)[0]))
@@ -907,7 +908,7 @@ def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Ex
     part = der.flex[beam.name]
     f, tab = part.fields, part.table
     om, al, a0x, a0y, gx, gy = sp.symbols("Om_ Al_ A0x_ A0y_ gx_ gy_", real=True)
-    at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    at = exact(x) / exact(beam.length)
     X = L_ * s + f.u
     ax = a0x - gx + f.u_ddot - 2 * om * f.v_dot - al * f.v - om**2 * X
     ay = a0y - gy + f.v_ddot + 2 * om * f.u_dot + al * X - om**2 * f.v
@@ -925,7 +926,7 @@ def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Ex
     omega = der.ddt(pose.angle)
     a0 = Arot.T * der.ddt(pose.R, 2)
     g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
-    gl = Arot.T * sp.Matrix([sp.nsimplify(c) for c in g])
+    gl = Arot.T * sp.Matrix([exact(c) for c in g])
     actual = {om: omega, al: der.ddt(omega), a0x: a0[0], a0y: a0[1], gx: gl[0], gy: gl[1]}
     out = out.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
     u, v, _ = beam_fields_at(der, beam.name, x)

@@ -31,6 +31,7 @@ from functools import cached_property, lru_cache
 
 import sympy as sp
 
+from flexsym.model.exact_numbers import exact
 from flexsym.physics.energy import A, E, I, L, rho
 from flexsym.physics.fe import elastic_element, hermite, le, xi
 
@@ -208,7 +209,7 @@ class EfPart:
 
     def _locate(self, x: float) -> list[tuple[int, sp.Expr, float]]:
         """(element, xi, weight): at an interior node the two adjacent element ends, averaged."""
-        at = sp.nsimplify(x) / sp.nsimplify(self.beam.length)
+        at = exact(x) / exact(self.beam.length)
         f = self.fractions
         e = max(k for k in range(self.n) if f[k] <= at)
         if at == f[e] and e > 0:

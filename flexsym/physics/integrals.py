@@ -20,6 +20,7 @@ import sympy as sp
 from sympy.simplify.fu import TR8
 
 from flexsym.core.errors import FlexsymError
+from flexsym.model.exact_numbers import exact
 from flexsym.model.modes import Mode, s
 
 QUAD_DPS = 34
@@ -132,7 +133,7 @@ class IntegralTable:
     # ----- integration of a density ---------------------------------------------------
     def integrate(self, density: sp.Expr, a=0, b=1) -> sp.Expr:
         """int_a^b density ds, with each factor monomial replaced by its integral symbol."""
-        a, b = sp.nsimplify(a), sp.nsimplify(b)
+        a, b = exact(a), exact(b)
         groups: dict[sp.Expr, list[sp.Expr]] = {}
         for term in sp.Add.make_args(sp.expand(density)):
             key_parts, rest = [], []
@@ -147,7 +148,7 @@ class IntegralTable:
 
     def monomial_symbol(self, parts, a=0, b=1) -> sp.Expr:
         """The symbol of int_a^b s^k * prod(factors) ds (a, b exact fractions of the length)."""
-        a, b = sp.nsimplify(a), sp.nsimplify(b)
+        a, b = exact(a), exact(b)
         s_pow = 0
         factors: list[Factor] = []
         for base, exp in parts:

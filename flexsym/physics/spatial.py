@@ -61,6 +61,7 @@ import numpy as np
 import sympy as sp
 
 from flexsym.core.errors import SpecError
+from flexsym.model.exact_numbers import exact
 from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
@@ -88,7 +89,7 @@ def _cross(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
 
 
 def _vec(v) -> sp.Matrix:
-    return sp.Matrix([sp.nsimplify(c) for c in v])
+    return sp.Matrix([exact(c) for c in v])
 
 
 def rotation(axis, angle) -> sp.Matrix:
@@ -236,7 +237,7 @@ def derive_spatial(system: System) -> SystemDerivation:
             Q, rel = euler_rotation(e), 2 * euler_G(e) * ed
             # e.e = 1 as a constraint row scaled to a length (the runtime's tolerances are
             # lengths); (e.e')^2 k/2 in T makes M regular and vanishes with its forces on it
-            scale = sp.nsimplify(length_scale(system))
+            scale = exact(length_scale(system))
             der.constraints.append((f"{j.name}.norm", scale * (e.dot(e) - 1) / 2))
             der.T += 2 * _spin_inertia(system, body, psyms) * e.dot(ed)**2
             slide, v_rel = sp.zeros(3, 1), sp.zeros(3, 1)
@@ -260,9 +261,9 @@ def derive_spatial(system: System) -> SystemDerivation:
         actual = {x: e for x, e in zip(om, fr.omega)} | {x: e for x, e in zip(vf, fr.V)}
         if not b.flexible:
             c = _vec(b.com)
-            m = sp.nsimplify(b.mass)
+            m = exact(b.mass)
             vG = vf + _cross(om, c)
-            I3 = [sp.nsimplify(v) for v in b.inertia]
+            I3 = [exact(v) for v in b.inertia]
             der.frame_T.append((m * vG.dot(vG) / 2 + sum(I3[k] * om[k]**2 for k in range(3)) / 2,
                                 actual))
             V_grav += -m * (gvec.dot(fr.R) + fr.g.dot(c))
@@ -405,7 +406,7 @@ def _cut_rows(der) -> None:
     t = 0 perpendicular to e1 and to the parent's x axis (scaled to a length, as every row).
     Refused when a loop does not close at t = 0 (3D assembly is not derived yet)."""
     system = der.system
-    scale = sp.nsimplify(length_scale(system))
+    scale = exact(length_scale(system))
     der.spatial["cuts"] = {}
     start = None
     for name in der.tree.cut:
@@ -422,7 +423,7 @@ def _cut_rows(der) -> None:
             e1_0 = [float(v) for v in e1.xreplace(start).evalf()]
             x_0 = [float(v) for v in (Rp * sp.Matrix([1, 0, 0])).xreplace(start).evalf()]
             e2_0 = _vec(_unit(np.cross(e1_0, x_0)))
-            e2_local = sp.Matrix([sp.nsimplify(float(v)) for v in (Rp.xreplace(start).evalf().T * e2_0)])
+            e2_local = sp.Matrix([exact(float(v)) for v in (Rp.xreplace(start).evalf().T * e2_0)])
             e2 = Rp * e2_local
             der.constraints.append((f"{name}.cross", scale * e1.dot(e2)))
             axes = (e1, e2, scale)
@@ -495,7 +496,7 @@ def _spin_inertia(system: System, body: str, psyms: dict) -> sp.Expr:
     if b.flexible:
         P = psyms[body]
         return P["rho"] * P["A"] * P["L"]**3 / 3
-    return sp.nsimplify(max(b.inertia))
+    return exact(max(b.inertia))
 
 
 def _momentum(der, bodies=None) -> sp.Matrix:
@@ -509,9 +510,9 @@ def _momentum(der, bodies=None) -> sp.Matrix:
             continue
         fr = der.spatial["frames"][b.name]
         if not b.flexible:
-            c, m = _vec(b.com), sp.nsimplify(b.mass)
+            c, m = _vec(b.com), exact(b.mass)
             vG = fr.V + _cross(fr.omega, c)
-            I3 = sp.diag(*[sp.nsimplify(v) for v in b.inertia])
+            I3 = sp.diag(*[exact(v) for v in b.inertia])
             H += fr.A * (m * _cross(fr.A.T * fr.R + c, vG) + I3 * fr.omega)
             continue
         d = der.spatial[b.name]
@@ -533,7 +534,7 @@ def _first_moment(der, bodies) -> tuple[sp.Expr, sp.Matrix]:
     for name in sorted(bodies):
         b, fr = der.system.body(name), der.spatial["frames"][name]
         if not b.flexible:
-            m = sp.nsimplify(b.mass)
+            m = exact(b.mass)
             mass, S = mass + m, S + m * (fr.R + fr.A * _vec(b.com))
             continue
         d = der.spatial[name]
@@ -614,7 +615,7 @@ def _at(der, body: str, x: float, what: str):
     """A field of a beam at station x (the table's values substituted)."""
     d = der.spatial[body]
     beam = der.system.body(body)
-    at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    at = exact(x) / exact(beam.length)
     view = _View(d["table"], d["modes"])
     generic = {gp.symbol: d["P"][gp.name] for gp in BEAM_PARAMS}
 
@@ -710,7 +711,7 @@ def _output(der, quantity: str) -> sp.Expr:
         if fn in ("u", "v", "vz"):
             r = ef_at(der, beam.name, x)
             k = ("u", "v", "vz").index(fn)
-            return r[k] - (sp.nsimplify(x) / sp.nsimplify(beam.length) * der.spatial[beam.name]["P"]["L"]
+            return r[k] - (exact(x) / exact(beam.length) * der.spatial[beam.name]["P"]["L"]
                            if k == 0 else 0)
         if fn == "w":
             p0, p1, px = (ef_at(der, beam.name, xx) for xx in (0.0, beam.length, x))
@@ -733,7 +734,7 @@ def _sigma(der, beam: FlexibleBeam, x: float, point, where: str) -> sp.Expr:
     and Mz = E I_z v'', My = -E I_y vz'' (a fibre at y > 0 shortens under Mz > 0, as in the
     plane; one at z > 0 stretches under My > 0), so sigma = N/A - Mz y/I_z + My z/I_y, with the
     beam's N, My and Mz (constitutive or from equilibrium, modal or ef)."""
-    y, z = (sp.nsimplify(c) for c in section_point(beam, x, point, where))
+    y, z = (exact(c) for c in section_point(beam, x, point, where))
     P = der.spatial[beam.name]["P"]
     section = ef_section if is_ef(beam) else _section
     N, My, Mz = (section(der, beam, x, f) for f in ("N", "My", "Mz"))
@@ -777,7 +778,7 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
         L = P["L"]
         if fn == "N":
             if beam.model.strain == "prestress":
-                at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+                at = exact(x) / exact(beam.length)
                 om = der.spatial["frames"][beam.name].omega
                 return P["rho"] * P["A"] * (om[1]**2 + om[2]**2) * L**2 * (1 - at**2) / 2
             if not beam.model.axial:
@@ -792,7 +793,7 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     # the acceleration in the frame's components, a = a_0 + alpha x r + omega x (omega x r)
     # + 2 omega x r' + r'', integrated in placeholders and then given the frame's actual motion
     fr = der.spatial["frames"][beam.name]
-    at = sp.nsimplify(x) / sp.nsimplify(beam.length)
+    at = exact(x) / exact(beam.length)
     om, F, r = d["om"], d["F"], d["r"]
     al = sp.Matrix(sp.symbols(f"{beam.name}_Al_x {beam.name}_Al_y {beam.name}_Al_z", real=True))
     a0 = sp.Matrix(sp.symbols(f"{beam.name}_A0_x {beam.name}_A0_y {beam.name}_A0_z", real=True))

@@ -19,6 +19,7 @@ import casadi as ca
 import numpy as np
 import sympy as sp
 
+from flexsym.model.exact_numbers import exact
 from flexsym.physics.rod3d import element_functions
 
 EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
@@ -98,7 +99,7 @@ def ef_at(der, body: str, x: float) -> sp.Matrix:
     """The deformed axis point at station x (linear between the nodes), frame components."""
     info = der.spatial[body]
     n = info["n"]
-    s_ = sp.nsimplify(x) / sp.nsimplify(info["length"]) * n
+    s_ = exact(x) / exact(info["length"]) * n
     j = min(int(sp.floor(s_)), n - 1)
     tt = s_ - j
     return (1 - tt) * info["node"](j) + tt * info["node"](j + 1)
