@@ -789,7 +789,7 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
                 "My": -P["E"] * P["Iy"] / L**2 * _at(der, beam.name, x, "vz_ss"),
                 "Mz": P["E"] * P["I"] / L**2 * _at(der, beam.name, x, "v_ss")}[fn]
     # equilibrium of the part beyond x: S = int (g - a) rho A dx + loads on its markers,
-    # M = int (r - r_x) x rho A (g - a) dx - d/dt int rho (I_y + I_z) spin dx e_x + load moments
+    # M = int (r - r_x) x rho A (g - a) dx - d/dt int rho (I_y + I_z) spin t dx + load moments
     # the acceleration in the frame's components, a = a_0 + alpha x r + omega x (omega x r)
     # + 2 omega x r' + r'', integrated in placeholders and then given the frame's actual motion
     fr = der.spatial["frames"][beam.name]
@@ -810,11 +810,15 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
         rx = sp.Matrix([field_at(_View(d["table"], d["modes"]), e, at).xreplace({s: at})
                         for e in r])
         mom = _cross(r - rx, load)
-        out = d["integral"](mom[k], at, 1)
-        if fn == "Mx":  # minus the rate of the torsional angular momentum beyond x
-            spin_rate = F["phi_dd"] + al[0] + (al[1] * F["v_s"] + om[1] * F["v_d_s"]
-                                               + al[2] * F["vz_s"] + om[2] * F["vz_d_s"]) / L
-            out -= d["integral"](rho * (P["Iy"] + P["I"]) * L * spin_rate, at, 1)
+        # minus the rate of the sections' spin momentum beyond x, h = rho (I_y + I_z) spin t
+        # along the tangent t (as T's rotary term and _momentum hold it): its rate in the frame
+        # plus omega x h (the gyroscopic part, in all three components)
+        spin_rate = F["phi_dd"] + al[0] + (al[1] * F["v_s"] + om[1] * F["v_d_s"]
+                                           + al[2] * F["vz_s"] + om[2] * F["vz_d_s"]) / L
+        tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
+        h_rate = (spin_rate * tangent + d["spin"] * sp.Matrix([0, F["v_d_s"] / L, F["vz_d_s"] / L])
+                  + _cross(om, d["spin"] * tangent))
+        out = d["integral"](mom[k] - rho * (P["Iy"] + P["I"]) * L * h_rate[k], at, 1)
     omega = fr.omega
     now = (d["actual"] | dict(zip(al, der.ddt(omega))) | dict(zip(gl, fr.g))
            | dict(zip(a0, der.ddt(fr.V) + _cross(omega, fr.V))))
