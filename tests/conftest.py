@@ -8,8 +8,13 @@ import pytest
 
 @pytest.fixture(scope="session", autouse=True)
 def isolated_cache(tmp_path_factory):
-    """Builds and custom variants go to a fresh cache, as on a new machine."""
-    path = tmp_path_factory.mktemp("flexsym-cache")
+    """Builds and custom variants go to a fresh cache, as on a new machine; pytest-xdist's
+    workers share one (its builds are locked per folder), so each system is built once."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        path = tmp_path_factory.getbasetemp().parent / "flexsym-cache"
+        path.mkdir(exist_ok=True)
+    else:
+        path = tmp_path_factory.mktemp("flexsym-cache")
     old = os.environ.get("FLEXSYM_CACHE")
     os.environ["FLEXSYM_CACHE"] = str(path)
     yield path
