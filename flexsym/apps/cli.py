@@ -57,7 +57,7 @@ def _elements(text):
 def resolve(args, systems: bool = False):
     """(spec, scene or None) from a variant name with overrides, or from a scene file; with
     systems, a system scene gives (None, SystemScene)."""
-    from flexsym.model.variant import builtin, customize
+    from flexsym.model.variant import customize
 
     if args.variant.endswith(".toml"):
         from flexsym.scenes.scene import load_scene

@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import json
 import time
-from pathlib import Path
 
 import casadi as ca
 import sympy as sp
@@ -35,11 +34,11 @@ from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
 from flexsym.physics.energy import A, E, I, L, rho
 from flexsym.physics.fe import le
-from flexsym.codegen.generate import MANIFEST, _environment, c_prefix, model_accessor, write_folder
+from flexsym.codegen.generate import MANIFEST, _environment, c_prefix, model_accessor
 from flexsym.physics.lagrange import equations_of_motion_sx
 from flexsym.emit.kernels import SympyToCasadi, group_by_parameters, make_kernels, matrix_sx
 from flexsym.model.maneuver import t as t_sym
-from flexsym.core.paths import cache_dir, file_lock, module_file, templates_dir
+from flexsym.core.paths import module_file, templates_dir
 from flexsym.model.system import System, length_scale, system_to_dict
 from flexsym.core.versions import generator_hash, tool_versions
 

@@ -32,7 +32,7 @@ def hub_system(model, hub_inertia: float = 40.0) -> System:
     tau = (J_h + rho A L^3/3) theta_P''(t), P(t; 6 rad/s, 15 s)."""
     s, L = PAPER_SECTION, PAPER_LENGTH
     J = hub_inertia + s.rho * s.A * L**3 / 3
-    acc = f"ifelse(t <= 15, (6/15)*(1 - cos(2*pi*t/15)), 0)"
+    acc = "ifelse(t <= 15, (6/15)*(1 - cos(2*pi*t/15)), 0)"
     return System(
         name="hub",
         bodies=(RigidBody("hub", 1.0, hub_inertia, markers=(Marker("centre", 0.0),)),

@@ -335,7 +335,6 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
         return system, Assembly(scale=scale)
     loops = _Loops(system, scale)
     guided = theta0(system)
-    where = f"system '{system.name}'"
     starts = {c[0]: (c[2], c[3]) for j in loops.joints for c in j.coordinates}  # (value, rate)
     fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
     free = ~fixed
