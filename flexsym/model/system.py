@@ -850,9 +850,6 @@ class System:
             if load.frame not in ("ground", "body"):
                 raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body' (the "
                                 "spatial torque's axes)")
-            if n == 3 and body.flexible:  # its section forces from equilibrium would need it
-                raise SpecError(f"{where}: a spatial torque acts on a rigid body ('{load.body}' is a "
-                                "beam: put it on the rigid body the beam is clamped to)")
         elif isinstance(load, SpringDamper):
             for end, ref, point in (("a", load.a, load.point_a), ("b", load.b, load.point_b)):
                 if ref != GROUND:
