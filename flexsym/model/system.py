@@ -42,9 +42,11 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     # the section moments about the section's own x (torsion), y and z axes, and the shear
     # forces along its y and z axes; sigma takes (beam, x, y) in the plane, (beam, x, y, z) in 3D
     "z": "marker", "vz": "beam", "Mx": "beam", "My": "beam", "Mz": "beam", "Qy": "beam", "Qz": "beam",
+    # and a marker's orientation: R(B.m, i, j), the ground axis i's component of its axis j
+    "R": "marker",
 }
 # H: the angular momentum about the origin; Q: the shear forces
-SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "Hx", "Hy", "Hz")
+SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "R", "Hx", "Hy", "Hz")
 PLANAR_ONLY = ("M", "torque", "momentum")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
@@ -638,6 +640,10 @@ class System:
                 use = f"for {fn}" if fn != "reaction" else f"beyond joint '{args[0]}'"
                 raise SpecError(f"{where}: output '{o.quantity}': angular momentum is not derived for "
                                 f"a spatial ef beam yet ('{ef}'): use a modal model {use}")
+            marked = self.body(args[0].partition(".")[0]) if fn == "R" else None
+            if n == 3 and getattr(getattr(marked, "model", None), "kind", None) == "fe":
+                raise SpecError(f"{where}: output '{o.quantity}': the orientation of a spatial ef "
+                                "beam's section is not derived yet (a modal beam's or a rigid body's is)")
             if n == 3 and fn in PLANAR_ONLY:
                 hint = " (use Mx, My or Mz: the torsion and bending moments)" if fn == "M" else ""
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} is not derived for spatial "
@@ -837,7 +843,7 @@ class System:
             if load.frame not in ("ground", "body"):
                 raise SpecError(f"{where}: frame '{load.frame}' must be 'ground' or 'body'")
         elif isinstance(load, Torque):
-            body = self.body(load.body)
+            self.body(load.body)  # refuses an unknown body
             if n == 3 and (not isinstance(load.expression, (tuple, list)) or len(load.expression) != 3):
                 raise SpecError(f"{where}: a spatial torque is three expressions [tx, ty, tz] "
                                 f"(got {load.expression!r:.80})")
@@ -980,7 +986,11 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
         if len(args) != 1 or args[0] not in {d.name for d in system.drivers}:
             raise SpecError(f"{where}: needs one driver name")
     elif kind == "marker":
-        if len(args) != 1 or "." not in args[0]:
+        if fn == "R":
+            if len(args) != 3 or "." not in args[0] or not {args[1], args[2]} <= set("xyz"):
+                raise SpecError(f"{where}: needs ('body.marker', i, j) with i, j each x, y or z: the "
+                                "ground axis i's component of the marker's axis j")
+        elif len(args) != 1 or "." not in args[0]:
             raise SpecError(f"{where}: needs one 'body.marker'")
         system._ref(where, args[0])
     else:
@@ -1053,6 +1063,8 @@ def output_unit(system: System, quantity: str) -> str:
         return "m" if fn == "slide" else "m/s"
     if fn in ("Hx", "Hy", "Hz"):
         return "kg m^2/s"
+    if fn == "R":
+        return "1"
     return {"x": "m", "y": "m", "z": "m", "v": "m", "vz": "m", "u": "m", "w": "m", "N": "N", "M": "N m",
             "Mx": "N m", "My": "N m", "Mz": "N m", "Qy": "N", "Qz": "N", "sigma": "Pa", "T": "J",
             "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)", "dissipation": "W"}[fn]

@@ -687,6 +687,8 @@ def _output(der, quantity: str) -> sp.Expr:
         name = system.joint(args[0]).coordinates[1][0]
         k = next(i for i, c in enumerate(der.coords) if c.name == name)
         return der.qd[k] if fn == "slide_rate" else der.q[k]
+    if fn == "R":  # ground <- the marker's axes (a beam's: its section's, to first order)
+        return _section_rotation(der, args[0])["xyz".index(args[1]), "xyz".index(args[2])]
     if fn in ("x", "y", "z"):
         return _marker_point(der, args[0])["xyz".index(fn)]
     if fn == "T":  # EF_T: what casadi adds (the bodies' T in their frame's motion)
