@@ -121,7 +121,9 @@ def _tilted_pendulum() -> dict:
                                                    "w_mid": "w(strip, 0.5)", "My": "My(strip, root)",
                                                    "Mz": "Mz(strip, root)", "Mx": "Mx(strip, root)",
                                                    "th": "angle(pin)", "Rx": "reaction(pin, mx)",
-                                                   "Ry": "reaction(pin, my)", "Rz": "reaction(pin, mz)"}},
+                                                   "Ry": "reaction(pin, my)", "Rz": "reaction(pin, mz)",
+                                                   "Qy": "Qy(strip, 0.5)", "sig": "sigma(strip, root, 0.001, 0.0005)",
+                                                   "Rxz": "R(strip.tip, x, z)"}},
     }
 
 
@@ -168,7 +170,8 @@ def test_root_section_moments_are_the_pin_reaction(tilted):
 
 
 def test_spatial_kernels_c_casadi_sympy(tilted, system_kernels_agree):
-    """The tilted pendulum's generated C kernels against casadi against sympy at a random state."""
+    """The tilted pendulum's generated C kernels against casadi against sympy at a random state
+    (its outputs: section moments, a shear force, a stress, joint reactions, an orientation)."""
     from flexsym.physics.spatial import derive_spatial
 
     system_kernels_agree(derive_spatial(system_from_dict(_tilted_pendulum(), name="tilted")), tilted,

@@ -85,13 +85,13 @@ def ringing():
     flap plane, Newmark's trapezoidal rule (no numerical damping), rows at every step."""
     b = built(cantilever({"zeta": [0.02, 0.05, 0.03, 0.04, 0.01]}))
     dt = 2.5e-4
-    return run_ok(b, t_end=3.0, dt=dt, integrator="newmark", interval=dt), dt
+    return run_ok(b, t_end=3.0, dt=dt, integrator="newmark", interval=dt), dt, b
 
 
 def test_energy_lost_is_the_damping_power_integrated(ringing):
     """E(0) - E(t) = int 2 D dt over the run, within 1e-4 of what was dissipated (the trapezoidal
     quadrature of the power over the rows; measured 2.6e-5)."""
-    r, _ = ringing
+    r, _, _ = ringing
     assert energy_balance(r) < 1e-4
 
 
@@ -102,7 +102,17 @@ def test_each_plane_decays_at_its_modal_rate(ringing, coordinate, zeta, I, k):
     exp(-zeta omega t), omega of that plane's I (log decrement of successive extremes, fitted;
     within 1 %; measured 1e-5 to 4e-4 on the first modes, 6.5e-3 on the flap cf2 at 647
     rad/s, where the trapezoidal rule's own error at omega dt = 0.16 shows)."""
-    r, dt = ringing
+    r, dt, _ = ringing
     rate = decay_rate(r.t, r[coordinate], dt)
     want = zeta * omega_bending(k, I)
     assert abs(rate - want) < 0.01 * want, (coordinate, rate, want)
+
+
+def test_damped_kernels_c_casadi_sympy(ringing, system_kernels_agree):
+    """The damped cantilever's generated C kernels (its force holds -dD/dq', its outputs the
+    dissipated power) against casadi against sympy at a random state."""
+    from flexsym.physics.spatial import derive_spatial
+
+    data = cantilever({"zeta": [0.02, 0.05, 0.03, 0.04, 0.01]})
+    system_kernels_agree(derive_spatial(system_from_dict(data, name=data["system"]["name"])),
+                         ringing[2], t=0.3, seed=3)
