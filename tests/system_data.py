@@ -34,3 +34,14 @@ def refused_in_one_line(capsys, path, says: str) -> None:
     assert std.out == "" and std.err.count("\n") == 1 and f"flexsym: error: {path}: " in std.err, std
     assert says in std.err, std.err
     assert not out.exists()
+
+
+def edited_scene(tmp_path, what: str, scene, edits):
+    """A copy of the scene file with each (old, new) edit made once (each old is there once)."""
+    text = scene.read_text()
+    for old, new in edits:
+        assert text.count(old) == 1, what
+        text = text.replace(old, new)
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    return path

@@ -11,7 +11,7 @@ import pytest
 import sympy as sp
 
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, refused_in_one_line, run_ok
+from system_data import built, edited_scene, refused_in_one_line, run_ok
 
 ROOT = Path(__file__).resolve().parent.parent
 FLAP = ROOT / "scenes" / "flap.toml"
@@ -283,27 +283,17 @@ BAD = [  # (what, scene, edits of its text, what the one line says)
 ]
 
 
-def _bad_scene(tmp_path, what, scene, edits) -> Path:
-    text = scene.read_text()
-    for old, new in edits:
-        assert text.count(old) == 1, what
-        text = text.replace(old, new)
-    path = tmp_path / "bad.toml"
-    path.write_text(text)
-    return path
-
-
 @pytest.mark.parametrize("what,scene,edits,says", BAD, ids=[b[0] for b in BAD])
 def test_bad_spatial_scenes_are_refused(tmp_path, capsys, what, scene, edits, says):
     """Refused in one line naming the file and the item, exit 2, nothing written (in-process:
     the CLI's own main, as the command runs it)."""
-    refused_in_one_line(capsys, _bad_scene(tmp_path, what, scene, edits), says)
+    refused_in_one_line(capsys, edited_scene(tmp_path, what, scene, edits), says)
 
 
 def test_a_bad_spatial_scene_is_refused_by_the_command(tmp_path):
     """The same through the installed command's process: exit code 2, one line on stderr."""
     what, scene, edits, says = next(b for b in BAD if b[0] == "universal axis along the rod")
-    path, out = _bad_scene(tmp_path, what, scene, edits), tmp_path / "out.csv"
+    path, out = edited_scene(tmp_path, what, scene, edits), tmp_path / "out.csv"
     r = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(path), "--out", str(out)],
                        capture_output=True, text=True)
     assert r.returncode == 2, r.stderr

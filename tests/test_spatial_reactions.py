@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from system_data import built, run_ok
+from system_data import built, edited_scene, refused_in_one_line, run_ok
 
 ROOT = Path(__file__).resolve().parent.parent
 G = 9.81
@@ -317,17 +317,4 @@ BAD = [  # (what, scene, edits of its text, what the one line says)
 
 @pytest.mark.parametrize("what,scene,edits,says", BAD, ids=[b[0] for b in BAD])
 def test_bad_reactions_are_refused(tmp_path, capsys, what, scene, edits, says):
-    from flexsym.apps.cli import main
-
-    text = scene.read_text()
-    for old, new in edits:
-        assert text.count(old) == 1, what
-        text = text.replace(old, new)
-    path, out = tmp_path / "bad.toml", tmp_path / "out.csv"
-    path.write_text(text)
-    code = main(["run", str(path), "--out", str(out)])
-    std = capsys.readouterr()
-    assert code == 2, std.err
-    assert std.out == "" and std.err.count("\n") == 1 and f"flexsym: error: {path}: " in std.err, std
-    assert says in std.err, std.err
-    assert not out.exists()
+    refused_in_one_line(capsys, edited_scene(tmp_path, what, scene, edits), says)
