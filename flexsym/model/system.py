@@ -596,10 +596,11 @@ class System:
                                 f"{', '.join(SPATIAL_CUT_KINDS)})")
         for _, name in tree.parent_joint if n == 3 else ():
             parent = self.joint(name).parent.partition(".")[0]
-            if parent != GROUND and self.body(parent).flexible:
-                raise SpecError(f"{where}: joint '{name}': a body hung from a flexible beam's marker "
-                                "is not derived in 3D yet (a beam's marker may close a loop: a "
-                                "spherical or universal joint listed after the tree's)")
+            if parent != GROUND and getattr(getattr(self.body(parent), "model", None), "kind", None) == "fe":
+                raise SpecError(f"{where}: joint '{name}': a body hung from a spatial ef beam's marker "
+                                "is not derived yet (from a modal beam's it is; an ef beam's marker "
+                                "may close a loop: a spherical or universal joint listed after the "
+                                "tree's)")
         for j in self.joints if n == 3 else ():
             if j.kind == "universal" and j.name not in tree.cut:
                 raise SpecError(f"{where}: joint '{j.name}': a universal joint is derived as the joint "

@@ -220,6 +220,18 @@ def derive_spatial(system: System) -> SystemDerivation:
     der.rod_bodies, der.casadi_T, der.casadi_outputs = [], [], {}  # spatial ef beams (casadi)
     der.casadi_T_out = []
 
+    for b in system.bodies:  # the modal beams' fields first: a body may hang from a marker
+        if b.flexible and not is_ef(b):
+            strain = STRAIN_MODELS[b.model.validate().strain]
+            names = beam_coordinates(b)
+            modes = {r.coordinate: mode(r) for _, _, r in names}
+            table = IntegralTable(modes)
+            sym, symd, symdd = ({n: sp.Symbol(f"{b.name}_{n}{k}", real=True) for n, _, _ in names}
+                                for k in ("", "_d", "_dd"))
+            F = _fields(b, sym, symd, symdd, table, strain.foreshortening)
+            der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=psyms[b.name],
+                                       r=sp.Matrix([psyms[b.name]["L"] * s + F["u"], F["v"], F["vz"]]))
+
     grav = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0))
     frames = {GROUND: Frame(sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1), _vec(grav))}
     for body in tree.order:
@@ -227,8 +239,11 @@ def derive_spatial(system: System) -> SystemDerivation:
         if j.parent == GROUND:
             fp, m_p = frames[GROUND], _vec(j.point)
         else:
-            pbody, pm = system.marker(j.parent)  # a rigid body's (System.validate)
-            fp, m_p = frames[pbody], _vec((pm.x, pm.y, pm.z))
+            pbody, pm = system.marker(j.parent)
+            if system.body(pbody).flexible:  # a modal beam's marker (System.validate)
+                fp, m_p = _section_frame(der, frames[pbody], pbody, pm.x), sp.zeros(3, 1)
+            else:
+                fp, m_p = frames[pbody], _vec((pm.x, pm.y, pm.z))
         cm = system.marker(j.child)[1]
         m_c = _vec((cm.x, cm.y, cm.z))
         if j.kind == "spherical":
@@ -272,17 +287,9 @@ def derive_spatial(system: System) -> SystemDerivation:
         if is_ef(b):
             V_grav += ef_body(der, b, P, fr, om, vf, actual, gvec)
             continue
-        spec = b.model.validate()
-        names = beam_coordinates(b)
-        modes = {r.coordinate: mode(r) for _, _, r in names}
-        table = IntegralTable(modes)
-        strain = STRAIN_MODELS[spec.strain]
-        sym = {n: sp.Symbol(f"{b.name}_{n}", real=True) for n, _, _ in names}
-        symd = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n, _, _ in names}
-        symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n, _, _ in names}
-        F = _fields(b, sym, symd, symdd, table, strain.foreshortening)
+        strain = STRAIN_MODELS[b.model.strain]
+        F, table, modes, r = (der.spatial[b.name][k] for k in ("F", "table", "modes", "r"))
         L, rho, A = P["L"], P["rho"], P["A"]
-        r = sp.Matrix([L * s + F["u"], F["v"], F["vz"]])
         rd = sp.Matrix([F["u_d"], F["v_d"], F["vz_d"]])
         vel = vf + rd + _cross(om, r)  # in the placeholders: short expansions, short integrals
         spin = F["phi_d"] + om[0] + (om[1] * F["v_s"] + om[2] * F["vz_s"]) / L
@@ -352,6 +359,26 @@ def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral) -> sp
     M2 = integral(P["rho"] * P["A"] * P["L"] / 2 * (R["u"]**2 + R["v"]**2 + R["vz"]**2)
                   + P["rho"] * (P["Iy"] + P["I"]) * P["L"] / 2 * R["phi"]**2)
     return damping_dissipation(b.damping, K2, M2, list(rate.values()))
+
+
+def _section_frame(der, fb: Frame, beam: str, x: float) -> Frame:
+    """The frame of a modal beam's deformed section at station x, for a body hung from a marker
+    there: origin at the axis point r(x), axes turned from the beam frame's by the rotation
+    S = R_z(theta_z) R_y(theta_y) R_x(theta_x), theta = (phi, -vz_x, v_x): exactly a rotation,
+    I + [theta]x to first order as the modal kinematics, and in a plane (theta = (0, 0, v_x)) the
+    planar tangent angle itself, so a planar system run as a spatial one keeps its rows. Its
+    angular velocity relative to the beam frame, in its own axes: R_x^T R_y^T theta_z' e_z +
+    R_x^T theta_y' e_y + theta_x' e_x."""
+    L = der.spatial[beam]["P"]["L"]
+    th = [_at(der, beam, x, "phi"), -_at(der, beam, x, "vz_s") / L, _at(der, beam, x, "v_s") / L]
+    Rx, Ry, Rz = (rotation(axis, angle) for axis, angle in zip(((1, 0, 0), (0, 1, 0), (0, 0, 1)), th))
+    rate = [der.ddt(t_) for t_ in th]
+    rel = (Rx.T * Ry.T * sp.Matrix([0, 0, rate[2]]) + Rx.T * sp.Matrix([0, rate[1], 0])
+           + sp.Matrix([rate[0], 0, 0]))
+    S = Rz * Ry * Rx
+    r = _at(der, beam, x, "r")
+    return Frame(fb.A * S, fb.R + fb.A * r, S.T * fb.omega + rel,
+                 S.T * (fb.V + _cross(fb.omega, r) + der.ddt(r)), S.T * fb.g)
 
 
 def initial_euler(direction, rate) -> tuple[list[float], list[float]]:
@@ -834,7 +861,10 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
         on = body == beam.name and (m.x > x or (x >= beam.length and m.x >= beam.length))
         return m if on else None
 
-    for F, tau, ref in cut_loads(der, beam.name):
+    hung = [(-F, -M, j.parent) for j in der.system.joints  # bodies hung from markers beyond x
+            if j.name not in der.tree.cut and beyond(j.parent)
+            for F, M in [joint_reaction(der, j)]]  # (F, M: on the hung body, about the marker)
+    for F, tau, ref in cut_loads(der, beam.name) + hung:
         m = beyond(ref)
         if m is None:
             continue
