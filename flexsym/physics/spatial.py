@@ -6,9 +6,10 @@ What is derived so far: rigid bodies, uniform modal beams and the geometrically 
 (spatial_ef.py) joined in a tree by revolute, prismatic and cylindrical joints (axes fixed in
 the parent's frame; axis_motion), spherical joints (Euler parameters on |e| = 1, a constraint
 row) and clamps, with loops closed by spherical and universal joints (_cut_rows), guided or
-motor-driven, under gravity, point forces, torques on rigid bodies and spring-dampers. What is
-not (structural damping, bodies from finite-element data, ...) is refused up front by
-System.validate.
+motor-driven, under gravity, point forces, torques and spring-dampers, modal beams with
+structural damping; a body may hang from a rigid body or from a modal beam's marker (the
+deformed section's frame, _section_frame). What is not (bodies from finite-element data, an
+ef beam's damping, ...) is refused up front by System.validate.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
