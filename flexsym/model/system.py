@@ -536,14 +536,18 @@ class System:
 
     def frame_driven(self, body: str) -> bool:
         """Whether the body's frame moves by the drives alone (a function of t): every tree
-        joint between it and ground is a clamp or guided. A spatial ef beam's element kinetic
-        energy is then a C kernel; otherwise it needs the system's AD path (physics/spatial_ef)."""
+        joint between it and ground is a clamp or guided, and no body on the way is flexible (a
+        body hung from a beam's marker moves with its deformation). A spatial ef beam's element
+        kinetic energy is then a C kernel; otherwise it needs the system's AD path
+        (physics/spatial_ef)."""
         tree, guided = self.tree(), {d.joint for d in self.drivers if d.kind == "guided"}
         while body != GROUND:
             j = self.joint(tree.joint_of(body))
             if j.kind != "clamp" and j.name not in guided:
                 return False
             body = j.parent.partition(".")[0] if j.parent != GROUND else GROUND
+            if body != GROUND and self.body(body).flexible:
+                return False
         return True
 
     # ----- structural validation ---------------------------------------------------------
