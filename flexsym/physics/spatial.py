@@ -370,8 +370,7 @@ def _section_frame(der, fb: Frame, beam: str, x: float) -> Frame:
     planar tangent angle itself, so a planar system run as a spatial one keeps its rows. Its
     angular velocity relative to the beam frame, in its own axes: R_x^T R_y^T theta_z' e_z +
     R_x^T theta_y' e_y + theta_x' e_x."""
-    L = der.spatial[beam]["P"]["L"]
-    th = [_at(der, beam, x, "phi"), -_at(der, beam, x, "vz_s") / L, _at(der, beam, x, "v_s") / L]
+    th = _section_angles(der, beam, x)
     Rx, Ry, Rz = (rotation(axis, angle) for axis, angle in zip(((1, 0, 0), (0, 1, 0), (0, 0, 1)), th))
     rate = [der.ddt(t_) for t_ in th]
     rel = (Rx.T * Ry.T * sp.Matrix([0, 0, rate[2]]) + Rx.T * sp.Matrix([0, rate[1], 0])
@@ -421,10 +420,14 @@ def _section_rotation(der, ref: str) -> sp.Matrix:
     fr = der.spatial["frames"][body]
     if not der.system.body(body).flexible:
         return fr.A
-    L = der.spatial[body]["P"]["L"]
-    theta = sp.Matrix([_at(der, body, m.x, "phi"), -_at(der, body, m.x, "vz_s") / L,
-                       _at(der, body, m.x, "v_s") / L])
-    return fr.A * (sp.eye(3) + _skew(theta))
+    return fr.A * (sp.eye(3) + _skew(_section_angles(der, body, m.x)))
+
+
+def _section_angles(der, beam: str, x: float) -> sp.Matrix:
+    """theta = (phi, -vz_x, v_x): a modal beam section's rotation at station x from its frame
+    (torsion, then the slopes of the two bending planes), first order as the modal kinematics."""
+    L = der.spatial[beam]["P"]["L"]
+    return sp.Matrix([_at(der, beam, x, "phi"), -_at(der, beam, x, "vz_s") / L, _at(der, beam, x, "v_s") / L])
 
 
 def _cut_rows(der) -> None:
@@ -597,10 +600,7 @@ def joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
     F, Mo = F + mass * gvec, Mo + _cross(S, gvec)
     for load in system.loads:
         if isinstance(load, PointForce) and inside(load.marker):
-            Fv = _vec((load.fx, load.fy, load.fz))
-            if load.frame == "body":
-                Fv = der.spatial["frames"][system.marker(load.marker)[0]].A * Fv
-            add(Fv, _marker_point(der, load.marker))
+            add(_point_force(der, load), _marker_point(der, load.marker))
         elif isinstance(load, Torque) and load.body in bodies:
             tau = _torque(der, load)
             Mo += der.spatial["frames"][load.body].A * tau if load.frame == "body" else tau
@@ -669,9 +669,7 @@ def _applied(der) -> sp.Matrix:
     names = _names(der)
     for load in system.loads:
         if isinstance(load, PointForce):
-            F = _vec((load.fx, load.fy, load.fz))
-            if load.frame == "body":
-                F = der.spatial["frames"][system.marker(load.marker)[0]].A * F
+            F = _point_force(der, load)
             p = _marker_point(der, load.marker)
             Q += sp.Matrix([F.dot(sp.diff(p, x)) for x in der.q])
         elif isinstance(load, Torque):  # virtual power tau . omega, omega in the body's axes
@@ -696,6 +694,12 @@ def _names(der) -> dict:
         if c.group == "joint":  # its name: the joint's, or J_slide (Joint.coordinates)
             names[c.name], names[f"{c.name}_rate"] = x, xd
     return names
+
+
+def _point_force(der, load: PointForce) -> sp.Matrix:
+    """A point force's vector in ground components (given in the ground's or its body's axes)."""
+    F = _vec((load.fx, load.fy, load.fz))
+    return der.spatial["frames"][der.system.marker(load.marker)[0]].A * F if load.frame == "body" else F
 
 
 def _torque(der, load: Torque, names=None) -> sp.Matrix:
@@ -780,10 +784,7 @@ def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     N; the turn would add v_x S_y + vz_x S_z, slope times shear)."""
     if fn[0] == "Q" or (fn != "N" and beam.model.moment == "equilibrium"):
         X = sp.Matrix([_frame_section(der, beam, x, ("S" if fn[0] == "Q" else "M") + k) for k in "xyz"])
-        L = der.spatial[beam.name]["P"]["L"]
-        theta = sp.Matrix([_at(der, beam.name, x, "phi"), -_at(der, beam.name, x, "vz_s") / L,
-                           _at(der, beam.name, x, "v_s") / L])
-        return (X - _cross(theta, X))["xyz".index(fn[1])]
+        return (X - _cross(_section_angles(der, beam.name, x), X))["xyz".index(fn[1])]
     return _frame_section(der, beam, x, fn)
 
 
