@@ -49,10 +49,22 @@ ORTHO_TOL = 1e-11  # |invariant| below this fraction of its scale is an exact ze
 
 @dataclass(frozen=True)
 class Section:
+    """An element's section and material. I resists bending along y (the planar I, the spatial
+    I_z); a spatial body's sections add Iy (bending along z), J (St Venant torsion) and G."""
+
     E: float
     rho: float
     A: float
     I: float
+    Iy: float | None = None
+    J: float | None = None
+    G: float | None = None
+
+    SPATIAL = ("Iy", "J", "G")
+
+    @property
+    def spatial(self) -> bool:
+        return self.Iy is not None
 
 
 @dataclass(frozen=True)
@@ -112,11 +124,19 @@ class BeamBody:
             if not (math.isfinite(b) and b > a):
                 raise SpecError(f"{where}: node {i + 1} at x = {b!r} does not follow node {i} "
                                 f"at x = {a!r} (nodes must increase along the axis)")
+        spatial = self.sections[0].spatial
         for e, sec in enumerate(self.sections):
-            for k in ("E", "rho", "A", "I"):
+            for k in ("E", "rho", "A", "I") + (Section.SPATIAL if spatial else ()):
                 v = getattr(sec, k)
                 if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                     raise SpecError(f"{where}: element {e}: {k} = {v!r} must be a positive number")
+            given = [k for k in Section.SPATIAL if getattr(sec, k) is not None]
+            if given and len(given) < 3 or bool(given) != spatial:
+                raise SpecError(f"{where}: element {e}: give Iy, J and G on every element of a "
+                                "spatial body, and on none of a planar one")
+        if spatial and any(m.rotary for m in self.masses):
+            raise SpecError(f"{where}: a point mass's rotary inertia is planar only (a spatial "
+                            "body's point masses are on its axis, mass only)")
         for pm in self.masses:
             if self.node_index(pm.x) is None:
                 raise SpecError(f"{where}: point mass at x = {pm.x!r} is not at a node")
@@ -150,18 +170,40 @@ class BeamBody:
     def s_nodes(self) -> np.ndarray:
         return np.array(self.nodes) / self.length
 
+    @property
+    def spatial(self) -> bool:
+        return self.reference.spatial
+
     def ratios(self) -> dict[str, np.ndarray]:
-        """Per element: rho A, E A, E I relative to the reference section."""
+        """Per element: rho A, E A, E I relative to the reference section; a spatial body's
+        also E I_y, G J and rho (I_y + I_z), the sections' spin inertia."""
         r = self.reference
-        return {"mu": np.array([s.rho * s.A for s in self.sections]) / (r.rho * r.A),
-                "ea": np.array([s.E * s.A for s in self.sections]) / (r.E * r.A),
-                "ei": np.array([s.E * s.I for s in self.sections]) / (r.E * r.I)}
+        out = {"mu": np.array([s.rho * s.A for s in self.sections]) / (r.rho * r.A),
+               "ea": np.array([s.E * s.A for s in self.sections]) / (r.E * r.A),
+               "ei": np.array([s.E * s.I for s in self.sections]) / (r.E * r.I)}
+        if self.spatial:
+            out |= {"eiy": np.array([s.E * s.Iy for s in self.sections]) / (r.E * r.Iy),
+                    "gj": np.array([s.G * s.J for s in self.sections]) / (r.G * r.J),
+                    "ip": np.array([s.rho * (s.Iy + s.I) for s in self.sections]) / (r.rho * (r.Iy + r.I))}
+        return out
+
+    def view(self, plane: str) -> "BeamBody":
+        """A spatial body's other equations as a planar body's, so that the same assembly and
+        modes serve: "z", bending along z (I = I_y); "torsion", St Venant torsion as the bar's
+        axial equation (E A -> G J, rho A -> rho (I_y + I_z); point masses on the axis have no
+        spin inertia)."""
+        if plane == "z":
+            secs = tuple(Section(s.E, s.rho, s.A, s.Iy) for s in self.sections)
+            return BeamBody(self.nodes, secs, tuple(PointMass(m.x, m.mass) for m in self.masses))
+        ip = [s.Iy + s.I for s in self.sections]
+        secs = tuple(Section(s.G * s.J / p, s.rho, p, s.I) for s, p in zip(self.sections, ip))
+        return BeamBody(self.nodes, secs)
 
     def to_dict(self) -> dict:
         """Canonical content (repr of every double): what generated code depends on."""
+        keys = ("E", "rho", "A", "I") + (Section.SPATIAL if self.spatial else ())
         d = {"nodes": [repr(float(x)) for x in self.nodes],
-             "sections": [[repr(float(getattr(s, k))) for k in ("E", "rho", "A", "I")]
-                          for s in self.sections],
+             "sections": [[repr(float(getattr(s, k))) for k in keys] for s in self.sections],
              "masses": [[repr(float(m.x)), repr(float(m.mass)), repr(float(m.rotary))]
                         for m in self.masses]}
         if self.matrices is not None:
@@ -301,6 +343,96 @@ def _compute_mode(body: BeamBody, axis: str, family: str, index: int) -> ShapeDa
         return ShapeData(axis, (0.0,) + tuple(float(v) for v in x), (), freq)
     return ShapeData(axis, (0.0,) + tuple(float(v) for v in x[0::2]),
                      (0.0,) + tuple(float(v) * L for v in x[1::2]), freq)
+
+
+# ----- geometric stiffness from unit inertial loads (spatial bodies) ----------------------
+# A frame's motion loads its undeformed body, per unit mass at r, with -(a + alpha x r +
+# omega x (omega x r)), a = the frame origin's acceleration minus gravity (all in the frame's
+# components): linear in twelve unit cases, as the SID standard input data hold them, the six
+# products omega_i omega_j, the three alpha_i and the three a_i. Each case's axial forces N_e
+# (a static solve of the clamped body) give its geometric stiffness sum_e N_e K_G,e (the
+# element's, eq. 8, in both bending planes), projected on the modes.
+AXES = "xyz"
+LOAD_CASES = (tuple(f"ww_{AXES[i]}{AXES[j]}" for i in range(3) for j in range(i, 3))
+              + tuple(f"al_{c}" for c in AXES) + tuple(f"a_{c}" for c in AXES))
+
+
+def load_case_field(case: str) -> tuple[np.ndarray, np.ndarray]:
+    """(C, d): the case's load per unit mass at r is -(C r + d)."""
+    C, d = np.zeros((3, 3)), np.zeros(3)
+    kind, axes = case.split("_")
+    k = [AXES.index(c) for c in axes]
+    if kind == "ww":  # omega x (omega x r) = (omega omega^T - |omega|^2 I) r
+        i, j = k
+        C[i, j] += 1.0
+        C[j, i] += 1.0 if i != j else 0.0
+        if i == j:
+            C -= np.eye(3)
+    elif kind == "al":  # alpha x r
+        e = np.eye(3)[k[0]]
+        C = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+    else:
+        d[k[0]] = 1.0
+    return C, d
+
+
+def load_case_scale(case: str) -> int:
+    """N of a unit case is rho A L^m times a number: m = 1 for a_i, 2 for the others."""
+    return 1 if case.startswith("a_") else 2
+
+
+def load_case_forces(body: BeamBody) -> dict[str, np.ndarray]:
+    """Per case, the axial force N_e of every element [N per unit case] of the clamped body:
+    K u = F on the axial dofs with the consistent nodal loads of the case's axial load
+    -(C r + d)_x rho A on the undeformed axis r = (x, 0, 0) and at the point masses, N_e =
+    E A (u_e+1 - u_e) / l. (Its transverse load bends the body and adds no axial force.)"""
+    M, K, _ = body.assembled
+    ax = np.arange(0, K.shape[0], 3)
+    Ka = K[np.ix_(ax, ax)]
+    gx, gw = gauss()
+    x = np.array(body.nodes)
+    out = {}
+    for case in LOAD_CASES:
+        C, d = load_case_field(case)
+        F = np.zeros(body.elements + 1)
+        for e, sec in enumerate(body.sections):
+            l = x[e + 1] - x[e]
+            xs = x[e] + l * gx
+            q = -(C[0, 0] * xs + d[0]) * sec.rho * sec.A * gw * l
+            F[e] += (q * (1 - gx)).sum()
+            F[e + 1] += (q * gx).sum()
+        for pm in body.masses:
+            F[body.node_index(pm.x)] += -(C[0, 0] * pm.x + d[0]) * pm.mass
+        u = np.concatenate([[0.0], np.linalg.solve(Ka, F[1:])])
+        out[case] = np.array([s.E * s.A for s in body.sections]) * np.diff(u) / np.diff(x)
+    return out
+
+
+def load_case_stiffness(body: BeamBody, shapes: list[ShapeData]) -> dict[str, np.ndarray]:
+    """The cases' geometric stiffness projected on bending modes (shapes, in one plane: the
+    element's K_G does not depend on I), over rho_ref A_ref L^(m-1) (load_case_scale): the
+    numbers D with V = 1/2 sum_c f_c rho A L^(m_c - 1) q^T D_c q; cases without axial force
+    left out."""
+    n, L, r = body.elements, body.length, body.reference
+    bend = np.array([3 * i + c for i in range(n) for c in (1, 2)])
+    Phi = np.zeros((2 * n, len(shapes)))
+    for k, sh in enumerate(shapes):
+        Phi[0::2, k] = sh.values[1:]
+        Phi[1::2, k] = np.array(sh.slopes[1:]) / L
+    out = {}
+    for case, N in load_case_forces(body).items():
+        scale = r.rho * r.A * L**load_case_scale(case)
+        if np.abs(N).max() <= ORTHO_TOL * scale:
+            continue
+        KG = np.zeros((3 * (n + 1), 3 * (n + 1)))
+        for e, sec in enumerate(body.sections):
+            _, _, kge = element_matrices(sec, body.nodes[e + 1] - body.nodes[e])
+            idx = np.arange(3 * e, 3 * e + 6)
+            KG[np.ix_(idx, idx)] += N[e] * kge
+        KG = KG[3:, 3:][np.ix_(bend, bend)]
+        D = Phi.T @ KG @ Phi / (scale / L)
+        out[case] = np.vectorize(round_sig)(D)
+    return out
 
 
 # ----- piecewise evaluation ------------------------------------------------------------
