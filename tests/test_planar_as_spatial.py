@@ -6,6 +6,7 @@ scene as the user wrote it. Open chains (S1 `hub`, S3 `pendulum`) have the same 
 both derivations: the rows agree to round-off, the casadi-differentiated spatial kinetic energy
 against the sympy-differentiated planar one. S0 is checked in test_spatial.py (the flap scene
 without gravity)."""
+import copy
 import tomllib
 from pathlib import Path
 
@@ -23,14 +24,16 @@ def spatial_twin(data: dict) -> dict:
     get a second bending plane (the same I: motion stays in the plane) and torsion, a rigid
     body's polar inertia I becomes [I/2, I/2, I] (a plate in the plane), g gets g_z = 0, a
     bending moment M is Mz and a joint's reaction moment is its mz."""
+    data = copy.deepcopy(data)
     twin = {k: v for k, v in data.items() if k not in ("body", "joint", "gravity", "output")}
     twin["system"] = dict(data["system"], name=data["system"]["name"] + "_3d", dimension=3)
     bodies = []
     for b in data["body"]:
         b = dict(b)
-        if b["kind"] == "beam":
-            b["inertia_z"] = b["inertia_y"] = b.pop("inertia")
-            b["torsion_constant"], b["shear_modulus"] = 2 * b["inertia_z"], 0.4 * b["youngs_modulus"]
+        if b["kind"] == "beam":  # a uniform beam's section, or each segment's
+            for sec in b.get("segments", [b]):
+                sec["inertia_z"] = sec["inertia_y"] = sec.pop("inertia")
+                sec["torsion_constant"], sec["shear_modulus"] = 2 * sec["inertia_z"], 0.4 * sec["youngs_modulus"]
         else:
             b["inertia"] = [b["inertia"] / 2, b["inertia"] / 2, b["inertia"]]
             for key in ("com",):

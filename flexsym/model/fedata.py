@@ -574,6 +574,8 @@ def round_sig(x: float, digits: int = SIG_DIGITS) -> float:
 
 SEGMENT_KEYS = {"length": "length", "density": "rho", "youngs_modulus": "E", "area": "A",
                 "inertia": "I"}
+SEGMENT_KEYS_3D = {"length": "length", "density": "rho", "youngs_modulus": "E", "area": "A",
+                   "inertia_z": "I", "inertia_y": "Iy", "torsion_constant": "J", "shear_modulus": "G"}
 DEFAULT_ELEMENTS = 100
 
 
@@ -586,23 +588,24 @@ def check_mesh_keys(r) -> None:
             r.fail(f"[body] {key}", f"must be an integer in 1..2000 (got {v!r})")
 
 
-def scene_body(r) -> BeamBody:
+def scene_body(r, spatial: bool = False) -> BeamBody:
     """The [body] table of a scene (r: scene._Reader): segments meshed with `elements` elements
-    (for the modes) and point masses. An imported folder is read by feimport.scene_folder."""
+    (for the modes) and point masses; a spatial beam's segments have the spatial section's keys
+    (SEGMENT_KEYS_3D). An imported folder is read by feimport.scene_folder."""
     tab = r.data["body"]
     check_mesh_keys(r)
+    keys = SEGMENT_KEYS_3D if spatial else SEGMENT_KEYS
     segs = tab.get("segments")
     if not isinstance(segs, list) or not segs or not all(isinstance(s, dict) for s in segs):
-        r.fail("[body] segments", "must be a non-empty list of tables {length, density, "
-               "youngs_modulus, area, inertia}")
+        r.fail("[body] segments", f"must be a non-empty list of tables {{{', '.join(keys)}}}")
     segments = []
     for i, seg in enumerate(segs):
         where = f"[body] segments[{i}]"
-        unknown = sorted(set(seg) - set(SEGMENT_KEYS))
+        unknown = sorted(set(seg) - set(keys))
         if unknown:
-            r.fail(f"{where} {unknown[0]}", f"unknown key (known: {', '.join(SEGMENT_KEYS)})")
+            r.fail(f"{where} {unknown[0]}", f"unknown key (known: {', '.join(keys)})")
         vals = {}
-        for key, short in SEGMENT_KEYS.items():
+        for key, short in keys.items():
             v = seg.get(key)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
                     or not MIN_POSITIVE <= v <= MAX_MAGNITUDE:

@@ -680,10 +680,16 @@ class System:
         for b in self.bodies:
             if not b.flexible:
                 continue
-            if b.model.body is not None:
-                raise SpecError(f"{where}: body '{b.name}': a beam from finite-element data is "
-                                "planar only so far")
+            body = b.model.body
+            if body is not None and not body.spatial:
+                raise SpecError(f"{where}: body '{b.name}': its finite-element data are planar (a "
+                                "spatial beam's elements need inertia_y, inertia_z, torsion_constant "
+                                "and shear_modulus)")
             if getattr(b.model, "kind", None) == "fe":
+                if body is not None and (len(set(body.sections)) > 1 or body.masses):
+                    raise SpecError(f"{where}: body '{b.name}': the spatial ef is a uniform rod; "
+                                    "this body's sections vary or carry point masses (run a modal "
+                                    "model, or give the uniform section)")
                 if b.damped:
                     raise SpecError(f"{where}: body '{b.name}': structural damping of a spatial ef "
                                     "beam is not derived yet (a modal beam's is)")
@@ -1019,27 +1025,30 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
     return fn, args
 
 
-def section_at(beam: FlexibleBeam, x: float) -> tuple[float, float]:
-    """(A, I) of the section at station x: the beam's, or for a body from finite-element data
-    its element's there (at a node, the element beyond it; at the tip, the last one)."""
+def section_at(beam: FlexibleBeam, x: float) -> tuple[float, float, float | None]:
+    """(A, I, Iy) of the section at station x (Iy: a spatial beam's, else None): the beam's, or
+    for a body from finite-element data its element's there (at a node, the element beyond
+    it; at the tip, the last one), the beam's section scaled as the run-time parameters are."""
     body = getattr(beam.model, "body", None)
+    sec = beam.section
     if body is None:
-        return beam.section.A, beam.section.I
+        return sec.A, sec.I, sec.Iy
     L = beam.length
     k = next((e for e in range(len(body.sections)) if x < body.nodes[e + 1] * L / body.length),
              len(body.sections) - 1)
-    ref = body.sections[0]
-    return (beam.section.A * body.sections[k].A / ref.A, beam.section.I * body.sections[k].I / ref.I)
+    ref, here = body.sections[0], body.sections[k]
+    return (sec.A * here.A / ref.A, sec.I * here.I / ref.I,
+            sec.Iy * here.Iy / ref.Iy if here.Iy is not None else sec.Iy)
 
 
 def section_point(beam: FlexibleBeam, x: float, texts, where: str) -> tuple[float, ...]:
     """(y,) of sigma(beam, x, y) or (y, z) of sigma(beam, x, y, z): numbers (m), each within
     SIGMA_REACH radii of gyration of the axis in its bending plane, sqrt(I/A) for y (I_z in 3D)
     and sqrt(I_y/A) for z (farther is outside any section with this A and I: a typing error)."""
-    A, I = section_at(beam, x)
+    A, I, Iy = section_at(beam, x)
     point = []
     names = ("I",) if len(texts) == 1 else ("Iz", "Iy")  # the planar I is the spatial I_z
-    for axis, text, Ik, name in zip("yz", texts, (I, beam.section.Iy), names):
+    for axis, text, Ik, name in zip("yz", texts, (I, Iy), names):
         try:
             c = float(text)
         except ValueError:

@@ -717,7 +717,7 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
         beam = system.body(args[0])
         x = beam_station(system, beam, args[1], where)
         y = exact(section_point(beam, x, args[2:], where)[0])
-        A_x, I_x = section_at(beam, x)  # the section there, as run-time parameters A, I scaled
+        A_x, I_x, _ = section_at(beam, x)  # the section there, as run-time parameters A, I scaled
         A_ = BEAM_PARAMS[2].symbol * exact(A_x / beam.section.A)
         I_ = BEAM_PARAMS[3].symbol * exact(I_x / beam.section.I)
         psyms = der.flex[beam.name].psyms

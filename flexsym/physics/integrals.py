@@ -124,7 +124,8 @@ class IntegralTable:
     # ----- section distributions (relative to the reference section p = [rho, E, A, I, L]) --
     def weight(self, kind: str) -> sp.Expr:
         """mu = rho A, ea = E A, ei = E I, nhat = centrifugal prestress N / (rho A w^2 L^2 / 2),
-        rot = rotary inertia of point masses: for the uniform beam 1, 1, 1, 1 - s^2, 0."""
+        rot = rotary inertia of point masses: for the uniform beam 1, 1, 1, 1 - s^2, 0; a
+        spatial beam's eiy = E I_y, gj = G J, ip = rho (I_y + I_z): 1."""
         return UNIFORM_WEIGHTS[kind]
 
     def weight_at(self, kind: str, at) -> sp.Expr:
@@ -260,7 +261,9 @@ class IntegralTable:
 
 
 UNIFORM_WEIGHTS = {"mu": sp.Integer(1), "ea": sp.Integer(1), "ei": sp.Integer(1),
-                   "nhat": 1 - s**2, "rot": sp.Integer(0)}
+                   "nhat": 1 - s**2, "rot": sp.Integer(0),
+                   # a spatial beam's: E I_y, G J, the sections' spin inertia rho (I_y + I_z)
+                   "eiy": sp.Integer(1), "gj": sp.Integer(1), "ip": sp.Integer(1)}
 
 
 class BodyIntegralTable(IntegralTable):

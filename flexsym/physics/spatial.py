@@ -68,11 +68,13 @@ from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, SpringDamper,
                                   System, Torque, beam_coordinates, beam_station, length_scale, parse_output,
-                                  section_point)
+                                  section_at, section_point)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
                                       damping_dissipation, joint_coordinate, spring_force_on_a,
                                       start_of, violation)
-from flexsym.physics.integrals import IntegralTable
+from flexsym.model.fedata import (body_mode, load_case_forces, load_case_scale, load_case_stiffness, locate,
+                                  round_sig)
+from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
 from flexsym.physics.spatial_ef import (ef_at, ef_body, ef_coordinates, ef_elastic_output,
@@ -132,57 +134,120 @@ def _params(system: System):
     return params, by_body
 
 
-def _fields(b: FlexibleBeam, sym: dict, symd: dict, symdd: dict, table: IntegralTable, fs: bool):
+def _beam_modes(b: FlexibleBeam) -> tuple[dict, dict]:
+    """(coordinate -> the key of its mode in the beam's table, key -> mode). A uniform beam's
+    two bending planes share its bending shapes and its torsion takes the bar's (the key is the
+    mode's own coordinate); a body from finite-element data has its own shapes per plane and
+    for torsion (fedata.BeamBody.view), keyed by the coordinate."""
+    body = b.model.body
+    names = beam_coordinates(b)
+    if body is None:
+        return {n: r.coordinate for n, _, r in names}, {r.coordinate: mode(r) for _, _, r in names}
+    views = {"u": body, "v": body, "vz": body.view("z"), "phi": body.view("torsion")}
+    return ({n: n for n, _, _ in names},
+            {n: body_mode(views[n.split("_")[0]], r) for n, _, r in names})
+
+
+def _fields(b: FlexibleBeam, sym: dict, symd: dict, symdd: dict, table: IntegralTable, fs: bool,
+            keys: dict):
     """(position r, velocity r', acceleration r'' in the frame, per unit s; and the strain
-    fields) as polynomials in the table's placeholders."""
-    spec = b.model
+    fields) as polynomials in the table's placeholders (keys: _beam_modes)."""
     L = BEAM_PARAMS[4].symbol
     mv = table.mode_value
+    groups = {"u": [], "v": [], "vz": [], "phi": []}
+    for n, _, _ in beam_coordinates(b):
+        groups[n.split("_")[0]].append(n)
 
-    def field(prefix_refs, sy, order=0):
-        return sum((mv(r.coordinate, order) * sy[name] for name, r in prefix_refs), sp.Integer(0))
+    def field(group, sy, order=0):
+        return sum((mv(keys[n], order) * sy[n] for n in groups[group]), sp.Integer(0))
 
-    ax = [(r.coordinate, r) for r in spec.axial]
-    bv = [(r.coordinate, r) for r in spec.bending]
-    bz = [("vz_" + r.token, r) for r in spec.bending]
-    tq = [("phi_" + r.token, r) for r in TORSION_MODES]
     F = {}
     for key, sy in (("", sym), ("_d", symd), ("_dd", symdd)):
-        F["u" + key] = field(ax, sy)
-        F["v" + key] = field(bv, sy)
-        F["vz" + key] = field(bz, sy)
-        F["phi" + key] = field(tq, sy)
-    F["u_stretch_s"] = field(ax, sym, 1)
-    F["v_s"], F["v_ss"] = field(bv, sym, 1), field(bv, sym, 2)
-    F["vz_s"], F["vz_ss"] = field(bz, sym, 1), field(bz, sym, 2)
-    F["phi_s"] = field(tq, sym, 1)
-    F["v_d_s"], F["vz_d_s"] = field(bv, symd, 1), field(bz, symd, 1)
+        for g in groups:
+            F[g + key] = field(g, sy)
+    F["u_stretch_s"] = field("u", sym, 1)
+    F["v_s"], F["v_ss"] = field("v", sym, 1), field("v", sym, 2)
+    F["vz_s"], F["vz_ss"] = field("vz", sym, 1), field("vz", sym, 2)
+    F["phi_s"] = field("phi", sym, 1)
+    F["v_d_s"], F["vz_d_s"] = field("v", symd, 1), field("vz", symd, 1)
     if fs:  # u_fs = -1/(2L) sum_ij H_ij(s) (v_i v_j + vz_i vz_j)
-        for pairs in (bv, bz):
-            for ni, ri in pairs:
-                for nj, rj in pairs:
-                    h = table.fs_value(ri.coordinate, rj.coordinate)
+        for plane in ("v", "vz"):
+            for ni in groups[plane]:
+                for nj in groups[plane]:
+                    h = table.fs_value(keys[ni], keys[nj])
                     F["u"] += -h * sym[ni] * sym[nj] / (2 * L)
                     F["u_d"] += -h * sym[ni] * symd[nj] / L
                     F["u_dd"] += -h * (symd[ni] * symd[nj] + sym[ni] * symdd[nj]) / L
     return F
 
 
-def _strain_density(term: str, F: dict, P: dict, omega: sp.Matrix) -> sp.Expr:
-    """A strain-energy term per unit s (P: this body's parameter symbols)."""
+def _strain_density(term: str, F: dict, P: dict, omega: sp.Matrix, w) -> sp.Expr:
+    """A strain-energy term per unit s (P: this body's parameter symbols, w: its table's
+    section distributions, IntegralTable.weight)."""
     L, E, A, Iz, Iy, G, J, rho = (P[k] for k in ("L", "E", "A", "I", "Iy", "G", "J", "rho"))
     slope2 = F["v_s"]**2 + F["vz_s"]**2
     if term == "axial":
-        return E * A / (2 * L) * F["u_stretch_s"]**2
+        return E * A * w("ea") / (2 * L) * F["u_stretch_s"]**2
     if term == "bending":
-        return (E * Iz * F["v_ss"]**2 + E * Iy * F["vz_ss"]**2) / (2 * L**3)
+        return (E * Iz * w("ei") * F["v_ss"]**2 + E * Iy * w("eiy") * F["vz_ss"]**2) / (2 * L**3)
     if term == "torsion":
-        return G * J / (2 * L) * F["phi_s"]**2
+        return G * J * w("gj") / (2 * L) * F["phi_s"]**2
     if term == "cubic":
-        return E * A / (2 * L**2) * F["u_stretch_s"] * slope2
+        return E * A * w("ea") / (2 * L**2) * F["u_stretch_s"] * slope2
     if term == "prestress":
         return rho * A * (omega[1]**2 + omega[2]**2) * L / 4 * (1 - s**2) * slope2
     raise SpecError(f"strain term '{term}' is not derived in 3D")
+
+
+def _load_case_factors(der, fr: Frame, cases) -> dict:
+    """The frame's actual value of each unit load case (fedata.LOAD_CASES): omega_i omega_j,
+    alpha_i = omega_i', and a_i, its origin's acceleration minus gravity (V' + omega x V - g),
+    in the frame's components (q'' appears where the frame moves freely)."""
+    om, out = fr.omega, {}
+    for case in cases:
+        kind, axes = case.split("_")
+        k = ["xyz".index(c) for c in axes]
+        if kind == "ww":
+            out[case] = om[k[0]] * om[k[1]]
+        elif kind == "al":
+            out[case] = der.ddt(om[k[0]])
+        else:
+            out[case] = (der.ddt(fr.V) + _cross(om, fr.V) - fr.g)[k[0]]
+    return out
+
+
+def _load_case_energy(der, b: FlexibleBeam) -> sp.Expr:
+    """The prestress of a body from finite-element data: V = 1/2 sum_c f_c rho A L^(m_c - 1)
+    q^T D_c q on each bending plane's coordinates, D_c the geometric stiffness of unit load
+    case c projected on the plane's modes (fedata.load_case_stiffness), f_c its frame's
+    actual motion (_load_case_factors): the stiffening follows the frame's rotation, angular
+    and linear acceleration and gravity, whatever they are."""
+    d = der.spatial[b.name]
+    P, sym, keys, modes = d["P"], d["sym"], d["keys"], d["modes"]
+    V = sp.Integer(0)
+    for plane in ("v", "vz"):
+        names = [n for n, g, _ in beam_coordinates(b) if g == "bending" and n.split("_")[0] == plane]
+        D = load_case_stiffness(b.model.body, [modes[keys[n]].shape for n in names])
+        f = _load_case_factors(der, der.spatial["frames"][b.name], D)
+        qv = sp.Matrix([sym[n] for n in names])
+        for case, Dc in D.items():
+            Dm = sp.Matrix(Dc.shape[0], Dc.shape[1], [sp.Float(repr(float(v)), 17) for v in Dc.ravel()])
+            V += f[case] * P["rho"] * P["A"] * P["L"]**(load_case_scale(case) - 1) * (qv.T * Dm * qv)[0, 0] / 2
+    return sp.expand(V)
+
+
+def _load_case_axial_force(der, b: FlexibleBeam, fr: Frame, x: float) -> sp.Expr:
+    """N at station x of a body from finite-element data under its frame's inertial load: the
+    unit load cases' element forces there (the element beyond a node) times the frame's
+    values, scaled by the run-time rho A L^m (fedata.load_case_forces)."""
+    body, P = b.model.body, der.spatial[b.name]["P"]
+    e = int(locate(body, np.array([x / b.length]), +1)[0])
+    r, Lb = body.reference, body.length
+    forces = {c: N[e] for c, N in load_case_forces(body).items()}
+    f = _load_case_factors(der, fr, [c for c, v in forces.items() if v])
+    return sp.Add(*[f[c] * P["rho"] * P["A"] * P["L"]**load_case_scale(c)
+                    * sp.Float(repr(round_sig(forces[c] / (r.rho * r.A * Lb**load_case_scale(c)))), 17)
+                    for c in f])
 
 
 def derive_spatial(system: System) -> SystemDerivation:
@@ -225,13 +290,14 @@ def derive_spatial(system: System) -> SystemDerivation:
         if b.flexible and not is_ef(b):
             strain = STRAIN_MODELS[b.model.validate().strain]
             names = beam_coordinates(b)
-            modes = {r.coordinate: mode(r) for _, _, r in names}
-            table = IntegralTable(modes)
+            keys, modes = _beam_modes(b)
+            body = b.model.body
+            table = IntegralTable(modes) if body is None else BodyIntegralTable(body, modes)
             sym, symd, symdd = ({n: sp.Symbol(f"{b.name}_{n}{k}", real=True) for n, _, _ in names}
                                 for k in ("", "_d", "_dd"))
-            F = _fields(b, sym, symd, symdd, table, strain.foreshortening)
-            der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=psyms[b.name],
-                                       r=sp.Matrix([psyms[b.name]["L"] * s + F["u"], F["v"], F["vz"]]))
+            F = _fields(b, sym, symd, symdd, table, strain.foreshortening, keys)
+            der.spatial[b.name] = dict(F=F, table=table, modes=modes, keys=keys, P=psyms[b.name],
+                                       sym=sym, r=sp.Matrix([psyms[b.name]["L"] * s + F["u"], F["v"], F["vz"]]))
 
     grav = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0))
     frames = {GROUND: Frame(sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1), _vec(grav))}
@@ -291,6 +357,7 @@ def derive_spatial(system: System) -> SystemDerivation:
         strain = STRAIN_MODELS[b.model.strain]
         F, table, modes, r = (der.spatial[b.name][k] for k in ("F", "table", "modes", "r"))
         L, rho, A = P["L"], P["rho"], P["A"]
+        w = table.weight
         rd = sp.Matrix([F["u_d"], F["v_d"], F["vz_d"]])
         vel = vf + rd + _cross(om, r)  # in the placeholders: short expansions, short integrals
         spin = F["phi_d"] + om[0] + (om[1] * F["v_s"] + om[2] * F["vz_s"]) / L
@@ -299,11 +366,15 @@ def derive_spatial(system: System) -> SystemDerivation:
             generic = {gp.symbol: P[gp.name] for gp in BEAM_PARAMS}
             return table.integrate(sp.expand(density), a, b_).xreplace(table.substitutions()).xreplace(generic)
 
-        der.frame_T.append((integral(rho * A * L / 2 * vel.dot(vel)
-                                     + rho * (P["Iy"] + P["I"]) * L / 2 * spin**2), actual))
-        V_grav += -rho * A * L * gvec.dot(fr.R) - integral(rho * A * L * fr.g.dot(r))
+        der.frame_T.append((integral(rho * A * L / 2 * w("mu") * vel.dot(vel)
+                                     + rho * (P["Iy"] + P["I"]) * L / 2 * w("ip") * spin**2), actual))
+        V_grav += (-integral(rho * A * L * w("mu")) * gvec.dot(fr.R)
+                   - integral(rho * A * L * w("mu") * fr.g.dot(r)))
         for term_name, wrt in strain.terms + (("torsion", ("torsion",)),):
-            Vt = integral(_strain_density(term_name, F, P, fr.omega))
+            if term_name == "prestress" and b.model.body is not None:
+                Vt = _load_case_energy(der, b)  # the unit inertial load cases (fedata)
+            else:
+                Vt = integral(_strain_density(term_name, F, P, fr.omega, w))
             Qk = generalized_force(Vt, q, [c.body == b.name and c.group in wrt for c in coords])
             der.terms.append((b.name, term_name, wrt, Vt, Qk))
             der.V += Vt
@@ -320,8 +391,13 @@ def derive_spatial(system: System) -> SystemDerivation:
         if isinstance(load, SpringDamper):
             Q_ += add_spring(der, load, _spring_ends(der, load))
     Q_ += _applied(der)
+    # a force that reads a free frame's acceleration (a body's unit load cases) is part of M
+    B = Q_.jacobian(qdd)
+    Q_ = Q_.xreplace(dict.fromkeys(qdd, 0))
+    der.V = der.V.xreplace(dict.fromkeys(qdd, 0))  # V holds such terms at q'' = 0
     der.Q = Q_.applyfunc(sp.expand)
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
+    der.M = (der.M - B).applyfunc(sp.expand)
     _cut_rows(der)
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
@@ -355,10 +431,11 @@ def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral) -> sp
     both bending planes, torsion) and the relative kinetic energy (translation and the
     section's spin, as T holds them) of the undeformed beam's elastic rates."""
     rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n, _, _ in beam_coordinates(b)}
-    R = _fields(b, rate, rate, rate, table, False)  # fields linear in the rates
-    K2 = integral(sum(_strain_density(t, R, P, None) for t in ("axial", "bending", "torsion")))
-    M2 = integral(P["rho"] * P["A"] * P["L"] / 2 * (R["u"]**2 + R["v"]**2 + R["vz"]**2)
-                  + P["rho"] * (P["Iy"] + P["I"]) * P["L"] / 2 * R["phi"]**2)
+    R = _fields(b, rate, rate, rate, table, False, _beam_modes(b)[0])  # linear in the rates
+    w = table.weight
+    K2 = integral(sum(_strain_density(t, R, P, None, w) for t in ("axial", "bending", "torsion")))
+    M2 = integral(P["rho"] * P["A"] * P["L"] / 2 * w("mu") * (R["u"]**2 + R["v"]**2 + R["vz"]**2)
+                  + P["rho"] * (P["Iy"] + P["I"]) * P["L"] / 2 * w("ip") * R["phi"]**2)
     return damping_dissipation(b.damping, K2, M2, list(rate.values()))
 
 
@@ -551,8 +628,9 @@ def _momentum(der, bodies=None) -> sp.Matrix:
         L = P["L"]
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
         Rl = sp.Matrix(sp.symbols(f"{b.name}_R_x {b.name}_R_y {b.name}_R_z", real=True))
-        dens = P["rho"] * P["A"] * L * _cross(Rl + d["r"], d["vel"]) \
-            + P["rho"] * (P["Iy"] + P["I"]) * L * d["spin"] * tangent
+        w = d["table"].weight
+        dens = P["rho"] * P["A"] * L * w("mu") * _cross(Rl + d["r"], d["vel"]) \
+            + P["rho"] * (P["Iy"] + P["I"]) * L * w("ip") * d["spin"] * tangent
         now = d["actual"] | dict(zip(Rl, fr.A.T * fr.R))  # substituted after integrating
         H += fr.A * sp.Matrix([d["integral"](e).xreplace(now) for e in dens])
     return H
@@ -569,9 +647,10 @@ def _first_moment(der, bodies) -> tuple[sp.Expr, sp.Matrix]:
             mass, S = mass + m, S + m * (fr.R + fr.A * _vec(b.com))
             continue
         d = der.spatial[name]
-        m = d["P"]["rho"] * d["P"]["A"] * d["P"]["L"]
+        mu = d["P"]["rho"] * d["P"]["A"] * d["P"]["L"] * d["table"].weight("mu")
+        m = d["integral"](mu)
         mass += m
-        S += m * fr.R + fr.A * sp.Matrix([d["integral"](m * e) for e in d["r"]])
+        S += m * fr.R + fr.A * sp.Matrix([d["integral"](mu * e) for e in d["r"]])
     return mass, S
 
 
@@ -772,7 +851,9 @@ def _sigma(der, beam: FlexibleBeam, x: float, point, where: str) -> sp.Expr:
     P = der.spatial[beam.name]["P"]
     section = ef_section if is_ef(beam) else _section
     N, My, Mz = (section(der, beam, x, f) for f in ("N", "My", "Mz"))
-    return N / P["A"] - Mz * y / P["I"] + My * z / P["Iy"]
+    sec = beam.section  # the section at x, as the run-time parameters scaled (section_at)
+    A, Iz, Iy = (P[k] * exact(v / getattr(sec, k)) for k, v in zip(("A", "I", "Iy"), section_at(beam, x)))
+    return N / A - Mz * y / Iz + My * z / Iy
 
 
 def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
@@ -807,18 +888,22 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     source = "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment
     if source != "equilibrium":
         L = P["L"]
+        at = exact(x) / exact(beam.length)
+        w = lambda kind: d["table"].weight_at(kind, at)  # noqa: E731 (the section there)
         if fn == "N":
             if beam.model.strain == "prestress":
-                at = exact(x) / exact(beam.length)
-                om = der.spatial["frames"][beam.name].omega
+                fr = der.spatial["frames"][beam.name]
+                if beam.model.body is not None:  # the unit load cases' axial forces there
+                    return _load_case_axial_force(der, beam, fr, x)
+                om = fr.omega
                 return P["rho"] * P["A"] * (om[1]**2 + om[2]**2) * L**2 * (1 - at**2) / 2
             if not beam.model.axial:
                 raise SpecError(f"system '{der.system.name}': body '{beam.name}': strain model "
                                 f"'{beam.model.strain}' has no axial coordinate to carry N")
-            return P["E"] * P["A"] / L * _at(der, beam.name, x, "u_stretch_s")
-        return {"Mx": P["G"] * P["J"] / L * _at(der, beam.name, x, "phi_s"),
-                "My": -P["E"] * P["Iy"] / L**2 * _at(der, beam.name, x, "vz_ss"),
-                "Mz": P["E"] * P["I"] / L**2 * _at(der, beam.name, x, "v_ss")}[fn]
+            return P["E"] * P["A"] * w("ea") / L * _at(der, beam.name, x, "u_stretch_s")
+        return {"Mx": P["G"] * P["J"] * w("gj") / L * _at(der, beam.name, x, "phi_s"),
+                "My": -P["E"] * P["Iy"] * w("eiy") / L**2 * _at(der, beam.name, x, "vz_ss"),
+                "Mz": P["E"] * P["I"] * w("ei") / L**2 * _at(der, beam.name, x, "v_ss")}[fn]
     # equilibrium of the part beyond x: S = int (g - a) rho A dx + loads on its markers,
     # M = int (r - r_x) x rho A (g - a) dx - d/dt int rho (I_y + I_z) spin t dx + load moments
     # the acceleration in the frame's components, a = a_0 + alpha x r + omega x (omega x r)
@@ -833,7 +918,8 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
     rdd = sp.Matrix([F["u_dd"], F["v_dd"], F["vz_dd"]])
     acc = a0 + _cross(al, r) + _cross(om, _cross(om, r)) + 2 * _cross(om, rd) + rdd
     L, rho, A = P["L"], P["rho"], P["A"]
-    load = rho * A * L * (gl - acc)
+    w = d["table"].weight
+    load = rho * A * L * w("mu") * (gl - acc)
     force, k = fn[0] == "S", "xyz".index(fn[1])
     if force:
         out = d["integral"](load[k], at, 1)
@@ -849,7 +935,7 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
         h_rate = (spin_rate * tangent + d["spin"] * sp.Matrix([0, F["v_d_s"] / L, F["vz_d_s"] / L])
                   + _cross(om, d["spin"] * tangent))
-        out = d["integral"](mom[k] - rho * (P["Iy"] + P["I"]) * L * h_rate[k], at, 1)
+        out = d["integral"](mom[k] - rho * (P["Iy"] + P["I"]) * L * w("ip") * h_rate[k], at, 1)
     omega = fr.omega
     now = (d["actual"] | dict(zip(al, der.ddt(omega))) | dict(zip(gl, fr.g))
            | dict(zip(a0, der.ddt(fr.V) + _cross(omega, fr.V))))

@@ -81,7 +81,7 @@ KEYS = {
     "system": {"name", "description", "start", "dimension"},
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
     "beam": {"name", "kind", "model", "markers", "damping", *UNIFORM_KEYS, *FE_KEYS},
-    "beam3": {"name", "kind", "model", "markers", "damping", *SPATIAL_KEYS},
+    "beam3": {"name", "kind", "model", "markers", "damping", *SPATIAL_KEYS, *FE_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial", "direction"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
@@ -266,32 +266,29 @@ def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path, dim: int 
         return RigidBody(name, r.number(where, tab, "mass"), inertia,
                          r.pair(where, tab, "com", default=(0.0,) * dim, n=dim),
                          _markers(r, where, tab, False, dim))
-    if dim == 3:
-        spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
-                      "--model" if model is not None else None)
-        num = {key: r.number(where, tab, key, positive=True) for key in SPATIAL_KEYS}
-        section = Section(num["density"], num["youngs_modulus"], num["area"], num["inertia_z"],
-                          Iy=num["inertia_y"], J=num["torsion_constant"], G=num["shear_modulus"])
-        return FlexibleBeam(name, num["length"], section, spec, _markers(r, where, tab, True),
-                            _damping(r, where, tab))
     spec = _model(r, f"{where} model", tab.get("model") if model is None else model,
                   "--model" if model is not None else None)
     markers = _markers(r, where, tab, True)
     damping = _damping(r, where, tab)
+    uniform_keys = SPATIAL_KEYS if dim == 3 else UNIFORM_KEYS
     if "segments" not in tab and "folder" not in tab:
         extra = [key for key in FE_KEYS if key in tab]
         if extra:
             r.fail(f"{where} {extra[0]}", "applies to a beam from finite-element data only (give "
-                   "segments or folder instead of length, density, youngs_modulus, area, inertia)")
-        section = Section(*(r.number(where, tab, key, positive=True)
-                            for key in ("density", "youngs_modulus", "area", "inertia")))
-        return FlexibleBeam(name, r.number(where, tab, "length", positive=True), section, spec, markers,
-                            damping)
-    uniform = [key for key in UNIFORM_KEYS if key in tab]
+                   f"segments or folder instead of {', '.join(uniform_keys)})")
+        num = {key: r.number(where, tab, key, positive=True) for key in uniform_keys}
+        section = (Section(num["density"], num["youngs_modulus"], num["area"], num["inertia_z"],
+                           Iy=num["inertia_y"], J=num["torsion_constant"], G=num["shear_modulus"])
+                   if dim == 3 else Section(*(num[key] for key in UNIFORM_KEYS[1:])))
+        return FlexibleBeam(name, num["length"], section, spec, markers, damping)
+    uniform = [key for key in uniform_keys if key in tab]
     if uniform:
-        r.fail(f"{where} {uniform[0]}", "give either length, density, youngs_modulus, area, "
-               "inertia (a uniform beam) or segments / folder (finite-element data), not both")
-    body = _fe_body(r, where, tab, base)
+        r.fail(f"{where} {uniform[0]}", f"give either {', '.join(uniform_keys)} (a uniform beam) or "
+               "segments / folder (finite-element data), not both")
+    body = _fe_body(r, where, tab, base, dim == 3)
+    if body.spatial != (dim == 3):
+        r.fail(f"{where} folder", f"its elements are {'spatial' if body.spatial else 'planar'}, the "
+               f"system is {'spatial' if dim == 3 else 'planar'} (dimension = {dim})")
     ref = body.reference
     if spec.kind == "fe":  # ef: the body remeshed, as the one-beam scene's --model ef
         given = tab.get("model") if model is None else None
@@ -305,8 +302,8 @@ def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path, dim: int 
         spec.validate()
     except SpecError as exc:
         r.fail(f"{where} model", str(exc))
-    return FlexibleBeam(name, body.length, Section(ref.rho, ref.E, ref.A, ref.I), spec, markers,
-                        damping)
+    return FlexibleBeam(name, body.length, Section(ref.rho, ref.E, ref.A, ref.I, ref.Iy, ref.J, ref.G),
+                        spec, markers, damping)
 
 
 def _damping(r: _Items, where: str, tab: dict) -> Damping | None:
@@ -339,13 +336,13 @@ class _BodyData:
         return self.r.string(f"{self.where}", self.data[table], key)
 
 
-def _fe_body(r: _Items, where: str, tab: dict, base: Path):
+def _fe_body(r: _Items, where: str, tab: dict, base: Path, spatial: bool = False):
     from flexsym.model.fedata import scene_body
     from flexsym.scenes.feimport import scene_folder
 
     reader = _BodyData(r, where, tab, base)
     if "folder" not in tab:
-        return scene_body(reader)
+        return scene_body(reader, spatial)
     try:
         return scene_folder(reader)
     except _Located:

@@ -43,7 +43,28 @@ void sim_drive(sim* s, double t, double* d)
     for (int j = 0; j < nd; ++j) d[j] = s->drive_v[k][j];
 }
 
-/* M(q, d) into Mraw and, with factor, its Cholesky factor into Mfac; once when M is constant. */
+/* Is A (n x n) symmetric to rounding? Every model's M is by construction, but for a body's
+ * prestress that reads its free frame's acceleration (its q'' moved into M). */
+static int symmetric(const double* A, int n)
+{
+    double big = 0.0, off = 0.0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            big = fmax(big, fabs(A[i * n + j]));
+            off = fmax(off, fabs(A[i * n + j] - A[j * n + i]));
+        }
+    return off <= 1e-13 * big;
+}
+
+/* M^-1 b in place with the factor in Mfac. */
+static void mass_solve(const sim* s, double* b)
+{
+    if (s->mass_lu) fsr_lu_solve(s->Mfac, s->n, s->mpiv, b);
+    else fsr_chol_solve(s->Mfac, s->n, b);
+}
+
+/* M(q, d) into Mraw and, with factor, its Cholesky (or, not symmetric, LU) factor into Mfac;
+ * once when M is constant. */
 fsr_status sim_mass(sim* s, double t, const double* q, const double* d, int factor)
 {
     int n = s->n, constant = s->m->mass_constant;
@@ -54,10 +75,15 @@ fsr_status sim_mass(sim* s, double t, const double* q, const double* d, int fact
     }
     if (!factor || (constant && s->mass_factored)) return FSR_OK;
     memcpy(s->Mfac, s->Mraw, sizeof(double) * (size_t)n * (size_t)n);
-    int k = fsr_chol_factor(s->Mfac, n);
-    if (k) return sim_fail(s, FSR_SINGULAR, "mass matrix not positive definite at t = %.6g s (pivot %d, %s)",
-                           t, k, s->m->coord_names[k - 1]);
-    if (constant && s->bw < 0) fsr_chol_inverse(s->Mfac, n, s->Minv, s->tmp);
+    s->mass_lu = !symmetric(s->Mraw, n);
+    int k = s->mass_lu ? fsr_lu_factor(s->Mfac, n, s->mpiv) : fsr_chol_factor(s->Mfac, n);
+    if (k) return sim_fail(s, FSR_SINGULAR, "mass matrix %s at t = %.6g s (pivot %d, %s)",
+                           s->mass_lu ? "singular" : "not positive definite", t, k,
+                           s->m->coord_names[k - 1]);
+    if (constant && s->bw < 0) {
+        if (s->mass_lu) fsr_lu_inverse(s->Mfac, n, s->mpiv, s->Minv, s->tmp);
+        else fsr_chol_inverse(s->Mfac, n, s->Minv, s->tmp);
+    }
     s->mass_factored = 1;
     return FSR_OK;
 }
@@ -72,7 +98,7 @@ fsr_status sim_accel(sim* s, double t, const double* q, const double* v, double*
     s->m->force(q, v, drive, s->o->p, a);
     s->r->force_evaluations++;
     if (s->m->mass_constant && s->bw < 0) sim_apply_inverse(s, s->Minv, s->n, a);
-    else fsr_chol_solve(s->Mfac, s->n, a);
+    else mass_solve(s, a);
     return FSR_OK;
 }
 
@@ -189,7 +215,7 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsm_system* m, const
     size_t base = 5 * nn + 2 * NN + (size_t)m->ny + (size_t)s->N + 4 * (size_t)n + work;
     size_t drives = (size_t)(DW_COUNT + 2) * (size_t)m->nd;  /* after the rest, at mem + base */
     double* mem = malloc(sizeof(double) * (base + drives));
-    s->piv = malloc(sizeof(int) * (size_t)s->N);
+    s->piv = malloc(sizeof(int) * (size_t)(s->N + n));
     s->ms = it->state_size ? calloc(1, it->state_size) : NULL;
     if (!r->rows || !mem || !s->piv || (it->state_size && !s->ms)) {
         free(mem);
@@ -199,6 +225,8 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsm_system* m, const
         s->ms = NULL;
         return sim_fail(s, FSR_NO_MEMORY, "out of memory for %ld output rows", s->capacity);
     }
+    s->mpiv = s->piv + s->N;
+    s->mass_lu = 0;
     s->Mraw = mem;
     s->Mfac = mem + nn;
     s->Jq = mem + 2 * nn;
@@ -253,7 +281,7 @@ static void mass_inverse_stiffness(void* ctx, const double* x, double* z)
 {
     sim* s = ctx;
     fsr_matvec(s->Jq, s->n, -1, x, z);
-    fsr_chol_solve(s->Mfac, s->n, z);
+    mass_solve(s, z);
 }
 
 fsr_status sim_omega_max(sim* s, double* scratch, double* omega)

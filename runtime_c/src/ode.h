@@ -32,7 +32,7 @@ typedef struct sim {
     long nsteps;   /* grid points t_k = k dt, t_nsteps = t_end */
     long next_row; /* grid index of the next output row; nsteps + 1 when all are written */
     double* Mraw;  /* mass matrix as evaluated */
-    double* Mfac;  /* its Cholesky factor */
+    double* Mfac;  /* its Cholesky factor, or its LU factor (mass_lu) */
     double* Minv;  /* its inverse, when constant and dense */
     double* S;     /* Newton iteration matrix (N x N), LU-factored */
     double* Sinv;  /* its inverse, when dense */
@@ -46,6 +46,9 @@ typedef struct sim {
     void* ms;      /* what the integrator carries from step to step (its state_size) */
     double* dense; /* 2n: a state between steps, for rows */
     int* piv;
+    int* mpiv;     /* n: the pivots of M's LU factor */
+    int mass_lu;   /* M is not symmetric (a body's prestress that reads its free frame's
+                      acceleration, physics/spatial.py): Mfac is its LU factor */
     int mass_have, mass_factored; /* only trusted when the mass is constant */
     int nd;        /* drive vector d = [t, theta, theta', theta'', ...] */
     double* dw;    /* drive vectors of the callers (DW_*), nd each */
