@@ -420,19 +420,68 @@ def load_case_stiffness(body: BeamBody, shapes: list[ShapeData]) -> dict[str, np
         Phi[0::2, k] = sh.values[1:]
         Phi[1::2, k] = np.array(sh.slopes[1:]) / L
     out = {}
-    for case, N in load_case_forces(body).items():
+    for case, KG in load_case_geometric(body).items():
         scale = r.rho * r.A * L**load_case_scale(case)
-        if np.abs(N).max() <= ORTHO_TOL * scale:
+        D = Phi.T @ KG[np.ix_(bend, bend)] @ Phi / (scale / L)
+        out[case] = np.vectorize(round_sig)(D)
+    return out
+
+
+def load_case_geometric(body: BeamBody) -> dict[str, np.ndarray]:
+    """Per case with an axial force, its geometric stiffness sum_e N_e K_G,e [N/m per unit
+    case] over the free dofs (u, v, theta of nodes 1..n; K_G,e does not depend on I, so it is
+    either bending plane's)."""
+    n, r = body.elements, body.reference
+    out = {}
+    for case, N in load_case_forces(body).items():
+        if np.abs(N).max() <= ORTHO_TOL * r.rho * r.A * body.length**load_case_scale(case):
             continue
         KG = np.zeros((3 * (n + 1), 3 * (n + 1)))
         for e, sec in enumerate(body.sections):
             _, _, kge = element_matrices(sec, body.nodes[e + 1] - body.nodes[e])
             idx = np.arange(3 * e, 3 * e + 6)
             KG[np.ix_(idx, idx)] += N[e] * kge
-        KG = KG[3:, 3:][np.ix_(bend, bend)]
-        D = Phi.T @ KG @ Phi / (scale / L)
-        out[case] = np.vectorize(round_sig)(D)
+        out[case] = KG[3:, 3:]
     return out
+
+
+# ----- a spatial body's matrices (the folder format's, feimport.py) -----------------------
+# Six dofs per free node, as finite-element programs write them: u axial, v and w the
+# deflections along y and z, phi the twist, theta_y = -dw/dx and theta_z = dv/dx (rotations
+# about the axes, right-hand rule). The equations decouple: the planar body's (u; v, theta_z),
+# the view "z"'s bending (w, -theta_y) and the view "torsion"'s bar (phi).
+SPATIAL_DOFS = ("u", "v", "w", "phi", "theta_y", "theta_z")
+_PLANES = {"y": ((0, 0, 1.0), (1, 1, 1.0), (2, 5, 1.0)),  # (planar dof, spatial dof, sign)
+           "z": ((1, 2, 1.0), (2, 4, -1.0)),  # bending only: u is the y plane's
+           "torsion": ((0, 3, 1.0),)}
+
+
+def _to_spatial(n: int, planes: dict[str, np.ndarray]) -> np.ndarray:
+    """Planar matrices over the free dofs (u, v, theta of nodes 1..n) placed in the spatial
+    layout (SPATIAL_DOFS of nodes 1..n), each plane's dofs as _PLANES maps them."""
+    out = np.zeros((6 * n, 6 * n))
+    for plane, mat in planes.items():
+        src = np.array([3 * i + a for i in range(n) for a, _, _ in _PLANES[plane]])
+        dst = np.array([6 * i + b for i in range(n) for _, b, _ in _PLANES[plane]])
+        sign = np.array([c for _ in range(n) for _, _, c in _PLANES[plane]])
+        out[np.ix_(dst, dst)] += sign[:, None] * mat[np.ix_(src, src)] * sign[None, :]
+    return out
+
+
+def spatial_matrices(body: BeamBody) -> tuple[np.ndarray, np.ndarray]:
+    """(M, K) of a spatial body over the free dofs SPATIAL_DOFS of nodes 1..n: consistent mass
+    with the point masses (on u, v, w), linear stiffness; per element the 12-dof spatial
+    element (axial bar, Hermite bending in both planes, torsion bar: G J / l [1 -1; -1 1],
+    rho I_p l / 6 [2 1; 1 2])."""
+    views = {"y": body.assembled, "z": body.view("z").assembled,
+             "torsion": body.view("torsion").assembled}
+    return tuple(_to_spatial(body.elements, {p: m[k] for p, m in views.items()}) for k in (0, 1))
+
+
+def spatial_load_case_geometric(body: BeamBody) -> dict[str, np.ndarray]:
+    """load_case_geometric in the spatial layout: the bending blocks of both planes."""
+    return {case: _to_spatial(body.elements, {"y": KG, "z": KG})
+            for case, KG in load_case_geometric(body).items()}
 
 
 # ----- piecewise evaluation ------------------------------------------------------------
