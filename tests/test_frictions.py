@@ -149,10 +149,15 @@ def test_output_piped_into_head_ends_quietly(tmp_path):
 
 def test_fe_export_of_a_mechanism_and_elements_beside_a_folder_are_refused(capsys, tmp_path):
     """fe-export on a system scene was a traceback; `elements` next to an imported `folder`
-    was silently ignored (the folder's mesh was used whatever it said)."""
-    code, _, err = run_cli(capsys, "fe-export", SCENES / "stepped_hub.toml", "--out", tmp_path / "fe")
-    assert code == 2 and err.count("\n") == 1 and "a system scene" in err
+    was silently ignored (the folder's mesh was used whatever it said). A system scene's one
+    beam from finite-element data is exported (planar or spatial); a scene without one, or
+    with several, is refused in one line."""
+    code, _, err = run_cli(capsys, "fe-export", SCENES / "hub.toml", "--out", tmp_path / "fe")
+    assert code == 2 and err.count("\n") == 1 and "0 beams from finite-element data" in err
     assert not (tmp_path / "fe").exists()
+    assert run_cli(capsys, "fe-export", SCENES / "stepped_hub.toml", "--out", tmp_path / "hub_fe")[0] == 0
+    assert run_cli(capsys, "fe-export", SCENES / "flap_mesh.toml", "--out", tmp_path / "flap_fe")[0] == 0
+    assert (tmp_path / "flap_fe" / "KG_ww_yy.mtx").exists()
     assert run_cli(capsys, "fe-export", SCENES / "stepped_blade.toml", "--out", tmp_path / "fe")[0] == 0
     text = (SCENES / "stepped_blade.toml").read_text()
     start = text.index("[body]")

@@ -215,3 +215,19 @@ def test_malformed_spatial_mesh_is_refused_in_one_line(tmp_path, capsys, what, e
     start, end = text.index("length = 10.0"), text.index("model = \"m3\"")
     scene.write_text(text[:start] + "elements = 40\n" + SEGMENTS + "\n" + text[end:])
     refused_in_one_line(capsys, edited_scene(tmp_path, what, scene, edits), says)
+
+
+def test_a_spatial_folder_in_a_scene_is_the_mesh_it_was_written_from(tmp_path):
+    """`folder = "..."` on a spatial [[body]] reads the spatial folder format (feimport) into
+    the same body as the scene's segments: equal digest, so the same derivation and rows."""
+    from flexsym.scenes.feimport import write_folder
+    from flexsym.scenes.scene import load_scene
+
+    mesh = load_scene(ROOT / "scenes" / "flap_mesh.toml").system.body("blade").model.body
+    write_folder(mesh, tmp_path / "blade_fe")
+    text = (ROOT / "scenes" / "flap_mesh.toml").read_text()
+    start, end = text.index("elements = 40"), text.index("model = \"prestress\"")
+    scene = tmp_path / "flap_folder.toml"
+    scene.write_text(text[:start] + "folder = \"blade_fe\"\n" + text[end:])
+    body = load_scene(scene).system.body("blade").model.body
+    assert body.spatial and body == mesh and body.digest == mesh.digest

@@ -412,15 +412,21 @@ def cmd_fe_export(args) -> int:
         raise SpecError(f"--out {out}: already exists (choose a new folder)")
     check_output_dir(out, "--out")
     scene = load_scene(args.scene)
-    if getattr(scene, "system", None) is not None:  # a mechanism: its beams are [[body]] entries
-        raise SpecError(f"{args.scene}: a system scene; fe-export writes the [body] of a one-beam "
-                        "scene (give a beam's segments in a one-beam scene, such as "
-                        "scenes/stepped_blade.toml, and export that)")
-    body = getattr(scene.spec, "body", None)
-    if body is None:
-        raise SpecError(f"{args.scene}: has no [body] table to export")
+    system = getattr(scene, "system", None)
+    if system is not None:  # a mechanism: its one beam from finite-element data
+        meshes = [b.model.body for b in system.bodies if b.flexible and b.model.body is not None]
+        if len(meshes) != 1:
+            raise SpecError(f"{args.scene}: has {len(meshes)} beams from finite-element data "
+                            "(segments or folder); fe-export writes a scene's one such beam")
+        body = meshes[0]
+    else:
+        body = getattr(scene.spec, "body", None)
+        if body is None:
+            raise SpecError(f"{args.scene}: has no [body] table to export")
     folder = write_folder(body, out)
-    print(f"{body.summary()}: written to {folder} (body.toml, M.mtx, K.mtx, KG.mtx)")
+    order = {"body.toml": 0, "M.mtx": 1, "K.mtx": 2}  # then the KG files
+    files = sorted((p.name for p in folder.iterdir()), key=lambda n: (order.get(n, 3), n))
+    print(f"{body.summary()}: written to {folder} ({', '.join(files)})")
     return 0
 
 

@@ -700,10 +700,7 @@ def summary(system: System) -> str:
                     f"model {b.model.name}")
             if b.model.kind == "modal":
                 what += f" (N {b.model.axial_force}, M {b.model.moment})"
-            if getattr(b.model, "body", None) is not None:
-                what = what.replace(", rho", ", root section rho").replace(
-                    "beam L", f"beam from finite-element data ({b.model.body.summary()}), L")
-            what += _damping_text(b)
+            what = _mesh_text(b, what) + _damping_text(b)
         else:
             what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
         lines.append(f"  {b.name}: {what}; frame ({X:.6g}, {Y:.6g}, {phi:.6g}); markers {marks}")
@@ -734,6 +731,15 @@ def summary(system: System) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _mesh_text(b, what: str) -> str:
+    """A beam's description, said to be from finite-element data (its root section) if it is."""
+    body = getattr(b.model, "body", None)
+    if body is None:
+        return what
+    return what.replace(", rho", ", root section rho").replace(
+        "beam L", f"beam from finite-element data ({body.summary()}), L")
+
+
 def _damping_text(b) -> str:
     """'; damping zeta ..., alpha ..., beta ...' of a damped beam (empty if undamped)."""
     if not b.damped:
@@ -754,7 +760,8 @@ def _summary3(system: System) -> str:
             s_ = b.section
             what = (f"beam L = {b.length:g} m, rho {s_.rho:g}, E {s_.E:g}, G {s_.G:g}, A {s_.A:g}, "
                     f"I_z {s_.I:g}, I_y {s_.Iy:g}, J {s_.J:g}; model {b.model.name} "
-                    f"(N {b.model.axial_force}, M {b.model.moment})") + _damping_text(b)
+                    f"(N {b.model.axial_force}, M {b.model.moment})")
+            what = _mesh_text(b, what) + _damping_text(b)
         else:
             what = (f"rigid m = {b.mass:g} kg, principal inertia ({', '.join(f'{v:g}' for v in b.inertia)}) "
                     f"kg m^2, com ({', '.join(f'{c:g}' for c in b.com)})")
