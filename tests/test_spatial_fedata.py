@@ -100,9 +100,8 @@ def test_each_plane_and_the_torsion_have_their_closed_form_frequencies():
 
 
 @pytest.fixture(scope="module")
-def flap_pair(tmp_path_factory):
+def flap_pair():
     """S5 as the scene has it, and from a 40-element mesh of its blade."""
-    tmp = tmp_path_factory.mktemp("flap")
     data = tomllib.loads((ROOT / "scenes" / "flap.toml").read_text())
     blade = next(b for b in data["body"] if b["kind"] == "beam")
     mesh = {k: v for k, v in blade.items() if k not in

@@ -2,14 +2,15 @@
 spanning tree (sympy): the 3D sibling of assemble.py, producing the same SystemDerivation, so
 that sysgen.py, the templates and the runtime take it unchanged.
 
-What is derived so far: rigid bodies, uniform modal beams and the geometrically exact `ef`
+What is derived so far: rigid bodies, modal beams (uniform, or from finite-element data:
+fedata.BeamBody, below) and the geometrically exact `ef`
 (spatial_ef.py) joined in a tree by revolute, prismatic and cylindrical joints (axes fixed in
 the parent's frame; axis_motion), spherical joints (Euler parameters on |e| = 1, a constraint
 row) and clamps, with loops closed by spherical and universal joints (_cut_rows), guided or
 motor-driven, under gravity, point forces, torques and spring-dampers, modal beams with
 structural damping; a body may hang from a rigid body or from a modal beam's marker (the
-deformed section's frame, _section_frame). What is not (bodies from finite-element data, an
-ef beam's damping, ...) is refused up front by System.validate.
+deformed section's frame, _section_frame). What is not (an ef beam's damping, ...) is refused
+up front by System.validate.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
@@ -38,6 +39,12 @@ out, as the spatial benchmarks define it):
     K_G in both planes from the axial modes), prestress 1/2 int N(x) (v_x^2 + vz_x^2) with
     N = rho A (omega_y^2 + omega_z^2)(L^2 - x^2)/2 (the centrifugal load of the frame's actual
     rotation about the axes across the beam).
+A beam from finite-element data: each term carries its section distribution (the table's
+weights: rho A with the point masses, EA, EI_z, EI_y, GJ, rho (I_y + I_z)), each plane and the
+torsion have their own modes from the mesh (_beam_modes), and prestress is the geometric
+stiffness of the twelve unit inertial load cases projected on the modes times the frame's
+actual omega_i omega_j, alpha_i and a_i (_load_case_energy); where a_i reads a free frame's
+q'', that part of the force joins M (not symmetric then: the runtime factors it by LU).
 What the generalisation keeps and drops: the bending planes couple only through the frame's
 motion, the foreshortening and the cubic term (both planes in one stretch); torsion is
 linear and couples to bending only through omega.t in T (the propeller moment of a section
@@ -66,7 +73,7 @@ from flexsym.model.exact_numbers import exact
 from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
-from flexsym.model.system import (GROUND, TORSION_MODES, FlexibleBeam, Gravity, PointForce, SpringDamper,
+from flexsym.model.system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper,
                                   System, Torque, beam_coordinates, beam_station, length_scale, parse_output,
                                   section_at, section_point)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
@@ -380,7 +387,7 @@ def derive_spatial(system: System) -> SystemDerivation:
             der.V += Vt
             Q_ += Qk
         if b.damped:  # D in the elastic rates (assemble.damping_dissipation), Q -= dD/dq'
-            der.dissipation[b.name] = _dissipation(b, P, table, integral)
+            der.dissipation[b.name] = _dissipation(b, P, table, integral, der.spatial[b.name]["keys"])
             Q_ -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
                                    integral=integral, om=om, vf=vf, actual=actual)
@@ -426,12 +433,12 @@ def axis_motion(j, coordinates) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Mat
     return Q, rel, slide, v_rel
 
 
-def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral) -> sp.Expr:
+def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict) -> sp.Expr:
     """D of a damped spatial modal beam: as in the plane, from the strain-rate energy (axial,
     both bending planes, torsion) and the relative kinetic energy (translation and the
     section's spin, as T holds them) of the undeformed beam's elastic rates."""
     rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n, _, _ in beam_coordinates(b)}
-    R = _fields(b, rate, rate, rate, table, False, _beam_modes(b)[0])  # linear in the rates
+    R = _fields(b, rate, rate, rate, table, False, keys)  # fields linear in the rates
     w = table.weight
     K2 = integral(sum(_strain_density(t, R, P, None, w) for t in ("axial", "bending", "torsion")))
     M2 = integral(P["rho"] * P["A"] * P["L"] / 2 * w("mu") * (R["u"]**2 + R["v"]**2 + R["vz"]**2)
@@ -448,7 +455,7 @@ def _section_frame(der, fb: Frame, beam: str, x: float) -> Frame:
     angular velocity relative to the beam frame, in its own axes: R_x^T R_y^T theta_z' e_z +
     R_x^T theta_y' e_y + theta_x' e_x."""
     th = _section_angles(der, beam, x)
-    Rx, Ry, Rz = (rotation(axis, angle) for axis, angle in zip(((1, 0, 0), (0, 1, 0), (0, 0, 1)), th))
+    Rx, Ry, Rz = _section_turns(th)
     rate = [der.ddt(t_) for t_ in th]
     rel = (Rx.T * Ry.T * sp.Matrix([0, 0, rate[2]]) + Rx.T * sp.Matrix([0, rate[1], 0])
            + sp.Matrix([rate[0], 0, 0]))
@@ -490,14 +497,21 @@ def _start_values(der) -> dict:
     return vals
 
 
+def _section_turns(th: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
+    """(R_x, R_y, R_z) of a section's angles theta: its axes are the beam frame's turned by
+    S = R_z R_y R_x, a rotation (orthonormal, unlike I + [theta]x), equal to it to first order."""
+    return tuple(rotation(axis, angle) for axis, angle in zip(((1, 0, 0), (0, 1, 0), (0, 0, 1)), th))
+
+
 def _section_rotation(der, ref: str) -> sp.Matrix:
     """Ground <- section axes at 'body.marker' (a beam's: the frame turned by the section's
-    rotation theta = (phi, -vz_x, v_x), to first order as the modal kinematics)."""
+    rotation S = R_z R_y R_x of theta = (phi, -vz_x, v_x), as a hung body's, _section_frame)."""
     body, m = der.system.marker(ref)
     fr = der.spatial["frames"][body]
     if not der.system.body(body).flexible:
         return fr.A
-    return fr.A * (sp.eye(3) + _skew(_section_angles(der, body, m.x)))
+    Rx, Ry, Rz = _section_turns(_section_angles(der, body, m.x))
+    return fr.A * Rz * Ry * Rx
 
 
 def _section_angles(der, beam: str, x: float) -> sp.Matrix:
