@@ -113,7 +113,8 @@ def flap_pair():
     return data, fe
 
 
-@pytest.mark.parametrize("model,tol", [("prestress", 1e-3), ("m3", 1e-6)])
+@pytest.mark.parametrize("model,tol", [("prestress", 1e-3),
+                                       pytest.param("m3", 1e-6, marks=pytest.mark.study)])  # 30 s
 def test_flap_from_a_mesh_agrees_with_the_analytic_modes(flap_pair, model, tol):
     """S5 for 20 s: the mesh's prestress (unit load cases) within 1e-3 of each peak of the
     analytic prestress (issue target 1 %; measured v_tip 1.3e-4, w_tip 3.7e-5, the root
