@@ -213,6 +213,20 @@ def test_the_output_follows_the_cardan_joints_closed_form(hooke, dt):
     assert np.abs(r["s"] - D).max() < 1e-12 and np.abs(r["viol"]).max() < 1e-9
 
 
+def test_inspect_and_the_units_name_both_angles():
+    """`flexsym inspect`'s system section lists the joint's two coordinates with their arms, and
+    the outputs' units follow each coordinate's motion (Joint.coordinates)."""
+    from flexsym.model.system import output_unit
+    from flexsym.scenes.system_scene import summary
+
+    system = system_from_dict(cardan(), name="cardan")
+    text = summary(system)
+    assert "  u: universal inshaft.fork -> outshaft.m, u: turn about (0, 0, 1), u_angle2: turn about (0, 1, 0)\n" in text
+    assert "  ball: spherical outshaft.end -> collar.c [closes a loop]\n" in text
+    assert [output_unit(system, q) for q in ("angle(u)", "rate(u)", "angle2(u)", "rate2(u)", "angle(guide)")] == \
+        ["rad", "rad/s", "rad", "rad/s", "m"]
+
+
 # ----- a universal joint between two moving bodies
 def _chain() -> dict:
     """An arm free about the vertical (revolute hub) and a bob on a universal joint at its end
