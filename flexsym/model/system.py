@@ -747,7 +747,8 @@ class System:
         where = f"system '{self.name}': joint '{j.name}'"
         if j.name not in tree.cut and j.parent_axis is None:
             raise SpecError(f"{where}: a universal joint in the tree needs parent_axis (three numbers, "
-                            "the first turn's axis in the parent's frame, across axis)")
+                            "the first turn's axis in the parent's frame, across axis; to close a "
+                            "loop, list it after the joints of the tree)")
         if j.name in tree.cut and j.parent_axis is not None:
             raise SpecError(f"{where}: closes a loop: parent_axis applies to a universal joint in the "
                             "tree (closing a loop, its cross axis is taken across axis and the "
