@@ -214,7 +214,7 @@ BAD = [  # (what, scene, edits of its text, what the one line says)
     ("planar moment output", FLAP, [('M_flap_A = "My(blade, root)"', 'M_flap_A = "M(blade, root)"')],
      "M is not derived for spatial systems yet (use Mx, My or Mz"),
     ("a universal joint in the tree", FLAP, [('kind = "revolute"', 'kind = "universal"')],
-     "a universal joint is derived as the joint that closes a loop only"),
+     "joint 'hub_joint': a universal joint in the tree needs parent_axis"),
     ("dimension 4", FLAP, [("dimension = 3", "dimension = 4")], "dimension: must be 2 (planar) or 3"),
     ("an orientation with one axis", FLAP, [('v_tip = "v(blade, tip)"', 'v_tip = "R(blade.tip, x)"')],
      "needs ('body.marker', i, j) with i, j each x, y or z"),

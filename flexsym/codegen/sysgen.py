@@ -381,10 +381,10 @@ def ef_elements(der: SystemDerivation) -> list[dict]:
 
 def _unbounded(system: System, c) -> bool:
     """A coordinate the runtime's blow-up limit (blowup x the length scale, in m) does not
-    bound: a revolute or cylindrical joint's angle (it may turn without end), an ANCF node's
-    slope (no unit)."""
+    bound: a joint's angle (a revolute, cylindrical or universal joint's turn: it may turn
+    without end), an ANCF node's slope (no unit)."""
     if c.group == "joint":
-        return any(x[0] == c.name and x[1] == "turn" for x in system.joint(c.joint).coordinates)
+        return any(x.name == c.name and x.motion == "turn" for x in system.joint(c.joint).coordinates)
     return c.group == "node" and c.name.rsplit("_", 1)[-1].startswith("d")
 
 

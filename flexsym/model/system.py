@@ -18,6 +18,7 @@ import math
 import re
 from collections import deque
 from dataclasses import dataclass, field, fields, replace
+from typing import NamedTuple
 
 from flexsym.core.errors import SpecError
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
@@ -35,7 +36,9 @@ STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
 DRIVER_KINDS = ("guided", "motor")
 OUTPUT_FUNCTIONS = {  # name -> what its first argument names
     "angle": "joint", "rate": "joint", "reaction": "joint", "torque": "driver",
-    "slide": "joint", "slide_rate": "joint",  # a cylindrical joint's second coordinate (Joint.coordinates)
+    # a joint's second coordinate (SECOND, Joint.coordinates): a cylindrical joint's slide, a
+    # universal joint's second angle (in the tree)
+    "slide": "joint", "slide_rate": "joint", "angle2": "joint", "rate2": "joint",
     "x": "marker", "y": "marker",
     "v": "beam", "u": "beam", "w": "beam", "N": "beam", "M": "beam", "sigma": "beam",
     # spatial systems only: the marker's ground z, the deflection along the beam frame's z, and
@@ -50,10 +53,17 @@ SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "R", "Hx", "Hy", "Hz")
 PLANAR_ONLY = ("M", "torque", "momentum")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
+PERPENDICULAR = 1e-9  # |cos| of a universal joint's two axes above this: not across each other
 # reaction(joint, c) per dimension: the force's ground components, then the moment about the
 # joint's child point (the plane's one, or its ground components)
 REACTION_COMPONENTS = {2: ("x", "y", "moment"), 3: ("x", "y", "z", "mx", "my", "mz")}
-_OUTPUT_RE = re.compile(r"\s*([A-Za-z_]+)\s*(?:\((.*)\))?\s*\Z")
+# A joint's second coordinate, by its kind (Joint.coordinates): its motion, what it is, and
+# the Joint fields of its value and rate at t = 0, which are also its initial table's keys and
+# its outputs' functions; the value's field names it: J_slide, J_angle2 (the result column;
+# with J_slide_rate, J_angle2_rate the names expressions use)
+SECOND = {"cylindrical": ("slide", "slide", "slide", "slide_rate"),
+          "universal": ("turn", "second angle", "angle2", "rate2")}
+_OUTPUT_RE = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:\((.*)\))?\s*\Z")
 
 
 def _finite(v) -> bool:
@@ -337,6 +347,16 @@ def _check_markers(where, markers, dimension: int = 2):
                             "lie in the x-y plane")
 
 
+class JointCoordinate(NamedTuple):
+    """One coordinate of a joint (Joint.coordinates)."""
+
+    name: str
+    motion: str  # "turn" about its axis or "slide" along it
+    value: float  # at t = 0 (a guess the assembly may move)
+    rate: float | None  # at t = 0 (None: 0, or what the loops need)
+    axis: tuple  # a direction (normalised where used), in the frame it moves in (Joint.coordinates)
+
+
 @dataclass(frozen=True)
 class Joint:
     """parent, child: 'body.marker', or 'ground' (then `point` is the ground point).
@@ -348,8 +368,11 @@ class Joint:
     child's frame parallel to the parent's at t = 0, `rate` its angular velocity relative to the
     parent then (three numbers, parent's frame); cylindrical (spatial systems): a revolute's
     turn about `axis` and a prismatic's slide along it, `initial`/`rate` the angle's and
-    `slide`/`slide_rate` the slide's (Joint.coordinates names them). `initial`: the coordinate
-    at t = 0, a guess that the assembly at t = 0
+    `slide`/`slide_rate` the slide's; universal (spatial systems): closing a loop, the child's
+    `axis` (child's frame) stays across a cross axis fixed in the parent (no coordinate); in
+    the tree, two turns in series, about `parent_axis` (parent's frame) by the angle
+    `initial`/`rate`, then about `axis` (child's frame) by `angle2`/`rate2` (Joint.coordinates
+    names them all). `initial`: the coordinate at t = 0, a guess that the assembly at t = 0
     (flexsym/scenes/assembly.py) may move to close the loops, unless `fixed`; `rate`: its rate
     at t = 0 when given (None: 0, or what the loops need)."""
 
@@ -366,25 +389,41 @@ class Joint:
     direction: tuple | None = None  # spatial spherical: the child's x axis at t = 0 (parent's frame)
     slide: float = 0.0  # cylindrical: the slide's initial value (m) ...
     slide_rate: float | None = None  # ... and its rate at t = 0 (m/s; None: 0, or what the loops need)
+    parent_axis: tuple | None = None  # universal in the tree: the first turn's axis (parent's frame)
+    angle2: float = 0.0  # universal in the tree: the second angle (about axis) at t = 0 (rad) ...
+    rate2: float | None = None  # ... and its rate (rad/s; None: 0, or what the loops need)
 
     @property
     def has_coordinate(self) -> bool:
-        return self.kind in ("revolute", "prismatic", "cylindrical")
+        return bool(self.coordinates)
 
     @property
-    def coordinates(self) -> tuple[tuple[str, str, float, float | None], ...]:
-        """(name, motion, value at t = 0, rate at t = 0 or None) of each of the joint's
-        coordinates, in the order of q: the one place they are named. A revolute joint's angle
-        ("turn" about its axis) and a prismatic joint's displacement ("slide" along it) carry
-        the joint's name (outputs angle(J), rate(J); initial, rate); a cylindrical joint has
-        both, the turn first: the angle named J as a revolute's, the slide J_slide (outputs
-        slide(J), slide_rate(J); initial slide, slide_rate)."""
-        if self.kind == "cylindrical":
-            return ((self.name, "turn", self.initial, self.rate),
-                    (f"{self.name}_slide", "slide", self.slide, self.slide_rate))
+    def coordinates(self) -> tuple[JointCoordinate, ...]:
+        """The joint's coordinates in the order of q, each moving the child in series after the
+        ones before it: the one place they are named. A revolute joint's angle (a turn about its
+        axis, default z) and a prismatic joint's displacement (a slide along it) carry the
+        joint's name (outputs angle(J), rate(J); initial, rate); a joint with two (SECOND)
+        names its second J_<field>: a cylindrical joint turns about its axis, then slides along
+        it (J_slide: slide(J), slide_rate(J); initial slide, slide_rate); a universal joint in
+        the tree (it has parent_axis) turns about parent_axis, then about axis in the turned
+        frame, the child's (J_angle2: angle2(J), rate2(J); initial angle2, rate2). A universal
+        joint closing a loop, a spherical joint (Euler parameters, physics/spatial.py) and a
+        clamp have none."""
+        axis = self.axis or (0.0, 0.0, 1.0)  # a revolute's default (_check_joint: the others need one)
         if self.kind in ("revolute", "prismatic"):
-            return ((self.name, "turn" if self.kind == "revolute" else "slide", self.initial, self.rate),)
+            return (JointCoordinate(self.name, "turn" if self.kind == "revolute" else "slide",
+                                    self.initial, self.rate, axis),)
+        if self.kind == "cylindrical" or (self.kind == "universal" and self.parent_axis is not None):
+            motion, _, value, rate = SECOND[self.kind]
+            first = self.parent_axis if self.kind == "universal" else axis
+            return (JointCoordinate(self.name, "turn", self.initial, self.rate, first),
+                    JointCoordinate(f"{self.name}_{value}", motion, getattr(self, value),
+                                    getattr(self, rate), axis))
         return ()
+
+    def fields_of(self, coordinate: str) -> tuple[str, str]:
+        """The Joint fields of a coordinate's value and rate at t = 0 (Joint.coordinates)."""
+        return ("initial", "rate") if coordinate == self.name else SECOND[self.kind][2:]
 
 
 @dataclass(frozen=True)
@@ -519,8 +558,8 @@ class System:
         taken = {"t": "the time", "violation": "the constraint violation", "T": "the kinetic energy",
                  "V": "the potential energy", "h": "the energy's step error"}
         taken |= {j.name: f"joint '{j.name}'" for j in self.joints if isinstance(j, Joint)}
-        taken |= {c[0]: f"the slide of joint '{j.name}'" for j in self.joints if isinstance(j, Joint)
-                  for c in j.coordinates if c[0] != j.name}
+        taken |= {c.name: f"the {SECOND[j.kind][1]} of joint '{j.name}'" for j in self.joints
+                  if isinstance(j, Joint) for c in j.coordinates if c.name != j.name}
         taken |= {f"{j.name}_e{k}": f"an Euler parameter of joint '{j.name}'" for j in self.joints
                   if isinstance(j, Joint) and j.kind == "spherical" for k in range(4)}
         for b in self.bodies:
@@ -606,9 +645,7 @@ class System:
                                 "may close a loop: a spherical or universal joint listed after the "
                                 "tree's)")
         for j in self.joints if n == 3 else ():
-            if j.kind == "universal" and j.name not in tree.cut:
-                raise SpecError(f"{where}: joint '{j.name}': a universal joint is derived as the joint "
-                                "that closes a loop only (list it after the joints of the tree)")
+            self._check_universal(j, tree)
         guided = set()
         for d in self.drivers:
             self._check_driver(d, tree, guided)
@@ -670,8 +707,8 @@ class System:
 
     def _check_spatial(self) -> None:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
-        before any work: revolute, prismatic, cylindrical, spherical and clamp joints in a tree, uniform modal beams or
-        the geometrically exact ef (rod3d, undamped)."""
+        before any work: revolute, prismatic, cylindrical, universal, spherical and clamp joints
+        in a tree, uniform modal beams or the geometrically exact ef (rod3d, undamped)."""
         where = f"system '{self.name}'"
         for j in self.joints:
             if j.kind not in SPATIAL_JOINT_KINDS:
@@ -699,6 +736,23 @@ class System:
                                 f"derived in 3D (derived: {', '.join(SPATIAL_STRAINS)})")
             if b.model.axial_force == "equilibrium" or b.model.moment == "equilibrium":
                 pass  # N and the moments from equilibrium are derived in 3D
+
+    def _check_universal(self, j: Joint, tree: Tree) -> None:
+        """A universal joint in the tree turns about its parent_axis and its axis (two
+        coordinates, Joint.coordinates); one closing a loop takes its cross axis from the
+        assembled start (physics/spatial._cut_rows), so a parent_axis there is refused rather
+        than silently replaced."""
+        if j.kind != "universal":
+            return
+        where = f"system '{self.name}': joint '{j.name}'"
+        if j.name not in tree.cut and j.parent_axis is None:
+            raise SpecError(f"{where}: a universal joint in the tree needs parent_axis (three numbers, "
+                            "the first turn's axis in the parent's frame, across axis; to close a "
+                            "loop, list it after the joints of the tree)")
+        if j.name in tree.cut and j.parent_axis is not None:
+            raise SpecError(f"{where}: closes a loop: parent_axis applies to a universal joint in the "
+                            "tree (closing a loop, its cross axis is taken across axis and the "
+                            "parent's x at t = 0)")
 
     def _check_magnitudes(self) -> None:
         """Every number of the system: a real number (not bool, complex, str, None), finite and
@@ -768,16 +822,21 @@ class System:
         if n == 3 and j.kind == "universal" and j.axis is None:
             raise SpecError(f"{where}: a universal joint needs its child's axis (three numbers, in the "
                             "child's frame)")
+        if j.parent_axis is not None:
+            self._check_parent_axis(j, where)
         if n == 3 and j.offset != 0:
             raise SpecError(f"{where}: offset (a planar angle) does not apply to spatial joints: "
                             "the child's frame starts parallel to the parent's")
-        for key in ("offset", "initial", "slide"):
+        for key in ("offset", "initial") + tuple(v[2] for v in SECOND.values()):
             if not _finite(getattr(j, key)):
                 raise SpecError(f"{where}: {key} {getattr(j, key)!r} must be a finite number")
-        if j.kind != "cylindrical" and (j.slide != 0 or j.slide_rate is not None):
-            raise SpecError(f"{where}: slide and slide_rate apply to cylindrical joints only")
-        if j.slide_rate is not None and not _finite(j.slide_rate):
-            raise SpecError(f"{where}: slide_rate {j.slide_rate!r} must be a finite number")
+        own = SECOND[j.kind][2:] if len(j.coordinates) == 2 else ()
+        for kind, (_, _, value, rate) in SECOND.items():  # a second coordinate's start values
+            if (value, rate) != own and (getattr(j, value) != 0 or getattr(j, rate) is not None):
+                raise SpecError(f"{where}: {value} and {rate} apply to {kind} joints only"
+                                + (" in the tree (with parent_axis)" if kind == "universal" else ""))
+            if getattr(j, rate) is not None and not _finite(getattr(j, rate)):
+                raise SpecError(f"{where}: {rate} {getattr(j, rate)!r} must be a finite number")
         if j.kind == "spherical":
             if n == 2:
                 raise SpecError(f"{where}: a spherical joint applies to spatial systems "
@@ -794,6 +853,9 @@ class System:
             raise SpecError(f"{where}: rate {j.rate!r} must be a finite number")
         if not isinstance(j.fixed, bool):
             raise SpecError(f"{where}: fixed {j.fixed!r} must be true or false")
+        if j.kind == "universal" and not j.has_coordinate and (j.initial or j.fixed or j.rate is not None):
+            raise SpecError(f"{where}: initial, rate and fixed apply to a universal joint in the tree "
+                            "(with parent_axis); one closing a loop has no coordinate")
         if (j.fixed or j.rate is not None) and not j.has_coordinate and j.kind != "spherical":
             raise SpecError(f"{where}: a {j.kind} joint has no coordinate to fix or give a rate")
         if j.kind == "clamp" and j.initial != 0:
@@ -801,6 +863,24 @@ class System:
                             "clamp has no coordinate; use offset for its angle)")
         if (j.parent == GROUND or any(j.point)) and (len(j.point) != n or not all(_finite(c) for c in j.point)):
             raise SpecError(f"{where}: point {j.point!r} must be {('two', 'three')[n - 2]} finite numbers")
+
+    def _check_parent_axis(self, j: Joint, where: str) -> None:
+        """A tree universal joint's parent_axis: a direction, across its axis (the cross: the
+        child starts parallel to its parent, so the two axes are given in one frame)."""
+        a1, a2 = j.parent_axis, j.axis
+        if j.kind != "universal" or self.dimension != 3:
+            raise SpecError(f"{where}: parent_axis applies to universal joints of spatial systems only "
+                            "(the first turn's axis of one in the tree)")
+        if (not isinstance(a1, (tuple, list)) or len(a1) != 3 or not all(_finite(a) for a in a1)
+                or math.hypot(*a1) < MIN_AXIS):
+            raise SpecError(f"{where}: parent_axis {a1!r} must be three finite numbers, not shorter "
+                            f"than {MIN_AXIS:g} (a direction in the parent's frame)")
+        cos = sum(x * y for x, y in zip(a1, a2)) / (math.hypot(*a1) * math.hypot(*a2))
+        if abs(cos) > PERPENDICULAR:
+            raise SpecError(f"{where}: parent_axis {list(a1)} and axis {list(a2)} are "
+                            f"{math.degrees(math.acos(max(-1.0, min(1.0, cos)))):.6g} degrees apart: a "
+                            "universal joint's two axes cross at right angles (the child starts "
+                            "parallel to its parent, so both are given in one frame)")
 
     def _check_driver(self, d: Driver, tree: Tree, guided: set) -> None:
         where = f"system '{self.name}': driver '{d.name}'"
@@ -811,8 +891,8 @@ class System:
         j = self.joint(d.joint)
         if not j.has_coordinate:
             raise SpecError(f"{where}: joint '{d.joint}' is a {j.kind} (no coordinate to drive)")
-        if j.kind == "cylindrical":  # a law per coordinate, and which one: not derived
-            raise SpecError(f"{where}: joint '{d.joint}' is cylindrical: a driver on it is not derived "
+        if len(j.coordinates) > 1:  # a law per coordinate, and which one: not derived
+            raise SpecError(f"{where}: joint '{d.joint}' is {j.kind}: a driver on it is not derived "
                             "yet (drive a revolute or prismatic joint)")
         if d.joint in tree.cut:
             raise SpecError(f"{where}: joint '{d.joint}' is a cut joint (it closes a loop); drive "
@@ -891,7 +971,8 @@ class System:
 
 
 _SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2,
-                     "direction": None, "slide": 0.0, "slide_rate": None}
+                     "direction": None, "slide": 0.0, "slide_rate": None, "parent_axis": None,
+                     "angle2": 0.0, "rate2": None}
 
 
 def system_to_dict(system: System) -> dict:
@@ -989,10 +1070,15 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
             raise SpecError(f"{where}: needs one joint name")
         if fn in ("angle", "rate") and not system.joint(args[0]).has_coordinate:
             raise SpecError(f"{where}: joint '{args[0]}' has no coordinate")
-        if fn in ("slide", "slide_rate") and system.joint(args[0]).kind != "cylindrical":
-            raise SpecError(f"{where}: {fn}(J) is a cylindrical joint's slide, and '{args[0]}' is a "
-                            f"{system.joint(args[0]).kind} joint (a prismatic joint's displacement "
-                            "is angle(J), its rate rate(J))")
+        owner = next((k for k, v in SECOND.items() if fn in v[2:]), None)  # a second coordinate's
+        j = system.joint(args[0])
+        if owner is not None and (j.kind != owner or len(j.coordinates) != 2):
+            hint = {"cylindrical": "a prismatic joint's displacement is angle(J), its rate rate(J)",
+                    "universal": "a revolute joint's angle is angle(J), its rate rate(J)"}[owner]
+            raise SpecError(f"{where}: {fn}(J) is a {owner} joint's {SECOND[owner][1]}"
+                            + (" (in the tree)" if owner == "universal" else "")
+                            + f", and '{args[0]}' is a {j.kind} joint"
+                            + (" closing a loop" if j.kind == owner else "") + f" ({hint})")
     elif kind == "driver":
         if len(args) != 1 or args[0] not in {d.name for d in system.drivers}:
             raise SpecError(f"{where}: needs one driver name")
@@ -1066,15 +1152,15 @@ def section_point(beam: FlexibleBeam, x: float, texts, where: str) -> tuple[floa
 def output_unit(system: System, quantity: str) -> str:
     """The SI unit of an output quantity (for summaries, CSV readers and plot axes)."""
     fn, args = parse_output(system, quantity)
-    if fn in ("angle", "rate", "torque"):
-        joint = system.joint(args[0] if fn != "torque" else
-                             next(d.joint for d in system.drivers if d.name == args[0]))
-        linear = joint.kind == "prismatic"
-        return {"angle": ("rad", "m"), "rate": ("rad/s", "m/s"), "torque": ("N m", "N")}[fn][linear]
+    second = {v[2]: False for v in SECOND.values()} | {v[3]: True for v in SECOND.values()}
+    if fn in ("angle", "rate") or fn in second:  # a joint coordinate (Joint.coordinates) or its rate
+        c = system.joint(args[0]).coordinates[fn in second]
+        return ("m" if c.motion == "slide" else "rad") + ("/s" if second.get(fn, fn == "rate") else "")
+    if fn == "torque":
+        joint = system.joint(next(d.joint for d in system.drivers if d.name == args[0]))
+        return "N" if joint.kind == "prismatic" else "N m"
     if fn == "reaction":
         return "N" if args[1] in ("x", "y", "z") else "N m"
-    if fn in ("slide", "slide_rate"):
-        return "m" if fn == "slide" else "m/s"
     if fn in ("Hx", "Hy", "Hz"):
         return "kg m^2/s"
     if fn == "R":

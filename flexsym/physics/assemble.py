@@ -87,9 +87,9 @@ def start_of(system: System, c: Coordinate) -> tuple[float, float]:
     generated initial state, the spatial loop check)."""
     if c.start is not None:
         return c.start
-    if c.group == "joint":  # by its name (Joint.coordinates: a cylindrical joint has two)
-        _, _, value, rate = next(x for x in system.joint(c.joint).coordinates if x[0] == c.name)
-        return value, rate or 0.0
+    if c.group == "joint":  # by its name (Joint.coordinates: a cylindrical joint has two, ...)
+        x = next(x for x in system.joint(c.joint).coordinates if x.name == c.name)
+        return x.value, x.rate or 0.0
     return 0.0, 0.0
 
 

@@ -3,10 +3,11 @@ spanning tree (sympy): the 3D sibling of assemble.py, producing the same SystemD
 that sysgen.py, the templates and the runtime take it unchanged.
 
 What is derived so far: rigid bodies, modal beams (uniform, or from finite-element data:
-fedata.BeamBody, below) and the geometrically exact `ef`
-(spatial_ef.py) joined in a tree by revolute, prismatic and cylindrical joints (axes fixed in
-the parent's frame; axis_motion), spherical joints (Euler parameters on |e| = 1, a constraint
-row) and clamps, with loops closed by spherical and universal joints (_cut_rows), guided or
+fedata.BeamBody, below) and the geometrically exact `ef` (spatial_ef.py) joined in a tree by
+revolute, prismatic, cylindrical and universal joints (turns and slides in series about axes
+fixed in the frame they move; axis_motion), spherical joints (Euler parameters on |e| = 1, a
+constraint row) and clamps, with loops closed by spherical and universal joints (_cut_rows),
+guided or
 motor-driven, under gravity, point forces, torques and spring-dampers, modal beams with
 structural damping; a body may hang from a rigid body or from a modal beam's marker (the
 deformed section's frame, _section_frame). What is not (an ef beam's damping, ...) is refused
@@ -24,7 +25,10 @@ rotation (Rodrigues) and s its slide along a, m_p and m_c the joint's marker on 
 child, m = m_p + a s,
     omega_c = Q^T omega_p + a theta',    V_c = Q^T (V_p + omega_p x m) + a s' - omega_c x m_c,
     g_c = Q^T g_p,   A_c = A_p Q,   R_c = R_p + A_p m - A_c m_c
-(revolute: s = 0; prismatic: theta = 0; cylindrical: both; a clamp: Q = I, s = 0; Q a = a).
+(revolute: s = 0; prismatic: theta = 0; cylindrical: both; a clamp: Q = I, s = 0; Q a = a). A
+universal joint in the tree turns twice, by theta1 about a1 (parent_axis, parent's frame), then
+by theta2 about a2 (axis, the child's frame): Q = Rot(a1, theta1) Rot(a2, theta2), omega_c =
+Q^T omega_p + Rot(a2, theta2)^T a1 theta1' + a2 theta2', s = 0.
 A beam's floating frame is its root section's; on it the beam carries, per unit s = x/L,
     r = (L s + u, v, vz),   u = axial modes (+ u_fs = -1/2 int (v_x^2 + vz_x^2) for #3),
     v, vz = the model's bending modes in the frame's x-y (I = I_z) and x-z (I_y) planes,
@@ -50,15 +54,16 @@ motion, the foreshortening and the cubic term (both planes in one stretch); tors
 linear and couples to bending only through omega.t in T (the propeller moment of a section
 needs its bending rotary inertia, left out by definition); the section's twist does not turn
 the bending planes (second order).
-Outputs: angle/rate of a joint, x/y/z of a marker, u/v/vz and w (distance from the chord) at
-a station, N, Mx (torsion), My, Mz at a station, constitutive or from equilibrium of the
-part beyond the station (the variant's axial_force / moment), in the beam frame's
-components, the moments turned into the deformed section's axes to first order; the shear
-forces Qy, Qz (always from equilibrium, turned likewise); sigma(beam, x, y, z) = N/A - Mz y/I_z
-+ My z/I_y; T, V, violation, Hx/Hy/Hz (angular momentum about the origin), joint reactions
-(joint_reaction: a cut joint's from its multipliers, a tree joint's from the momentum balance
-of the bodies beyond it). Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx, Mx = GJ phi_x (the
-loads of the part beyond the station on the part before it).
+Outputs: angle/rate of a joint (slide/slide_rate, angle2/rate2: its second coordinate),
+x/y/z of a marker, u/v/vz and w (distance from the chord) at a station, N, Mx (torsion), My,
+Mz at a station, constitutive or from equilibrium of the part beyond the station (the
+variant's axial_force / moment), in the beam frame's components, the moments turned into the
+deformed section's axes to first order; the shear forces Qy, Qz (always from equilibrium,
+turned likewise); sigma(beam, x, y, z) = N/A - Mz y/I_z + My z/I_y; T, V, violation,
+Hx/Hy/Hz (angular momentum about the origin), joint reactions (joint_reaction: a cut joint's
+from its multipliers, a tree joint's from the momentum balance of the bodies beyond it).
+Section moments: Mz = EI_z v_xx, My = -EI_y vz_xx, Mx = GJ phi_x (the loads of the part
+beyond the station on the part before it).
 """
 from __future__ import annotations
 
@@ -73,7 +78,7 @@ from flexsym.model.exact_numbers import exact
 from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
-from flexsym.model.system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper,
+from flexsym.model.system import (GROUND, SECOND, FlexibleBeam, Gravity, PointForce, SpringDamper,
                                   System, Torque, beam_coordinates, beam_station, length_scale, parse_output,
                                   section_at, section_point)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
@@ -87,6 +92,7 @@ from flexsym.physics.outputs import field_at
 from flexsym.physics.spatial_ef import (ef_at, ef_body, ef_coordinates, ef_elastic_output,
                                         ef_kinetic_output, ef_section, is_ef)
 from flexsym.model.maneuver import parse_expression, t
+from flexsym.scenes.assembly import joint_motion
 
 
 
@@ -267,8 +273,8 @@ def derive_spatial(system: System) -> SystemDerivation:
     coords: list[Coordinate] = []
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
-        if j.has_coordinate and j.name not in guided_by_joint:  # a cylindrical joint's two
-            coords += [Coordinate(c[0], "joint", body, j.name) for c in j.coordinates]
+        if j.has_coordinate and j.name not in guided_by_joint:  # a cylindrical joint's two, ...
+            coords += [Coordinate(c.name, "joint", body, j.name) for c in j.coordinates]
         elif j.kind == "spherical":  # Euler parameters: e(0) turns x to direction, e' = G^T omega/2
             e0, ed0 = initial_euler(j.direction, j.rate)
             coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
@@ -412,25 +418,17 @@ def derive_spatial(system: System) -> SystemDerivation:
 
 
 def axis_motion(j, coordinates) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Matrix]:
-    """A joint's motion along its unit axis a (parent's frame), composed of its coordinates'
-    (Joint.coordinates: each a "turn" or a "slide", symbols (x, x')): (Q, the parent marker's
-    shift, the child's angular velocity relative to the parent, the shifted marker's velocity
-    relative to the parent), the last two in the child's components. A turn by theta: Q =
-    Rot(a, theta), a theta'; a slide by s: a s, a s' (a clamp: none of them, Q = I). A
-    cylindrical joint is both, about and along one axis (Q a = a: the slide's direction is the
-    same in both frames)."""
-    Q, rel, slide, v_rel = sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1)
-    if not j.coordinates:
-        return Q, rel, slide, v_rel
-    axis = j.axis or (0.0, 0.0, 1.0)  # a revolute's default (System.validate: the others need one)
+    """A joint's motion from its coordinates' symbols (x, x') (Joint.coordinates: turns about and
+    slides along their axes, in series): (Q, the parent marker's shift, the child's angular
+    velocity relative to the parent, the shifted marker's velocity relative to the parent), the
+    last two in the child's components, composed by assembly.joint_motion (the start's poses
+    compose them the same way, with numbers) with exact axes."""
+    return joint_motion(j, coordinates, rotation, _unit_vec)
+
+
+def _unit_vec(axis) -> sp.Matrix:
     a = _vec(axis)
-    a = a / sp.sqrt(a.dot(a))
-    for (_, motion, _, _), (x, xd) in zip(j.coordinates, coordinates):
-        if motion == "turn":
-            Q, rel = rotation(axis, x), a * xd
-        else:
-            slide, v_rel = a * x, a * xd
-    return Q, rel, slide, v_rel
+    return a / sp.sqrt(a.dot(a))
 
 
 def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict) -> sp.Expr:
@@ -784,7 +782,7 @@ def _names(der) -> dict:
     """What a load's expression may name: t, each joint coordinate and its rate."""
     names = {"t": t}
     for c, x, xd in zip(der.coords, der.q, der.qd):
-        if c.group == "joint":  # its name: the joint's, or J_slide (Joint.coordinates)
+        if c.group == "joint":  # its name: the joint's, or J_slide, J_angle2 (Joint.coordinates)
             names[c.name], names[f"{c.name}_rate"] = x, xd
     return names
 
@@ -808,10 +806,10 @@ def _output(der, quantity: str) -> sp.Expr:
     where = f"system '{system.name}': output '{quantity}'"
     if fn in ("angle", "rate"):
         return joint_coordinate(der, args[0], fn == "rate", where)
-    if fn in ("slide", "slide_rate"):  # a cylindrical joint's second coordinate
-        name = system.joint(args[0]).coordinates[1][0]
+    if any(fn in v[2:] for v in SECOND.values()):  # a joint's second coordinate (slide, angle2)
+        name = system.joint(args[0]).coordinates[1].name
         k = next(i for i, c in enumerate(der.coords) if c.name == name)
-        return der.qd[k] if fn == "slide_rate" else der.q[k]
+        return der.qd[k] if fn in (v[3] for v in SECOND.values()) else der.q[k]
     if fn == "R":  # ground <- the marker's axes (a beam's: its section's, to first order)
         return _section_rotation(der, args[0])["xyz".index(args[1]), "xyz".index(args[2])]
     if fn in ("x", "y", "z"):

@@ -122,31 +122,27 @@ def rotations3(system: System) -> dict:
 def start3(system: System) -> dict:
     """Every joint coordinate's value at t = 0 by its name (Joint.coordinates; a guided joint's
     theta(0)): poses3's q."""
-    return ({c[0]: c[2] for j in system.joints for c in j.coordinates}
+    return ({c.name: c.value for j in system.joints for c in j.coordinates}
             | {k: v[0] for k, v in theta0(system).items()})
 
 
 def poses3(system: System, q: dict) -> dict:
     """Each body's frame of a spatial system (A: ground <- frame, R: its origin), composed as
     physics/spatial.py does (A_c = A_p Q, R_c = R_p + A_p m_p - A_c m_c) with undeformed beams:
-    each coordinate of a revolute, prismatic or cylindrical joint (q by its name,
-    Joint.coordinates) turns the child about the joint's axis or slides it along it, a spherical
-    joint by the shortest turn of x to its direction, tilted by q[joint] = (a, b)
-    along two directions across it (the assembly's coordinates; absent: not tilted)."""
+    the coordinates of a revolute, prismatic, cylindrical or universal joint in the tree (q by
+    their names, Joint.coordinates) turn the child about or slide it along their axes in series
+    (joint_motion), a spherical joint by the shortest turn of x to its direction, tilted by
+    q[joint] = (a, b) along two directions across it (the assembly's coordinates; absent: not
+    tilted)."""
     out = {GROUND: (sp.eye(3), sp.zeros(3, 1))}
     tree = system.tree()
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
         A_p, R_p = out[j.parent.partition(".")[0]] if j.parent != GROUND else out[GROUND]
         m_p = sp.Matrix(j.point) if j.parent == GROUND else _local3(system, j.parent)
-        Q = sp.eye(3)
         c = q.get(j.name, 0)
-        for name, motion, _, _ in j.coordinates:  # physics/spatial.axis_motion
-            a = sp.Matrix(j.axis or (0.0, 0.0, 1.0))
-            if motion == "turn":
-                Q = _turn3(a, q.get(name, 0))
-            else:
-                m_p = m_p + a / sp.sqrt(a.dot(a)) * q.get(name, 0)
+        Q, _, shift, _ = joint_motion(j, [(q.get(x.name, 0), 0) for x in j.coordinates], _turn3, _unit3)
+        m_p = m_p + shift
         if j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
             d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *c))
             v, cos = sp.Matrix([0, -d[2], d[1]]), d[0]  # x cross d, x . d (d a unit vector)
@@ -162,6 +158,34 @@ def poses3(system: System, q: dict) -> dict:
     return out
 
 
+def joint_motion(j, coordinates, turn, unit) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Matrix]:
+    """A joint's motion composed of its coordinates in series (Joint.coordinates, each a turn
+    about or a slide along its axis; coordinates: their (x, x') in that order), the one
+    composition of the derivation (physics/spatial.axis_motion: exact, symbolic) and of the
+    start (poses3: numbers, x' = 0): (Q, the parent marker's shift in the parent's frame, the
+    child's angular velocity relative to the parent and the shifted marker's velocity relative
+    to it, both in the child's components). A turn by theta about a: Q <- Q Rot(a, theta) and
+    the relative angular velocity turned into the new frame plus a theta' (a universal joint:
+    Rot(a1, t1) Rot(a2, t2), Rot(a2, t2)^T a1 t1' + a2 t2'); a slide by s along a: a s and
+    a s' (a cylindrical joint slides along the axis it turned about, Q a = a, so a is its
+    direction in both frames); a clamp: Q = I. turn(axis, angle): the rotation; unit(axis):
+    the unit vector."""
+    Q, rel, shift, v_rel = sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1)
+    for c, (x, xd) in zip(j.coordinates, coordinates):
+        a = unit(c.axis)
+        if c.motion == "turn":
+            R = turn(c.axis, x)
+            Q, rel = Q * R, R.T * rel + a * xd
+        else:
+            shift, v_rel = shift + a * x, v_rel + a * xd
+    return Q, rel, shift, v_rel
+
+
+def _unit3(axis) -> sp.Matrix:
+    a = sp.Matrix(axis)
+    return a / sp.sqrt(a.dot(a))
+
+
 def _tilted(direction, a, b) -> list:
     """The unit direction d0 + a t1 + b t2, normalised (t1, t2: unit, across d0 and each other)."""
     d0 = np.asarray(direction, float) / np.linalg.norm(direction)
@@ -174,8 +198,8 @@ def _tilted(direction, a, b) -> list:
     return [x / n for x in d]
 
 
-def _turn3(axis: sp.Matrix, angle) -> sp.Matrix:
-    a = axis / sp.sqrt(axis.dot(axis))
+def _turn3(axis, angle) -> sp.Matrix:
+    a = _unit3(axis)
     K = sp.Matrix([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
     return sp.eye(3) + sp.sin(angle) * K + (1 - sp.cos(angle)) * K * K
 
@@ -267,7 +291,7 @@ class _Loops:
         entries = []
         for j in tree_joints:
             entries += ([(j, None, 1.0)] * 2 if j in tilted else
-                        [(j, c[0], scale if c[1] == "slide" else 1.0) for c in j.coordinates])
+                        [(j, c.name, scale if c.motion == "slide" else 1.0) for c in j.coordinates])
         self.joints = [j for j, _, _ in entries]
         self.coords = [c for _, c, _ in entries]
         self.unit = np.array([u for _, _, u in entries])
@@ -335,7 +359,7 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
         return system, Assembly(scale=scale)
     loops = _Loops(system, scale)
     guided = theta0(system)
-    starts = {c[0]: (c[2], c[3]) for j in loops.joints for c in j.coordinates}  # (value, rate)
+    starts = {c.name: (c.value, c.rate) for j in loops.joints for c in j.coordinates}  # (value, rate)
     fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
     free = ~fixed
     x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if c is None else starts[c][0]
@@ -390,16 +414,17 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
 
 
 def _label(j, c: str) -> str:
-    return j.name if c == j.name else f"{j.name} slide"  # a cylindrical joint's second
+    """A coordinate in the report: its joint, and a second one's field (J slide, J angle2)."""
+    return j.name if c == j.name else f"{j.name} {j.fields_of(c)[0]}"
 
 
 def _unit(j, c: str) -> str:
-    return "m" if dict((x[0], x[1]) for x in j.coordinates)[c] == "slide" else "rad"
+    return "m" if next(x.motion for x in j.coordinates if x.name == c) == "slide" else "rad"
 
 
 def _key(j, c: str, rate: int) -> str:
     """The Joint field of coordinate c's value (rate 0) or rate (1) (Joint.coordinates)."""
-    return (("initial", "rate") if c == j.name else ("slide", "slide_rate"))[rate]
+    return j.fields_of(c)[rate]
 
 
 def _rates(system: System, J: np.ndarray, slots: list, guided: dict) -> dict:
@@ -412,7 +437,7 @@ def _rates(system: System, J: np.ndarray, slots: list, guided: dict) -> dict:
             return guided[j.name][1]
         if isinstance(c, int):
             return None if j.rate is None else j.rate[c]
-        return dict((x[0], x[3]) for x in j.coordinates)[c]
+        return next(x.rate for x in j.coordinates if x.name == c)
 
     given = np.array([given_rate(j, c) or 0.0 for j, c, _ in slots]) / np.array([u for _, _, u in slots])
     free = np.array([j.name not in guided and given_rate(j, c) is None for j, c, _ in slots], dtype=bool)
@@ -444,7 +469,7 @@ def _rate_slots(system: System, scale: float) -> list:
     for j in (system.joint(tree.joint_of(b)) for b in tree.order):
         if j.kind == "spherical":
             slots += [(j, k, 1.0) for k in range(3)]
-        slots += [(j, c[0], scale if c[1] == "slide" else 1.0) for c in j.coordinates]
+        slots += [(j, c.name, scale if c.motion == "slide" else 1.0) for c in j.coordinates]
     return slots
 
 

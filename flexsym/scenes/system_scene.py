@@ -21,8 +21,10 @@ scene (flexsym/scenes/scene.py), unchanged.
                 the parent's frame), offset (rad, child frame angle relative to the parent's),
                 initial = x (a guess of the coordinate at t = 0) or { value = x, fixed = true,
                 rate = v } (fixed: never moved by the assembly; rate: the rate at t = 0);
-                spatial (dimension = 3) also spherical, universal and cylindrical, whose
-                initial table adds slide = s, slide_rate = v (Joint.coordinates)
+                spatial (dimension = 3) also spherical, universal and cylindrical; a
+                cylindrical joint's initial table adds slide = s, slide_rate = v, a universal
+                joint's in the tree (parent_axis = [x, y, z], parent's frame) angle2 = a,
+                rate2 = w (Joint.coordinates)
     [[driver]]  name, kind = "guided", joint, and maneuver = "spin-up" (omega, duration) |
                 "constant" (omega) or theta = "expression of t";
                 name, kind = "motor", joint, torque (revolute) | force (prismatic) =
@@ -34,10 +36,10 @@ scene (flexsym/scenes/scene.py), unchanged.
                 (body.marker each), k, c, l0
     [solver]    run options (flexsym/model/options.py: integrator, dt, t_end, ...)
     [output]    file, interval, energy, columns = { name = "quantity" } (system.py's output
-                grammar: angle(J), rate(J), slide(J), slide_rate(J), x(B.m), y(B.m), v(B, x), u(B, x),
-                w(B, x), N(B, x), M(B, x), sigma(B, x, y), reaction(J), torque(D), T, V, momentum,
-                violation, dissipation; spatial: z(B.m), vz, Mx, My, Mz, Qy, Qz (B, x),
-                sigma(B, x, y, z), Hx, Hy, Hz)
+                grammar: angle(J), rate(J), x(B.m), y(B.m), v(B, x), u(B, x), w(B, x), N(B, x),
+                M(B, x), sigma(B, x, y), reaction(J), torque(D), T, V, momentum, violation,
+                dissipation; spatial: z(B.m), vz, Mx, My, Mz, Qy, Qz (B, x), sigma(B, x, y, z),
+                Hx, Hy, Hz, slide(J), slide_rate(J), angle2(J), rate2(J))
 
 Checks, each one line naming the file and the item, before anything is derived or written:
 the TOML's types and keys here; names, references, masses, the spanning tree, drivers,
@@ -64,7 +66,7 @@ from flexsym.scenes.assembly import Assembly, assemble, poses, rotations3, theta
 from flexsym.model.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
-from flexsym.model.system import (GROUND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
+from flexsym.model.system import (GROUND, SECOND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
                      parse_output)
 
@@ -82,7 +84,8 @@ KEYS = {
     "rigid": {"name", "kind", "mass", "inertia", "com", "markers"},
     "beam": {"name", "kind", "model", "markers", "damping", *UNIFORM_KEYS, *FE_KEYS},
     "beam3": {"name", "kind", "model", "markers", "damping", *SPATIAL_KEYS, *FE_KEYS},
-    "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial", "direction"},
+    "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial", "direction",
+              "parent_axis"},
     "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
     "motor": {"name", "kind", "joint", "torque", "force"},
     "gravity": {"g"},
@@ -416,7 +419,7 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
     if kind == "clamp" and "initial" in tab:
         r.fail(f"{where} initial", "applies to revolute and prismatic joints only (a clamp has no "
                "coordinate; use offset for its angle)")
-    slide, slide_rate = 0.0, None
+    second = {}  # a second coordinate's start (SECOND: a cylindrical joint's slide, ...)
     if kind == "spherical":  # its one start datum: the angular velocity, a vector
         given = tab.get("initial", {})
         if not isinstance(given, dict):  # an angle: it has three, and starts at its direction
@@ -426,30 +429,33 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
         r.table(f"{where} initial", given, {"rate"})
         initial, fixed, rate = 0.0, False, r.pair(f"{where} initial", given, "rate", n=3)
     else:
-        initial, fixed, rate = _initial(r, where, tab, kind == "cylindrical")
+        keys = SECOND[kind][2:] if kind in SECOND else ()
+        initial, fixed, rate = _initial(r, where, tab, keys)
         given = tab.get("initial")
-        if kind == "cylindrical" and isinstance(given, dict):
-            slide = r.number(f"{where} initial", given, "slide", default=0.0)
-            slide_rate = r.number(f"{where} initial", given, "slide_rate") if "slide_rate" in given else None
+        if keys and isinstance(given, dict):
+            value, rate_key = keys
+            second = {value: r.number(f"{where} initial", given, value, default=0.0),
+                      rate_key: r.number(f"{where} initial", given, rate_key) if rate_key in given else None}
     return Joint(r.string(where, tab, "name"), kind, parent, r.string(where, tab, "child"),
                  axis=r.pair(where, tab, "axis", n=dim), offset=r.number(where, tab, "offset", default=0.0),
                  point=point or (0.0,) * dim, initial=initial, fixed=fixed, rate=rate,
                  direction=r.pair(where, tab, "direction", n=3) if "direction" in tab else None,
-                 slide=slide, slide_rate=slide_rate)
+                 parent_axis=r.pair(where, tab, "parent_axis", n=3), **second)
 
 
-def _initial(r: _Items, where: str, tab: dict, slides: bool = False) -> tuple[float, bool, float | None]:
+def _initial(r: _Items, where: str, tab: dict, second: tuple = ()) -> tuple[float, bool, float | None]:
     """initial = 0.5 (a guess) or { value = 0.5, fixed = true, rate = 2.0 } (see assembly.py); a
-    cylindrical joint's (slides) also slide = 0.1, slide_rate = 0.3 (value and rate: its angle)."""
+    joint with a second coordinate also takes its keys (second: SECOND's, e.g. slide = 0.1,
+    slide_rate = 0.3 of a cylindrical joint; value and rate: its first)."""
     given = tab.get("initial", 0.0)
     if not isinstance(given, dict):
         return r.number(where, tab, "initial", default=0.0), False, None
     at = f"{where} initial"
-    r.table(at, given, {"value", "fixed", "rate"} | ({"slide", "slide_rate"} if slides else set()))
+    r.table(at, given, {"value", "fixed", "rate"} | set(second))
     fixed = given.get("fixed", False)
     if not isinstance(fixed, bool):
         r.fail(f"{at} fixed", f"must be true or false (got {fixed!r})")
-    if fixed and not {"value", "slide"} & set(given):
+    if fixed and not ({"value"} | set(second[:1])) & set(given):
         r.fail(f"{at} fixed", "fixes the value: give value = ...")
     rate = r.number(at, given, "rate") if "rate" in given else None
     return r.number(at, given, "value", default=0.0), fixed, rate
@@ -641,11 +647,12 @@ def check_assembly(system: System) -> tuple[System, Assembly]:
 
 
 def _check_universal_axes(system: System) -> None:
-    """A universal joint's cross axis e2 is perpendicular to its axis e1 and to the parent's x
-    axis at t = 0 (physics/spatial.py): e1 along that x leaves no such direction."""
+    """A loop-closing universal joint's cross axis e2 is perpendicular to its axis e1 and to the
+    parent's x axis at t = 0 (physics/spatial.py): e1 along that x leaves no such direction (one
+    in the tree has its parent_axis)."""
     frames = None
     for j in system.joints:
-        if j.kind != "universal":
+        if j.kind != "universal" or j.has_coordinate:
             continue
         frames = frames or rotations3(system)
         e1 = frames[j.child.partition(".")[0]] @ np.asarray(j.axis, float)
@@ -749,9 +756,22 @@ def _damping_text(b) -> str:
     return f"; damping zeta {zeta}, alpha {d.alpha:g} 1/s, beta {d.beta:g} s"
 
 
+def _axes_text(j: Joint) -> str:
+    """A spatial joint's axes and coordinates for summary(): each coordinate's name, motion and
+    axis (Joint.coordinates; a universal joint in the tree: parent_axis, then axis in the
+    child's frame), or a loop-closing universal joint's axis (child's frame)."""
+    def vec(a):
+        return f"({', '.join(f'{c:g}' for c in a)})"
+    if j.kind == "universal" and not j.has_coordinate:
+        return f", axis {vec(j.axis)} (child's frame)"
+    return "".join(f", {c.name}: {c.motion} {'about' if c.motion == 'turn' else 'along'} {vec(c.axis)}"
+                   for c in j.coordinates)
+
+
 def _summary3(system: System) -> str:
     """summary() of a spatial system: bodies, joints, coordinates, loads, outputs."""
     guided = {d.joint for d in system.drivers if d.kind == "guided"}
+    cut = system.tree().cut
     lines = [f"system '{system.name}' (spatial)" + (f": {system.description}" if system.description else ""),
              "", "bodies:"]
     for b in system.bodies:
@@ -766,13 +786,12 @@ def _summary3(system: System) -> str:
             what = (f"rigid m = {b.mass:g} kg, principal inertia ({', '.join(f'{v:g}' for v in b.inertia)}) "
                     f"kg m^2, com ({', '.join(f'{c:g}' for c in b.com)})")
         lines.append(f"  {b.name}: {what}; markers {marks}")
-    lines += ["", "joints (a tree, from ground):"]
+    lines += ["", "joints (a tree from ground, and those closing loops):"]
     for j in system.joints:
         parent = f"ground at ({', '.join(f'{c:g}' for c in j.point)})" if j.parent == GROUND else j.parent
-        axis = (f", axis ({', '.join(f'{a:g}' for a in (j.axis or (0, 0, 1)))})"
-                if j.kind in ("revolute", "cylindrical") else "")
-        lines.append(f"  {j.name}: {j.kind} {parent} -> {j.child}{axis}"
-                     + (" [guided]" if j.name in guided else ""))
+        lines.append(f"  {j.name}: {j.kind} {parent} -> {j.child}{_axes_text(j)}"
+                     + (" [guided]" if j.name in guided else "")
+                     + (" [closes a loop]" if j.name in cut else ""))
     lines += ["", "elastic coordinates: " + "; ".join(
         f"{b.name}: " + ", ".join(n for n, _, _ in beam_coordinates(b))
         for b in system.bodies if b.flexible)]
