@@ -45,3 +45,21 @@ def edited_scene(tmp_path, what: str, scene, edits):
     path = tmp_path / "bad.toml"
     path.write_text(text)
     return path
+
+
+def scene_text_runs(tmp_path, capsys, text: str) -> None:
+    """`flexsym run` of a scene given as text finishes and writes its CSV (the base of a set of
+    malformed scenes: each refusal is then its edit's)."""
+    from flexsym.apps.cli import main
+
+    path, out = tmp_path / "good.toml", tmp_path / "out.csv"
+    path.write_text(text)
+    assert main(["run", str(path), "--out", str(out)]) == 0, capsys.readouterr().err
+    assert out.exists()
+
+
+def scene_text_refused(tmp_path, capsys, text: str, says: str) -> None:
+    """refused_in_one_line for a scene given as text."""
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    refused_in_one_line(capsys, path, says)

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from system_data import built, refused_in_one_line, run_ok
+from system_data import built, run_ok, scene_text_refused, scene_text_runs
 
 G = 9.81
 MASS, INERTIA, COM = 2.0, [0.02, 0.03, 0.04], [0.1, 0.05, 0.0]
@@ -335,18 +335,11 @@ BAD = [  # (what, scene text, what the one line says)
 
 def test_the_good_scene_runs(tmp_path, capsys):
     """The malformed scenes' base runs (so each refusal below is its edit's)."""
-    from flexsym.apps.cli import main
-
-    path, out = tmp_path / "good.toml", tmp_path / "out.csv"
-    path.write_text(GOOD)
-    assert main(["run", str(path), "--out", str(out)]) == 0, capsys.readouterr().err
-    assert out.exists()
+    scene_text_runs(tmp_path, capsys, GOOD)
 
 
 @pytest.mark.parametrize("what,text,says", BAD, ids=[b[0] for b in BAD])
 def test_bad_cylindrical_scenes_are_refused(tmp_path, capsys, what, text, says):
     """Refused in one line naming the file and the item, exit 2, nothing written."""
     assert text != GOOD, what
-    path = tmp_path / "bad.toml"
-    path.write_text(text)
-    refused_in_one_line(capsys, path, says)
+    scene_text_refused(tmp_path, capsys, text, says)

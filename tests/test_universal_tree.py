@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, edited_scene, refused_in_one_line, run_ok
+from system_data import built, edited_scene, refused_in_one_line, run_ok, scene_text_refused, scene_text_runs
 from test_spatial import PLANAR, S7, CARDAN_AXIS
 
 G = 9.81
@@ -374,21 +374,14 @@ ELSEWHERE = [  # (what, scene, edits of its text, what the one line says)
 
 def test_the_good_scene_runs(tmp_path, capsys):
     """The malformed scenes' base runs (so each refusal below is its edit's)."""
-    from flexsym.apps.cli import main
-
-    path, out = tmp_path / "good.toml", tmp_path / "out.csv"
-    path.write_text(GOOD)
-    assert main(["run", str(path), "--out", str(out)]) == 0, capsys.readouterr().err
-    assert out.exists()
+    scene_text_runs(tmp_path, capsys, GOOD)
 
 
 @pytest.mark.parametrize("what,text,says", BAD, ids=[b[0] for b in BAD])
 def test_bad_universal_scenes_are_refused(tmp_path, capsys, what, text, says):
     """Refused in one line naming the file and the item, exit 2, nothing written."""
     assert text != GOOD, what
-    path = tmp_path / "bad.toml"
-    path.write_text(text)
-    refused_in_one_line(capsys, path, says)
+    scene_text_refused(tmp_path, capsys, text, says)
 
 
 @pytest.mark.parametrize("what,scene,edits,says", ELSEWHERE, ids=[b[0] for b in ELSEWHERE])
