@@ -2,7 +2,8 @@
 runs them after the suite: `python -m pytest -q -m docs tests/test_docs_commands.py`).
 
 Each ```bash block is run as one bash script (`set -e`) from a scratch folder that holds the
-repository's `scenes/`, as a user runs it from the repository root. A command followed by a
+repository's `scenes/` and `docs/` (the validation report's scripts), as a user runs it from the
+repository root. A command followed by a
 `# flexsym: error ...` line is a documented refusal: it must exit 2 with that message. Blocks
 that say they take minutes (the validation report's studies) carry the marker `study` as well
 and run only when asked (`-m study`); blocks that create the virtual environment are the
@@ -73,6 +74,7 @@ def test_documented_block_runs(script, workdir, tmp_path):
     run_dir = tmp_path / "cwd"
     run_dir.mkdir()
     (run_dir / "scenes").symlink_to(ROOT / "scenes")
+    (run_dir / "docs").symlink_to(ROOT / "docs")
     body, refusals = _split_refusals(script)
     r = subprocess.run(["bash", "-e", "-c", body], cwd=run_dir, env=env, capture_output=True, text=True,
                        timeout=1800)
