@@ -708,7 +708,8 @@ class System:
     def _check_spatial(self) -> None:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
         before any work: revolute, prismatic, cylindrical, universal, spherical and clamp joints
-        in a tree, uniform modal beams or the geometrically exact ef (rod3d, undamped)."""
+        in a tree, modal beams (uniform, or from finite-element data with spatial sections) or
+        the geometrically exact ef (rod3d: uniform, undamped)."""
         where = f"system '{self.name}'"
         for j in self.joints:
             if j.kind not in SPATIAL_JOINT_KINDS:
