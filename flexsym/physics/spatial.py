@@ -216,7 +216,7 @@ def _load_case_factors(der, fr: Frame, cases) -> dict:
     """The frame's actual value of each unit load case (fedata.LOAD_CASES): omega_i omega_j,
     alpha_i = omega_i', and a_i, its origin's acceleration minus gravity (V' + omega x V - g),
     in the frame's components (q'' appears where the frame moves freely)."""
-    om, out = fr.omega, {}
+    om, out, acc = fr.omega, {}, None
     for case in cases:
         kind, axes = case.split("_")
         k = ["xyz".index(c) for c in axes]
@@ -224,8 +224,9 @@ def _load_case_factors(der, fr: Frame, cases) -> dict:
             out[case] = om[k[0]] * om[k[1]]
         elif kind == "al":
             out[case] = der.ddt(om[k[0]])
-        else:
-            out[case] = (der.ddt(fr.V) + _cross(om, fr.V) - fr.g)[k[0]]
+        else:  # the origin's acceleration: once for the three a_i
+            acc = der.ddt(fr.V) + _cross(om, fr.V) - fr.g if acc is None else acc
+            out[case] = acc[k[0]]
     return out
 
 
@@ -237,11 +238,14 @@ def _load_case_energy(der, b: FlexibleBeam) -> sp.Expr:
     and linear acceleration and gravity, whatever they are."""
     d = der.spatial[b.name]
     P, sym, keys, modes = d["P"], d["sym"], d["keys"], d["modes"]
-    V = sp.Integer(0)
+    planes = {}
     for plane in ("v", "vz"):
         names = [n for n, g, _ in beam_coordinates(b) if g == "bending" and n.split("_")[0] == plane]
-        D = load_case_stiffness(b.model.body, [modes[keys[n]].shape for n in names])
-        f = _load_case_factors(der, der.spatial["frames"][b.name], D)
+        planes[plane] = (names, load_case_stiffness(b.model.body, [modes[keys[n]].shape for n in names]))
+    # the frame's factors once for both planes (their cases are the same: K_G,e is either's)
+    f = _load_case_factors(der, der.spatial["frames"][b.name], {c for _, D in planes.values() for c in D})
+    V = sp.Integer(0)
+    for names, D in planes.values():
         qv = sp.Matrix([sym[n] for n in names])
         for case, Dc in D.items():
             Dm = sp.Matrix(Dc.shape[0], Dc.shape[1], [sp.Float(repr(float(v)), 17) for v in Dc.ravel()])
@@ -405,12 +409,15 @@ def derive_spatial(system: System) -> SystemDerivation:
             Q_ += add_spring(der, load, _spring_ends(der, load))
     Q_ += _applied(der)
     # a force that reads a free frame's acceleration (a body's unit load cases) is part of M
-    B = Q_.jacobian(qdd)
-    Q_ = Q_.xreplace(dict.fromkeys(qdd, 0))
-    der.V = der.V.xreplace(dict.fromkeys(qdd, 0))  # V holds such terms at q'' = 0
+    reads_qdd = any(e.has(*qdd) for e in Q_)  # else no system pays for the Jacobian below
+    B = Q_.jacobian(qdd) if reads_qdd else None
+    if reads_qdd:
+        Q_ = Q_.xreplace(dict.fromkeys(qdd, 0))
+        der.V = der.V.xreplace(dict.fromkeys(qdd, 0))  # V holds such terms at q'' = 0
     der.Q = Q_.applyfunc(sp.expand)
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
-    der.M = (der.M - B).applyfunc(sp.expand)
+    if reads_qdd:
+        der.M = (der.M - B).applyfunc(sp.expand)
     _cut_rows(der)
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
