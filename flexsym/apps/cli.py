@@ -264,6 +264,23 @@ def cmd_run(args) -> int:
     return 0 if verdict.valid else 4
 
 
+def _static_start_line(system) -> str:
+    """The CSV header's line for start = "static": which joint coordinates follow a loop's
+    deformation (the generated model's manifest says, sysgen._static_unknowns)."""
+    import json
+
+    from flexsym.codegen.generate import MANIFEST
+    from flexsym.toolchain.pipeline import system_folder
+
+    manifest = json.loads((system_folder(system) / MANIFEST).read_text())
+    group = {c["name"]: c["group"] for c in manifest["coordinates"]}
+    joints = [c for c in manifest["static_start"]["solved"] if group[c] == "joint"]
+    held = (f"joints held but {', '.join(joints)}, which follow the loop" if joints
+            else "joints held")
+    return ("start: the flexible bodies in static equilibrium under the loads at t = 0 "
+            f"({held}; solved by Newton to 1e-12 of the size)")
+
+
 def _units_line(units: dict) -> str:
     """The CSV header's units of the time and output columns (SI; the coordinates that may
     follow are SI too: m, rad, and the modes' amplitudes in m)."""
@@ -311,8 +328,7 @@ def _run_system(args, scene) -> int:
     units = {o.column: output_unit(scene.system, o.quantity) for o in scene.system.outputs}
     header = [_units_line(units)] + _options_header(args, scene, options)
     if system.start == "static":
-        header.insert(0, "start: the flexible bodies in static equilibrium under the loads at t = 0 "
-                         "(joints held; elastic coordinates solved by Newton to 1e-12 of the size)")
+        header.insert(0, _static_start_line(system))
     moved = scene.assembly.line(options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
     if moved:
         print(f"flexsym: {scene.path}: {moved}", file=sys.stderr)

@@ -25,6 +25,7 @@ import json
 import time
 
 import casadi as ca
+import numpy as np
 import sympy as sp
 
 from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, derive_system, ef_guided_force,
@@ -41,6 +42,7 @@ from flexsym.model.maneuver import t as t_sym
 from flexsym.core.paths import module_file, templates_dir
 from flexsym.model.system import System, length_scale, system_to_dict
 from flexsym.core.versions import generator_hash, tool_versions
+from flexsym.scenes.assembly import numeric_rank
 
 _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.rod3d", "physics.efbody",
         "model.system", "codegen.sysgen")
@@ -430,8 +432,9 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "rod_bodies": rod_elements(der), "bandwidth": _bandwidth(der),
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
-        "elastic": [i for i, c in enumerate(der.coords) if c.group != "joint"],
     }
+    if ctx["static_start"]:
+        ctx["static_free"], ctx["static_rows"] = _static_unknowns(system, der, kernels)
     env = _environment()
     files = {
         f"fsm_{system.name}.h": env.get_template("system/system.h.j2").render(ctx),
@@ -454,7 +457,9 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
                          for b, term, wrt, _, _ in der.terms],
         "outputs": dict(zip(der.outputs, (o.quantity for o in system.outputs))),
-    } | ({"damping": {b: ("ef elements: ef_damping kernel, alpha and beta in system.c"
+    } | ({"static_start": {"solved": [der.coords[i].name for i in ctx["static_free"]],
+                            "constraint_rows": [der.constraints[k][0] for k in ctx["static_rows"]]}}
+         if ctx["static_start"] else {}) | ({"damping": {b: ("ef elements: ef_damping kernel, alpha and beta in system.c"
                           if b in der.ef_damping else "modal: -dD/dq' in force")
                       for b in der.dissipation}} if der.dissipation else {}) | {
         "length_scale": scale, "mass_constant": mass_constant,
@@ -465,6 +470,38 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     }
     files[MANIFEST] = json.dumps(manifest, indent=2) + "\n"
     return files
+
+
+def _static_unknowns(system: System, der: SystemDerivation, kernels: list) -> tuple[list, list]:
+    """start = "static": the coordinates the equilibrium at t = 0 is solved for, and the
+    constraint rows it keeps. The elastic coordinates; in a closed loop also the joint
+    coordinates that follow the loop's deformation, picked from the last coordinate back (the
+    joints nearest the cut; never a `fixed` joint's) until they close the loop with the others
+    held (the rank of Phi_q over them reaches its rank over every joint coordinate that may
+    move), and the rows of Phi_q independent over those (a redundant row has no multiplier of
+    its own). Evaluated at the assembled start with the default parameters; the rest of the
+    joints stay held, as in an open chain."""
+    solved = [i for i, c in enumerate(der.coords) if c.group != "joint"]
+    if not der.tree.cut:
+        return solved, []
+    fn = {k.name: k.function for k in kernels}
+    d0 = fn["drive"](0.0, [p.default for p in der.drive_params])
+    jac = np.array(fn["constraint_jac"]([start_of(system, c)[0] for c in der.coords], d0,
+                                        [v for _, _, v in der.params]))
+    movable = [i for i, c in enumerate(der.coords)
+               if c.group == "joint" and not system.joint(c.joint).fixed]
+    target, follow = numeric_rank(jac[:, movable]), []
+    for i in reversed(movable):
+        if numeric_rank(jac[:, follow]) == target:
+            break
+        if numeric_rank(jac[:, follow + [i]]) > numeric_rank(jac[:, follow]):
+            follow.append(i)
+    solved = sorted(solved + follow)
+    rows = []
+    for k in range(len(der.constraints)):
+        if numeric_rank(jac[rows + [k]][:, solved]) > len(rows):
+            rows.append(k)
+    return solved, rows
 
 
 def describe(system: System) -> str:

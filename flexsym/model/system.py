@@ -699,10 +699,6 @@ class System:
             if not any(b.flexible for b in self.bodies):
                 raise SpecError(f"{where}: start = \"static\" puts the flexible bodies in equilibrium, "
                                 "and there is none")
-            if tree.cut:
-                raise SpecError(f"{where}: start = \"static\" is derived for open chains only (with the "
-                                f"cut joint(s) {', '.join(tree.cut)}, the loop would have to move with the "
-                                "deformation)")
         return self
 
     def _check_spatial(self) -> None:

@@ -344,7 +344,8 @@ def _newton(loops: _Loops, x0: np.ndarray, free: np.ndarray) -> np.ndarray:
     return x
 
 
-def _rank(a: np.ndarray) -> int:
+def numeric_rank(a: np.ndarray) -> int:
+    """The rank of a, singular values below RANK_TOL x the largest counting as zero."""
     if a.size == 0:
         return 0
     s = np.linalg.svd(a, compute_uv=False)
@@ -376,8 +377,8 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
         else:
             _cannot_close(system, loops, x, fixed, scale)
     jac = loops.jac(x)
-    rank = _rank(jac[:, free])
-    generic = max(_rank(loops.jac(_random(loops, k))[:, free]) for k in range(4))
+    rank = numeric_rank(jac[:, free])
+    generic = max(numeric_rank(loops.jac(_random(loops, k))[:, free]) for k in range(4))
     if rank < generic:
         _singular(system, loops, jac, free, rank)
 
