@@ -227,14 +227,14 @@ def test_bad_input_is_refused_with_one_line(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--max-modes" in err[0]
 
-    # a uniform beam on a guided hub only: bodies from FE data and system bodies are refused
+    # a uniform beam only: bodies from FE data are refused, on a hub and in a system
     from pathlib import Path
 
     scenes = Path(__file__).resolve().parents[1] / "scenes"
     for argv, fragment in (
             (["select", str(scenes / "stepped_blade.toml"), "--tol", "0.01", "--exact"], "--exact: the exact"),
             (["run", str(scenes / "stepped_blade.toml"), "--model", "exact"], "integrates a uniform beam"),
-            (["run", str(scenes / "hub.toml"), "--model", "exact"], "derived for a guided hub only")):
+            (["run", str(scenes / "stepped_hub.toml"), "--model", "exact"], "integrates a uniform beam")):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and fragment in err[0], err

@@ -31,6 +31,7 @@ import sympy as sp
 from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, derive_system, ef_guided_force,
                                       length_param, start_of)
 from flexsym.physics.spatial import derive_spatial
+from flexsym.physics.exact_body import EXACT_VG, exact_energies, exact_residual
 from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
 from flexsym.physics.energy import A, E, I, L, rho
@@ -45,7 +46,7 @@ from flexsym.core.versions import generator_hash, tool_versions
 from flexsym.scenes.assembly import numeric_rank
 
 _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.rod3d", "physics.efbody",
-        "model.system", "codegen.sysgen")
+        "physics.exact_kinematics", "physics.exact_body", "model.system", "codegen.sysgen")
 
 
 def fingerprint(system: System) -> str:
@@ -81,6 +82,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
     for k in range(len(der.guided)):
         ddot += [d[2 + 3 * k], d[3 + 3 * k], ca.SX(0.0)]
     ddot = ca.vertcat(*ddot)
+    x["ddot"] = ddot  # what the exact beams' section loads differentiate along (exact_body)
     M = matrix_sx(tr, der.M, psyms)
     f = matrix_sx(tr, der.f, psyms)
     T_, V_, h_ = der.energies()
@@ -89,17 +91,28 @@ def build_system_kernels(der: SystemDerivation) -> list:
     en = matrix_sx(tr, sp.Matrix([T_, V_, h_]), psyms)
     frame_T = getattr(der, "frame_T", ())  # a spatial system's bodies (physics/spatial.py)
     casadi_T = getattr(der, "casadi_T", ())  # a spatial system's ef beams (rod3d, casadi)
-    if der.ef_kinetic or frame_T or casadi_T:
-        # Lagrange on the kinetic energy of the ef bodies and of a spatial system's bodies by AD
-        # (lagrange.equations_of_motion_sx): written in their frame's motion, substituted here
+    exact_bodies = getattr(der, "exact_bodies", ())  # planar beams with exact kinematics
+    r_exact = None
+    if der.ef_kinetic or frame_T or casadi_T or exact_bodies:
+        # Lagrange on the kinetic energy of the ef bodies, of a spatial system's bodies and of
+        # the exact beams by AD (lagrange.equations_of_motion_sx): written in their frame's
+        # motion, substituted here; the exact beams' gravity V_g too (exact_body.py)
         T_ef = (ef_kinetic_energy(der, tr, x) if der.ef_kinetic else ca.SX(0.0)) \
             + frame_kinetic_energy(tr, frame_T) + sum((c(tr, x) for c in casadi_T), ca.SX(0.0))
         guided = [(d[1 + 3 * k], d[2 + 3 * k], d[3 + 3 * k]) for k in range(len(der.guided))]
         M_ef, f_ef = equations_of_motion_sx(T_ef, 0, q, qd, guided)
+        V_x = ca.SX(0.0)
+        if exact_bodies:  # M and f from Lagrange; the Newton Jacobians from d'Alembert's r
+            T_x, V_x = exact_energies(exact_bodies, tr, x)
+            M_x, f_x = equations_of_motion_sx(T_x, -ca.gradient(V_x, q), q, qd, guided)
+            r_exact = ca.mtimes(M + M_ef, qdd) - (f + f_ef) + exact_residual(exact_bodies, tr, x, ddot)
+            T_ef, M_ef, f_ef = T_ef + T_x, M_ef + M_x, f_ef + f_x
+            tr.symbols[EXACT_VG], tr.priority[EXACT_VG] = V_x, 2
         M += M_ef
         f += f_ef
         T0_ef = ca.substitute(T_ef, qd, ca.SX.zeros(qd.shape))
-        en += ca.vertcat(T_ef, 0, ca.mtimes(qd.T, ca.mtimes(M_ef, qd)) / 2 - T0_ef)
+        h_ef = ca.mtimes(qd.T, ca.mtimes(M_ef, qd)) / 2 - T0_ef
+        en += ca.vertcat(T_ef, V_x, h_ef + V_x) if exact_bodies else ca.vertcat(T_ef, 0, h_ef)
         tr.symbols[EF_T] = T_ef
         for k, g in enumerate(der.guided):  # d/dt dT_ef/dtheta' - dT_ef/dtheta (torque outputs)
             p_th = ca.jacobian(T_ef, d[2 + 3 * k])
@@ -117,7 +130,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
     drive = [x["t"]]
     for g in der.guided:
         drive += [dtr(g.theta), dtr(sp.diff(g.theta, t_sym)), dtr(sp.diff(g.theta, t_sym, 2))]
-    r = ca.mtimes(M, x["qdd"]) - f
+    r = ca.mtimes(M, x["qdd"]) - f if r_exact is None else r_exact
     constraint_kernels = []
     if der.constraints:
         # Phi depends on time only through the guided theta_k: Phi_t = dPhi/dd * d'
@@ -410,6 +423,15 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ()))  # rod elements: M_e(e) in C
     scale = length_scale(system)
     initial = [tuple(c_double(v) for v in start_of(system, c)) for c in der.coords]
+    outputs_fn = next(k.function for k in kernels if k.name == "outputs")
+
+    def placeholders_read(name: str) -> bool:
+        """The outputs read q'' or the drive through a casadi placeholder (which hides from
+        sympy what it reads: an exact beam's section loads read both)."""
+        if not getattr(der, "casadi_outputs", None):
+            return False
+        args = outputs_fn.sx_in()
+        return ca.depends_on(outputs_fn(*args), args[outputs_fn.name_in().index(name)])
     ctx = {
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
         "prefix": c_prefix(system.name), "accessor": model_accessor(system.name),
@@ -426,8 +448,8 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "length_scale": c_double(scale), "length_param": length_param(der),
         "unbounded": [int(_unbounded(system, c)) for c in der.coords],
         "mass_constant": mass_constant, "initial": initial,
-        "outputs_use_acceleration": der.outputs_use_acceleration,
-        "outputs_use_drive": der.outputs_use_drive,
+        "outputs_use_acceleration": der.outputs_use_acceleration or placeholders_read("qdd"),
+        "outputs_use_drive": der.outputs_use_drive or placeholders_read("d"),
         "ef_bodies": ef_elements(der), "ef_damped": bool(der.ef_damping),
         "rod_bodies": rod_elements(der), "bandwidth": _bandwidth(der),
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),

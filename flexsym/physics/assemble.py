@@ -50,6 +50,8 @@ from flexsym.model.exact_numbers import exact
 from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
                      gravity_density, kinetic_density, momentum_density, w)
 from flexsym.physics.efbody import EfPart, ef_part
+from flexsym.physics.exact_kinematics import ExactKinematics, Quadrature
+from flexsym.physics.exact_body import EXACT_VG, body_quadrature, inertial_section_load, position_symbols
 from flexsym.core.errors import SpecError
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force, jacobi_integral
@@ -127,6 +129,16 @@ class FlexPart:
 
 
 @dataclass
+class ExactPart(FlexPart, ExactKinematics):
+    """A beam with exact kinematics (physics/exact_body.py): its V is the modal beam's (the
+    FlexPart's fields), its T, gravity and positions are casadi quadratures."""
+
+    quad: Quadrature = None
+    frame: tuple = ()  # (omega, V_x, V_y, g_x, g_y, R_x, R_y) in frame components, sympy
+    index: list = field(default_factory=list)  # its coordinates' places in q, in mode order
+
+
+@dataclass
 class EfKinetic:
     """An ef body's frame motion in frame components (omega, V = A^T R'), which sysgen feeds
     to the generic element's kinetic energy (efbody.generic_element) per element."""
@@ -185,6 +197,8 @@ class SystemDerivation:
     # body's point masses only), and per damped ef body (alpha, beta) of its elements (sysgen)
     dissipation: dict = field(default_factory=dict)
     ef_damping: dict = field(default_factory=dict)
+    exact_bodies: list = field(default_factory=list)  # ExactPart: T and V_g in casadi (sysgen)
+    casadi_outputs: dict = field(default_factory=dict)  # placeholder -> value(tr, x) (sysgen)
 
     @property
     def drive_symbols(self) -> list[sp.Symbol]:
@@ -241,14 +255,46 @@ def _held_beyond_root(system: System, beam: str) -> str:
     return ""
 
 
+def _check_exact(system: System, tree, b: FlexibleBeam) -> None:
+    """What the exact kinematics in a system (physics/exact_body.py) is derived for: a uniform,
+    undamped planar beam from which nothing hangs and on which no load acts beyond its root
+    (their equations would differentiate its quadrature positions in sympy), N and M its own
+    (EA eps, EI dphi/dx), and no output that needs its momentum (momentum, the reaction of a
+    tree joint it lies beyond, N or M from equilibrium of a beam it hangs from)."""
+    where = f"system '{system.name}': body '{b.name}': the exact kinematics (strain model 'exact')"
+    if system.dimension != 2:
+        raise SpecError(f"{where} is derived for planar systems only")
+    if b.model.body is not None:
+        raise SpecError(f"{where} is derived for a uniform beam (not from finite-element data)")
+    if b.damped:
+        raise SpecError(f"{where}: structural damping is not derived for it yet")
+    loaded = _held_beyond_root(replace(system, joints=()), b.name)
+    for j in system.joints:
+        if j.parent.partition(".")[0] == b.name and j.name not in tree.cut:
+            raise SpecError(f"{where}: joint '{j.name}' hangs a body from it (a loop may close "
+                            "on it; a body hanging from it is not derived yet)")
+    if loaded:
+        raise SpecError(f"{where}: {loaded} acts on it beyond its root (not derived yet)")
+    beyond = {j.name for j in system.joints if j.name not in tree.cut
+              and b.name in tree.subtree(system, j.name)}
+    for o in system.outputs:
+        fn, args = parse_output(system, o.quantity)
+        keys = {"M": ("moment",), "N": ("axial_force",), "sigma": ("moment", "axial_force")}.get(fn, ())
+        on_beam = keys and args[0] != b.name and any(
+            getattr(system.body(args[0]).model, k, "") == "equilibrium" for k in keys) and any(
+            j.parent.partition(".")[0] == args[0] for j in system.joints if j.name in beyond)
+        if fn == "momentum" or (fn == "reaction" and args[0] in beyond) or on_beam:
+            raise SpecError(f"{where}: output '{o.quantity}' needs its momentum, which is not "
+                            "derived yet")
+
+
 def check_derivable(system: System, tree=None) -> None:
     """Refuse, before any work, what the derivation does not support (one line)."""
     tree = tree or system.tree()
     where = f"system '{system.name}'"
     for b in system.bodies:
         if b.flexible and b.model.kind == "modal" and STRAIN_MODELS[b.model.strain].kinematics == "exact":
-            raise SpecError(f"{where}: body '{b.name}': the exact kinematics (strain model 'exact') "
-                            "is derived for a guided hub only; use ef for a geometrically exact body")
+            _check_exact(system, tree, b)
         if b.flexible and b.model.kind == "modal" and b.model.strain == "prestress":
             held = _held_beyond_root(system, b.name)
             if held:
@@ -374,8 +420,14 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
         fields = build_fields([modes[r.coordinate] for r in spec.axial],
                               [modes[r.coordinate] for r in spec.bending], sym, symd, table,
                               strain.foreshortening, symdd)
-        der.flex[b.name] = FlexPart(b, table, fields, modes,
-                                    {r.coordinate: r.axis for r in spec.modes}, names, psyms[b.name])
+        args = (b, table, fields, modes, {r.coordinate: r.axis for r in spec.modes}, names,
+                psyms[b.name])
+        if strain.kinematics == "exact":
+            part = ExactPart(*args, index=[[c.name for c in coords].index(f"{b.name}_{n}") for n in names])
+            part.quad = body_quadrature(part)
+            der.flex[b.name] = part
+        else:
+            der.flex[b.name] = FlexPart(*args)
 
     # kinematics: poses in tree order
     for body in tree.order:
@@ -449,14 +501,18 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
             return expr.xreplace(values).xreplace(part.psyms).xreplace(actual)
 
         mass = mass * tab.integrate(fl.weights["mu"])  # 1 for a uniform beam; a body's own
-        der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
-        V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
-            - body_expr(mass) * gvec.dot(pose.R)
-        H_ = body_expr(tab.integrate(momentum_density(fl, frame, ph[3], ph[4])))
-        der.momentum += H_
-        Ig = tab.integrate(gravity_density(fl, ph[5], ph[6]))  # linear in g: -g.(first moment)
-        _record_body(der, b.name, body_expr(mass), pose, A_,
-                     [body_expr(-sp.diff(Ig, gk)) for gk in ph[5:]], H_)
+        if isinstance(part, ExactPart):  # T and the deformation's gravity: exact_body (casadi)
+            part.frame = (omega, Vloc[0], Vloc[1], gloc[0], gloc[1], Rloc[0], Rloc[1])
+            der.exact_bodies.append(part)
+        else:
+            der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
+            V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
+                - body_expr(mass) * gvec.dot(pose.R)
+            H_ = body_expr(tab.integrate(momentum_density(fl, frame, ph[3], ph[4])))
+            der.momentum += H_
+            Ig = tab.integrate(gravity_density(fl, ph[5], ph[6]))  # linear in g: -g.(first moment)
+            _record_body(der, b.name, body_expr(mass), pose, A_,
+                         [body_expr(-sp.diff(Ig, gk)) for gk in ph[5:]], H_)
         strain = STRAIN_MODELS[b.model.strain]
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
@@ -660,6 +716,9 @@ def beam_fields_at(der: SystemDerivation, body: str, x: float):
 
     def fa(e):
         return field_at(view, e, at).xreplace(part.table.substitutions()).xreplace(part.psyms)
+    if isinstance(part, ExactPart):  # the section angle is the slope field, exactly
+        rx, ry = position_symbols(part, der.casadi_outputs, x)
+        return rx - _x(der, body, x), ry, fa(part.fields.v_s) / L_
     return fa(part.fields.u), fa(part.fields.v), fa(part.fields.v_s) / L_
 
 
@@ -683,9 +742,10 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
     if fn in ("x", "y"):
         return marker_pose(der, args[0])[0][0 if fn == "x" else 1]
     if fn == "T":
-        return der.T + (EF_T if der.ef_kinetic else 0)
+        return der.T + (EF_T if der.ef_kinetic or der.exact_bodies else 0)
     if fn == "V":
-        return der.V + sp.Add(*[part.elastic_energy() for part in der.elastic])
+        return (der.V + sp.Add(*[part.elastic_energy() for part in der.elastic])
+                + (EXACT_VG if der.exact_bodies else 0))
     if fn == "momentum":
         return der.momentum
     if fn == "dissipation":
@@ -904,8 +964,18 @@ def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Ex
     outputs._equilibrium_* for a guided hub) and the loads on its markers beyond x (joint
     reactions, point forces). N: their frame-x component (tension > 0), M: their moment about
     the section point (point rotary inertias' couples included)."""
-    rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
     part = der.flex[beam.name]
+    if isinstance(part, ExactPart):  # the inertial loads over its quadrature (casadi)
+        pose = der.poses[beam.name]
+        Arot = _rot(pose.angle)
+        u, v, slope = beam_fields_at(der, beam.name, x)
+        tangent = sp.Matrix([sp.cos(slope), sp.sin(slope)])  # the section's axis, frame components
+        section = pose.R + Arot * sp.Matrix([_x(der, beam.name, x) + u, v])
+        out = inertial_section_load(part, der.casadi_outputs, x, fn)
+        for F, tau, P in _loads_beyond(der, beam, x):
+            out += (Arot.T * F).dot(tangent) if fn == "N" else _cross(P - section, F) + tau
+        return out
+    rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
     f, tab = part.fields, part.table
     om, al, a0x, a0y, gx, gy = sp.symbols("Om_ Al_ A0x_ A0y_ gx_ gy_", real=True)
     at = exact(x) / exact(beam.length)

@@ -33,108 +33,25 @@ the states of every run.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import lru_cache
-
 import casadi as ca
-import mpmath
 import numpy as np
 import sympy as sp
 
 from flexsym.physics.energy import ENERGY_TERMS, alpha, build_fields, w
 from flexsym.core.errors import FlexsymError
-from flexsym.physics.integrals import IntegralTable, gauss_legendre
+from flexsym.physics.integrals import IntegralTable
+from flexsym.physics.exact_kinematics import (M_POINTS, MAX_SEGMENTS, QUAD_RTOL, ExactKinematics,
+                                             Quadrature, _test_state)
 from flexsym.emit.kernels import make_kernels, maneuver_sx, translator
 from flexsym.physics.lagrange import equations_of_motion_sx, generalized_force
 from flexsym.model.maneuver import maneuver_of
 from flexsym.physics.modal import Derivation, DerivedTerm
-from flexsym.model.modes import s
 from flexsym.model.output_names import point_of
 from flexsym.physics.outputs import output_expression
 from flexsym.model.strain_models import STRAIN_MODELS
 
-M_POINTS = 6  # Gauss points per segment (cumulative integrals cost m^2 per segment)
-QUAD_RTOL = 1e-6  # accuracy check of the quadrature (relative; see choose_quadrature)
-MAX_SEGMENTS = 256
-TEST_TIP_SLOPE = 1.5  # rad: the test state's largest section rotation (a tip thrown sideways)
 
-
-@dataclass(frozen=True)
-class Quadrature:
-    """Composite Gauss-Legendre rule on [0, 1]: n_seg segments of m points."""
-
-    n_seg: int
-    m: int
-
-    @property
-    def size(self) -> int:
-        return self.n_seg * self.m
-
-    @property
-    def local(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return _local_rule(self.m)
-
-    @property
-    def nodes(self) -> np.ndarray:
-        tau = self.local[0]
-        return np.concatenate([(k + tau) / self.n_seg for k in range(self.n_seg)])
-
-    @property
-    def weights(self) -> np.ndarray:
-        return np.tile(self.local[1], self.n_seg) / self.n_seg
-
-    def weights_between(self, a: float, b: float) -> np.ndarray:
-        """Weights over all nodes of int_a^b g ds for g interpolated per segment (degree m - 1)."""
-        out = np.zeros(self.size)
-        tau, _, _ = self.local
-        for k in range(self.n_seg):
-            lo, hi = max(a * self.n_seg - k, 0.0), min(b * self.n_seg - k, 1.0)
-            if hi > lo:
-                out[k * self.m:(k + 1) * self.m] = (_lagrange_integrals(tau, hi)
-                                                    - _lagrange_integrals(tau, lo)) / self.n_seg
-        return out
-
-    def describe(self) -> dict:
-        return {"segments": self.n_seg, "points_per_segment": self.m, "points": self.size,
-                "rule": "composite Gauss-Legendre with a spectral integration matrix per segment",
-                "check": f"M, f and [T, V, h] change by < {QUAD_RTOL:g} relative when the number "
-                         f"of segments is doubled, at a test state with section rotation up to "
-                         f"{TEST_TIP_SLOPE} rad (mode k's share ~ 1/k^2)"}
-
-
-@lru_cache(maxsize=None)
-def _local_rule(m: int):
-    """Nodes, weights and cumulative integration matrix S[a, b] = int_0^tau_a l_b on [0, 1]."""
-    xs, ws = gauss_legendre(m)
-    tau = np.array([float(x) for x in xs])
-    S = np.array([_lagrange_integrals(tau, t) for t in tau])
-    return tau, np.array([float(x) for x in ws]), S
-
-
-def _lagrange_integrals(tau: np.ndarray, t: float) -> np.ndarray:
-    """int_0^t l_b(x) dx for the Lagrange basis on the nodes tau (exact polynomial integration)."""
-    with mpmath.workdps(40):
-        out = []
-        for b in range(len(tau)):
-            poly = [mpmath.mpf(1)]  # coefficients, lowest degree first
-            denom = mpmath.mpf(1)
-            for c in range(len(tau)):
-                if c != b:
-                    poly = [(poly[i - 1] if i else 0) - tau[c] * (poly[i] if i < len(poly) else 0)
-                            for i in range(len(poly) + 1)]
-                    denom *= tau[b] - tau[c]
-            out.append(float(sum(cf * mpmath.mpf(t)**(i + 1) / (i + 1)
-                                 for i, cf in enumerate(poly)) / denom))
-    return np.array(out)
-
-
-def _shape_derivative(mode, order: int, at: np.ndarray) -> np.ndarray:
-    fn = sp.lambdify(s, sp.diff(mode.expr, s, order), "mpmath")
-    with mpmath.workdps(30):
-        return np.array([float(fn(mpmath.mpf(float(x)))) for x in at])
-
-
-class ExactDerivation(Derivation):
+class ExactDerivation(ExactKinematics, Derivation):
     """A Derivation whose T, M, f and kinematic outputs live in casadi (quadrature), V in sympy."""
 
     exact = True
@@ -173,64 +90,8 @@ class ExactDerivation(Derivation):
         return (name in ("v_tip", "u_tip") or (name[0] == "N" and self.spec.axial_force == "equilibrium")
                 or (name[0] == "M" and self.spec.moment == "equilibrium"))
 
-    # ----- casadi ------------------------------------------------------------------------
-    def _fields(self, quad: Quadrature, vec, p, at=None):
-        """(phi-like, eps-like) fields of the coordinate vector `vec` (q, q' or q'') at the
-        quadrature nodes (or at the points `at`), as SX."""
-        at = quad.nodes if at is None else np.asarray(at, dtype=float)
-        phi, eps = ca.SX.zeros(len(at)), ca.SX.zeros(len(at))
-        for i, name in enumerate(self.coords):
-            d = ca.DM(_shape_derivative(self.modes[name], 1, at)) * vec[i]
-            if self.groups[name] == "bending":
-                phi += d
-            else:
-                eps += d
-        return phi / p[4], eps / p[4]
-
-    @staticmethod
-    def _cumulative(quad: Quadrature, g, scale):
-        """int_0^s g at every node (N x c) and over the whole beam (1 x c)."""
-        _, wts, S = quad.local
-        start, rows = ca.SX.zeros(1, g.shape[1]), []
-        for k in range(quad.n_seg):
-            gk = g[k * quad.m:(k + 1) * quad.m, :]
-            rows.append(ca.repmat(start, quad.m, 1) + scale * ca.mtimes(ca.DM(S), gk))
-            start = start + scale * ca.mtimes(ca.DM(wts).T, gk)
-        return ca.vertcat(*rows), start
-
-    @staticmethod
-    def _cumulative_transpose(quad: Quadrature, F, scale):
-        """The transpose of _cumulative: sum_i C_ij F_i, the load at and beyond node j."""
-        _, wts, S = quad.local
-        beyond, rows = ca.SX.zeros(1, F.shape[1]), []
-        for k in reversed(range(quad.n_seg)):
-            Fk = F[k * quad.m:(k + 1) * quad.m, :]
-            rows.insert(0, scale * (ca.mtimes(ca.DM(S).T, Fk) + ca.mtimes(ca.DM(wts), beyond)))
-            beyond = beyond + ca.sum1(Fk)
-        return ca.vertcat(*rows)
-
     def kinematics(self, quad: Quadrature, x: dict) -> dict:
-        """Positions, velocities and the velocity part of the accelerations at the nodes
-        (N x 2, moving frame), and the Jacobian columns dg/dq of the integrand g = (1+eps) t."""
-        q, qd, p = x["q"], x["qd"], x["p"]
-        phi, eps = self._fields(quad, q, p)
-        phid, epsd = self._fields(quad, qd, p)
-        c, sn = ca.cos(phi), ca.sin(phi)
-        a = 1 + eps
-        t, n = ca.horzcat(c, sn), ca.horzcat(-sn, c)
-        scale = p[4] / quad.n_seg
-        cols = []  # dg_j/dq_i as N x 2 blocks
-        for i, name in enumerate(self.coords):
-            shape = ca.DM(_shape_derivative(self.modes[name], 1, quad.nodes)) / p[4]
-            base = n * ca.repmat(a, 1, 2) if self.groups[name] == "bending" else t
-            cols.append(base * ca.repmat(shape, 1, 2))
-        r, tip = self._cumulative(quad, t * ca.repmat(a, 1, 2), scale)
-        gd = t * ca.repmat(epsd, 1, 2) + n * ca.repmat(a * phid, 1, 2)
-        rd, _ = self._cumulative(quad, gd, scale)
-        gamma = n * ca.repmat(2 * epsd * phid, 1, 2) - t * ca.repmat(a * phid * phid, 1, 2)
-        rdd_v, _ = self._cumulative(quad, gamma, scale)
-        return {"r": r, "tip": tip, "rd": rd, "rdd_v": rdd_v, "cols": cols, "scale": scale,
-                "t": t, "n": n, "a": a}
+        return self.beam_kinematics(quad, x["q"], x["qd"], x["p"][4])
 
     @staticmethod
     def _frame_acceleration(k: dict, rdd, drive, accelerates: bool):
@@ -277,7 +138,7 @@ class ExactDerivation(Derivation):
         Newton matrices) cost half as much as differentiating M q'' - f."""
         q, qdd, drive, p = x["q"], x["qdd"], x["drive"], x["p"]
         k = self.kinematics(quad, x)
-        phidd, epsdd = self._fields(quad, qdd, p)
+        phidd, epsdd = self._fields(quad, qdd, p[4])
         gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
         rdd_a, _ = self._cumulative(quad, gdd, k["scale"])
         acc = self._frame_acceleration(k, k["rdd_v"] + rdd_a, drive, self.maneuver.accelerates)
@@ -309,7 +170,7 @@ class ExactDerivation(Derivation):
         #   N(x) = -rho A int_x^L a dx . t(x)              (along the axis at x)
         #   M(x) = -rho A int_x^L (r - r(x)) x a dx       (EI kappa sign: tip load +y gives M > 0)
         at = float(point_of(name, self.spec.points)[1])
-        phidd, epsdd = self._fields(quad, qdd, p)
+        phidd, epsdd = self._fields(quad, qdd, p[4])
         gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
         rdd_a, _ = self._cumulative(quad, gdd, k["scale"])
         acc = self._frame_acceleration(k, k["rdd_v"] + rdd_a, drive, self.maneuver.accelerates)
@@ -320,7 +181,7 @@ class ExactDerivation(Derivation):
             arm = k["r"] - ca.repmat(r_at, quad.size, 1)
             moment = arm[:, 0] * acc[:, 1] - arm[:, 1] * acc[:, 0]
             return -p[0] * p[2] * p[4] * ca.dot(wb, moment)
-        phi_at, _ = self._fields(quad, q, p, at=[at])
+        phi_at, _ = self._fields(quad, q, p[4], at=[at])
         Fx, Fy = p[4] * ca.dot(wb, acc[:, 0]), p[4] * ca.dot(wb, acc[:, 1])
         return -p[0] * p[2] * (Fx * ca.cos(phi_at[0]) + Fy * ca.sin(phi_at[0]))
 
@@ -388,25 +249,6 @@ def _symbolic_inputs(der):
 def _potential(der, tr):
     V = sp.Add(*[t.V for t in der.terms])
     return tr(der.numeric(sp.expand(V)))
-
-
-def _test_state(der):
-    """Bending mode k carries a share ~ 1/k^2 of a 1.5 rad rotation (alternating signs: the
-    harder case; a smooth deformation's modal content decays at least that fast), moderate
-    velocities. The study (exact_study.py) checks the rule on the states the runs visit."""
-    n = len(der.coords)
-    bend = [i for i, c in enumerate(der.coords) if der.groups[c] == "bending"]
-    q = np.zeros(n)
-    Lval = 10.0
-    shares = np.array([1.0 / (j + 1)**2 for j in range(len(bend))])
-    for j, i in enumerate(bend):
-        slope = _shape_derivative(der.modes[der.coords[i]], 1, np.linspace(0, 1, 201))
-        q[i] = (-1)**j * TEST_TIP_SLOPE * Lval * shares[j] / (shares.sum() * np.max(np.abs(slope)))
-    for i, c in enumerate(der.coords):
-        if der.groups[c] == "axial":
-            q[i] = 1e-3
-    qd = np.array([0.3 * (-1)**i * (i + 1) for i in range(n)])
-    return q, qd, np.array([6.0, 0.5]), np.array([3000.0, 7.0e10, 4.0e-4, 2.0e-7, Lval])
 
 
 def choose_quadrature(der) -> Quadrature:

@@ -620,7 +620,7 @@ def _carried(system: System, o: Output) -> None:
     elif (fn == "N" or (fn == "sigma" and system.dimension == 3)) and not axial_force_available(model):
         raise SpecError(f"{where}: model '{model.name}' (strain {model.strain}) has no axial mode to "
                         "carry N (choose a model with axial modes, e.g. m2)")
-    elif fn == "u" and not model.axial and model.strain != "foreshortening":
+    elif fn == "u" and not model.axial and model.strain not in ("foreshortening", "exact"):
         raise SpecError(f"{where}: model '{model.name}' has no axial mode and no foreshortening, so u "
                         "would be identically zero")
 

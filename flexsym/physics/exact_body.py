@@ -1,0 +1,176 @@
+"""A beam with exact kinematics (strain model `exact`, physics/exact.py) as a body of a planar
+system, its floating frame moved by the system (physics/assemble.ExactPart).
+
+Its strain energy is the modal beam's (quadratic: sympy, as every modal body's). What the exact
+kinematics changes lives in casadi, over the beam's composite Gauss rule (exact.Quadrature):
+
+    r(s) = L int_0^s (1 + eps) (cos phi, sin phi) ds'                 (frame components)
+    T    = 1/2 rho A L int_0^1 |r' + omega z x r + V|^2 ds              (omega, V: the frame's)
+    V_g  = -rho A L int_0^1 g . (R + r) ds                              (R: the frame's origin)
+
+T and V_g join the system's automatic-differentiation path (sysgen.build_system_kernels), and
+a position r(x) on the beam (a marker, an output, a cut joint's row) is a placeholder symbol in
+sympy whose casadi value sysgen substitutes. Sympy never differentiates a placeholder:
+check_derivable refuses what would (a tree joint, a load or a spring on the beam beyond its
+root, reactions), so the only derivatives taken of r(x) are casadi's.
+"""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import sympy as sp
+
+from flexsym.core.errors import FlexsymError
+from flexsym.model.exact_numbers import exact
+from flexsym.physics.exact_kinematics import M_POINTS, MAX_SEGMENTS, QUAD_RTOL, Quadrature, _test_state
+
+# Placeholder of the exact beams' gravity potential V_g in the output V (sysgen's casadi value)
+EXACT_VG = sp.Symbol("V_exact_", real=True)
+
+
+def body_quadrature(part) -> Quadrature:
+    """The composite rule, segments doubled until the beam's first moment, mass matrix and
+    kinetic energy in a spinning, translating frame change by less than QUAD_RTOL at
+    exact.py's large-deflection test state (section rotation up to 1.5 rad), the finer rule
+    judging: the one-beam rule's test (exact.choose_quadrature) on what a system body uses."""
+    q, qd, _, p = _test_state(part)
+    L = p[4]
+    qs, qds = ca.SX.sym("q", len(q)), ca.SX.sym("qd", len(q))
+
+    def evaluate(quad):
+        k = part.beam_kinematics(quad, qs, qds, L)
+        W = ca.DM(quad.weights)
+        v = k["rd"] + 6.0 * ca.horzcat(-k["r"][:, 1], k["r"][:, 0]) + ca.repmat(ca.DM([[0.7, -0.4]]), quad.size, 1)
+        T = 0.5 * ca.dot(W, ca.sum2(v * v))
+        out = ca.vertcat(ca.mtimes(W.T, k["r"]).T, T, ca.vec(ca.hessian(T, qds)[0]))
+        fn = ca.Function("check", [qs, qds], [out])
+        return np.array(fn(q, qd).full()).ravel()
+
+    n_seg = 2
+    prev = evaluate(Quadrature(n_seg, M_POINTS))
+    while n_seg < MAX_SEGMENTS:
+        cur = evaluate(Quadrature(2 * n_seg, M_POINTS))
+        if np.max(np.abs(prev - cur)) / np.max(np.abs(cur)) < QUAD_RTOL:
+            return Quadrature(n_seg, M_POINTS)
+        n_seg, prev = 2 * n_seg, cur
+    raise FlexsymError(f"body '{part.beam.name}': exact kinematics: the quadrature did not reach "
+                       f"{QUAD_RTOL:g} with {MAX_SEGMENTS} segments (too many or too high modes)")
+
+
+def _body_vectors(part, tr, x):
+    """The body's coordinates and rates (SX, in the order of its modes) and its L, rho A."""
+    q = ca.vertcat(*[x["q"][i] for i in part.index])
+    qd = ca.vertcat(*[x["qd"][i] for i in part.index])
+    P = {k.name: tr(v) for k, v in part.psyms.items()}
+    return q, qd, P["L"], P["rho"] * P["A"]
+
+
+def exact_energies(bodies, tr, x) -> tuple:
+    """(T, V_g) of the exact beams, casadi, in the system's q, q' (see the module doc)."""
+    T, Vg = ca.SX(0.0), ca.SX(0.0)
+    for part in bodies:
+        q, qd, L, rhoA = _body_vectors(part, tr, x)
+        k = part.beam_kinematics(part.quad, q, qd, L)
+        om, Vx, Vy, gx, gy, Rx, Ry = (tr(e) for e in part.frame)
+        W = ca.DM(part.quad.weights)
+        r = k["r"]
+        v = k["rd"] + ca.horzcat(-om * r[:, 1] + Vx, om * r[:, 0] + Vy)
+        T += 0.5 * rhoA * L * ca.dot(W, ca.sum2(v * v))
+        Vg -= rhoA * L * (ca.dot(W, gx * r[:, 0] + gy * r[:, 1]) + gx * Rx + gy * Ry)
+    return T, Vg
+
+
+def position_symbols(part, outputs: dict, x: float) -> tuple[sp.Symbol, sp.Symbol]:
+    """Placeholders for r(x) on the beam (frame components), registered in `outputs` (the
+    derivation's casadi_outputs) with their casadi values."""
+    at = float(exact(x) / exact(part.beam.length))
+    syms = tuple(sp.Symbol(f"r{c}_{part.beam.name}_{at!r}_", real=True) for c in "xy")
+    if syms[0] in outputs:
+        return syms
+    weights = ca.DM(part.quad.weights_between(0.0, at))
+
+    def value(tr, xx, c):
+        q, qd, L, _ = _body_vectors(part, tr, xx)
+        k = part.beam_kinematics(part.quad, q, qd, L)
+        g = k["t"] * ca.repmat(k["a"], 1, 2)
+        return L * ca.mtimes(weights.T, g[:, c])
+    outputs[syms[0]] = lambda tr, xx: value(tr, xx, 0)
+    outputs[syms[1]] = lambda tr, xx: value(tr, xx, 1)
+    return syms
+
+
+def _loads(part, tr, x, ddot):
+    """The beam's kinematics at its quadrature points and m_i (a_i - g) per unit weight (N x 2,
+    frame components): a_i the absolute acceleration, a_O + alpha z x r_i - omega^2 r_i +
+    2 omega z x r_i' + r_i'' (a_O = V' + omega z x V), q'' included; and the frame's omega
+    and V (SX)."""
+    q, qd, qdd, d = x["q"], x["qd"], x["qdd"], x["d"]
+    qb, qbd, L, rhoA = _body_vectors(part, tr, x)
+    qbdd = ca.vertcat(*[qdd[i] for i in part.index])
+    quad = part.quad
+    k = part.beam_kinematics(quad, qb, qbd, L)
+    om, Vx, Vy, gx, gy = (tr(e) for e in part.frame[:5])
+    V = ca.vertcat(Vx, Vy)
+
+    def rate(e):  # d/dt along the motion, q'' included
+        return ca.mtimes(ca.jacobian(e, q), qd) + ca.mtimes(ca.jacobian(e, qd), qdd) \
+            + ca.mtimes(ca.jacobian(e, d), ddot)
+    alpha, Vd = rate(om), rate(V)
+    aO = Vd + om * ca.vertcat(-Vy, Vx)
+    phidd, epsdd = part._fields(quad, qbdd, L)
+    gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
+    rdd_a, _ = part._cumulative(quad, gdd, k["scale"])
+    r, rd = k["r"], k["rd"]
+    zx = lambda v: ca.horzcat(-v[:, 1], v[:, 0])  # noqa: E731
+    acc = (k["rdd_v"] + rdd_a + 2 * om * zx(rd) + alpha * zx(r) - om * om * r
+           + ca.repmat(ca.horzcat(aO[0] - gx, aO[1] - gy), quad.size, 1))
+    return k, rhoA * L * acc, om, V, L
+
+
+def exact_residual(bodies, tr, x, ddot):
+    """The exact beams' part of r = M q'' - f by d'Alembert's principle on the quadrature
+    points, in the system's q, q', q'': sum_i m_i (a_i - g) . dp_i/dq (_loads), with
+    dp_i/dq = J_V + z x r_i J_omega + dr_i/dq (J_V = dV/dq', J_omega = domega/dq': the
+    frame's virtual motion). Equal to the Lagrange terms of exact_energies (the tests compare
+    their derivatives), at a fraction of the cost of differentiating those: sysgen takes the
+    Newton Jacobians from this one, as exact.py does for the guided hub."""
+    q, qd = x["q"], x["qd"]
+    r_all = ca.SX.zeros(q.shape[0])
+    for part in bodies:
+        k, mA, om, V, _ = _loads(part, tr, x, ddot)
+        F = mA * ca.repmat(ca.DM(part.quad.weights), 1, 2)  # N x 2
+        Ft = part._cumulative_transpose(part.quad, F, k["scale"])
+        elastic = ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]])
+        r = k["r"]
+        moment = ca.sum1(r[:, 0] * F[:, 1] - r[:, 1] * F[:, 0])
+        r_b = ca.mtimes(ca.jacobian(V, qd).T, ca.sum1(F).T) + ca.jacobian(om, qd).T * moment
+        for j, i in enumerate(part.index):
+            r_b[i] += elastic[j]
+        r_all += r_b
+    return r_all
+
+
+def inertial_section_load(part, outputs: dict, x: float, fn: str) -> sp.Symbol:
+    """A placeholder for what the inertial loads beyond station x give the section there:
+    N = -sum m_i (a_i - g) . t(x) (tension > 0), M = -sum (r_i - r(x)) x m_i (a_i - g) (the
+    modal beam's signs), over the quadrature weights from x to the tip; the loads on the
+    beam's markers beyond x are added in sympy (assemble._equilibrium_stress)."""
+    at = float(exact(x) / exact(part.beam.length))
+    sym = sp.Symbol(f"{fn}_inertial_{part.beam.name}_{at!r}_", real=True)
+    if sym in outputs:
+        return sym
+    wb, w0 = ca.DM(part.quad.weights_between(at, 1.0)), ca.DM(part.quad.weights_between(0.0, at))
+
+    def value(tr, xx):
+        k, mA, _, _, L = _loads(part, tr, xx, xx["ddot"])
+        g = k["t"] * ca.repmat(k["a"], 1, 2)
+        r_x = L * ca.mtimes(w0.T, g)  # 1 x 2
+        if fn == "N":
+            qb = ca.vertcat(*[xx["q"][i] for i in part.index])
+            phi, _ = part._fields(part.quad, qb, L, at=[at])
+            force = ca.mtimes(wb.T, mA)
+            return -(force[0] * ca.cos(phi[0]) + force[1] * ca.sin(phi[0]))
+        arm = k["r"] - ca.repmat(r_x, part.quad.size, 1)
+        return -ca.dot(wb, arm[:, 0] * mA[:, 1] - arm[:, 1] * mA[:, 0])
+    outputs[sym] = value
+    return sym
