@@ -29,7 +29,15 @@ GROUND = "ground"
 JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
 DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
 SPATIAL_JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
-SPATIAL_CUT_KINDS = ("spherical", "universal")  # closing a loop in 3D: their constraint rows  # derived in 3D so far (physics/spatial.py)
+# Joints closing a loop in 3D, by kind: their constraint rows (physics/spatial._cut_rows, the
+# assembly's scenes/assembly.cut_axes), as data: the gap rows ("point": the two points coincide,
+# three rows; "across": only across the axis, two rows along directions fixed in the parent) and
+# the rotation rows ("": none; "cross": a universal joint's one; "axis": the child's axis stays
+# parallel to the parent's, two; "lock": the relative rotation stays what it is at t = 0, three)
+SPATIAL_CUT_ROWS = {"spherical": ("point", ""), "universal": ("point", "cross"),
+                    "revolute": ("point", "axis"), "cylindrical": ("across", "axis"),
+                    "prismatic": ("across", "lock"), "clamp": ("point", "lock")}
+SPATIAL_CUT_KINDS = tuple(SPATIAL_CUT_ROWS)
 TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
 SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
 STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
@@ -633,10 +641,24 @@ class System:
                                 "names it)")
         tree = spanning_tree(self)
         for name in tree.cut if n == 3 else ():
-            if self.joint(name).kind not in SPATIAL_CUT_KINDS:
-                raise SpecError(f"{where}: joint '{name}' closes a loop: a {self.joint(name).kind} "
+            j = self.joint(name)
+            if j.kind not in SPATIAL_CUT_KINDS:
+                raise SpecError(f"{where}: joint '{name}' closes a loop: a {j.kind} "
                                 f"joint closing a spatial loop is not derived yet (closing: "
                                 f"{', '.join(SPATIAL_CUT_KINDS)})")
+            given = [k for k, v in (("initial", j.initial), ("slide", j.slide), ("angle2", j.angle2))
+                     if v != 0] + [k for k, v in (("rate", j.rate), ("slide_rate", j.slide_rate),
+                                                  ("rate2", j.rate2)) if v is not None]
+            ef = next((r for r in (j.parent, j.child) if r != GROUND and getattr(getattr(
+                self.body(r.partition(".")[0]), "model", None), "kind", None) == "fe"), None)
+            if ef and SPATIAL_CUT_ROWS[j.kind] != ("point", ""):
+                raise SpecError(f"{where}: joint '{name}' closes a loop at '{ef}': the orientation of a "
+                                f"spatial ef beam's section is not derived yet, so a {j.kind} joint "
+                                "cannot close a loop there (a spherical joint can)")
+            if j.kind != "spherical" and (given or j.fixed):
+                raise SpecError(f"{where}: joint '{name}' closes a loop: {', '.join(given or ['fixed'])} "
+                                "applies to joints in the tree (a joint closing a loop has no "
+                                "coordinate: its rows hold the child's relative motion)")
         for _, name in tree.parent_joint if n == 3 else ():
             parent = self.joint(name).parent.partition(".")[0]
             if parent != GROUND and getattr(getattr(self.body(parent), "model", None), "kind", None) == "fe":
