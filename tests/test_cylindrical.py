@@ -312,8 +312,8 @@ BAD = [  # (what, scene text, what the one line says)
      "joint 'c': a cylindrical joint needs an axis (three finite numbers, not all 0)"),
     ("in a planar system", PLANAR,
      "joint 'c': a cylindrical joint applies to spatial systems (dimension = 3) only"),
-    ("closing a loop", LOOP,
-     "joint 'closing' closes a loop: a cylindrical joint closing a spatial loop is not derived yet"),
+    ("closing a loop the given rates cannot keep", LOOP,  # a closing cylindrical is derived
+     "the joints' rates at t = 0 cannot satisfy the loops: c are given"),  # (test_spatial_cuts.py)
     ("a guided driver on it", GOOD + '\n[[driver]]\nname = "d"\nkind = "guided"\njoint = "c"\n'
      'maneuver = "constant"\nomega = 1.0\n',
      "driver 'd': joint 'c' is cylindrical: a driver on it is not derived yet"),

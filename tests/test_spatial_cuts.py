@@ -200,6 +200,18 @@ def test_an_undriven_loop_conserves_energy_at_rk4ps_order(kind):
     assert all(3.5 < p < 4.7 for p in orders), (drifts, orders)
 
 
+@pytest.mark.parametrize("kind", ["revolute", "cylindrical", "prismatic", "clamp"])
+def test_the_velocity_analysis_holds_the_rotation_rows(kind):
+    """b given 2 rad/s about y: the assembly's velocity analysis (rates3, with the closing
+    joint's rotation rows) turns a with it, the ball's rate (0, 2, 0) (locked, or the
+    minimum-norm rates when a may also turn about b's x; the gap rows alone would leave it 0)."""
+    from flexsym.scenes.system_scene import checked_system, system_from_data
+
+    system, _, _ = system_from_data(pair(kind, {"T": "T"}, hinge={"value": 0.8, "rate": 2.0}), "", "pair")
+    rate = checked_system(system)[0].joint("ball").rate
+    assert np.abs(np.array(rate) - [0.0, 2.0, 0.0]).max() < 1e-14, rate
+
+
 # ----- a clamp closing a loop, in static equilibrium
 def test_a_closing_clamp_carries_the_moment_of_hand_statics():
     """pair("clamp") at rest: a's centre of mass hangs in the y-z plane below the pivot, so
@@ -292,7 +304,19 @@ def _hinged_pair(d):
         j.update(kind="revolute", axis=[1.0, 0.0, 0.0])
 
 
+EF_ROD = {"name": "rod", "kind": "beam", "length": 0.3, "density": 7870.0, "youngs_modulus": 2.0e11,
+          "shear_modulus": 7.7e10, "area": 2.8e-5, "inertia_z": 6.4e-11, "inertia_y": 6.4e-11,
+          "torsion_constant": 1.28e-10, "model": {"variant": "ef", "elements": 4}}
+
+
+def _ef_rod(d):
+    d["body"][1] = dict(EF_ROD)
+    _joint(d, "slider_pin").update(kind="prismatic", axis=[1.0, 0.0, 0.0])
+
+
 BAD = [  # (what, edit of the good scene's data, what the one line says)
+    ("a closing prismatic at an ef beam's marker", _ef_rod,
+     "joint 'slider_pin' closes a loop at 'rod.tip': the orientation of a spatial ef beam's section is not derived yet"),
     ("a closing revolute with a zero axis", lambda d: _joint(d, "slider_pin").update(axis=[0.0, 0.0, 0.0]),
      "joint 'slider_pin': a revolute joint needs an axis (three finite numbers, not all 0)"),
     ("a closing revolute on a loop that does not close",

@@ -376,7 +376,10 @@ class Joint:
     child's frame parallel to the parent's at t = 0, `rate` its angular velocity relative to the
     parent then (three numbers, parent's frame); cylindrical (spatial systems): a revolute's
     turn about `axis` and a prismatic's slide along it, `initial`/`rate` the angle's and
-    `slide`/`slide_rate` the slide's; universal (spatial systems): closing a loop, the child's
+    `slide`/`slide_rate` the slide's (closing a spatial loop, a revolute, prismatic or
+    cylindrical joint or a clamp has no coordinate: its rows, SPATIAL_CUT_ROWS, hold the child's
+    motion relative to the parent as the joint allows it from the assembled start, its axis
+    in the parent's frame); universal (spatial systems): closing a loop, the child's
     `axis` (child's frame) stays across a cross axis fixed in the parent (no coordinate); in
     the tree, two turns in series, about `parent_axis` (parent's frame) by the angle
     `initial`/`rate`, then about `axis` (child's frame) by `angle2`/`rate2` (Joint.coordinates
@@ -651,10 +654,10 @@ class System:
                                                   ("rate2", j.rate2)) if v is not None]
             ef = next((r for r in (j.parent, j.child) if r != GROUND and getattr(getattr(
                 self.body(r.partition(".")[0]), "model", None), "kind", None) == "fe"), None)
-            if ef and SPATIAL_CUT_ROWS[j.kind] != ("point", ""):
+            if ef and j.kind not in ("spherical", "universal"):
                 raise SpecError(f"{where}: joint '{name}' closes a loop at '{ef}': the orientation of a "
                                 f"spatial ef beam's section is not derived yet, so a {j.kind} joint "
-                                "cannot close a loop there (a spherical joint can)")
+                                "cannot close a loop there (a spherical or universal joint can)")
             if j.kind != "spherical" and (given or j.fixed):
                 raise SpecError(f"{where}: joint '{name}' closes a loop: {', '.join(given or ['fixed'])} "
                                 "applies to joints in the tree (a joint closing a loop has no "

@@ -6,7 +6,8 @@ What is derived so far: rigid bodies, modal beams (uniform, or from finite-eleme
 fedata.BeamBody, below) and the geometrically exact `ef` (spatial_ef.py) joined in a tree by
 revolute, prismatic, cylindrical and universal joints (turns and slides in series about axes
 fixed in the frame they move; axis_motion), spherical joints (Euler parameters on |e| = 1, a
-constraint row) and clamps, with loops closed by spherical and universal joints (_cut_rows),
+constraint row) and clamps, with loops closed by spherical, universal, revolute, prismatic,
+cylindrical joints and clamps (_cut_rows: one mechanism, the kinds as data, SPATIAL_CUT_ROWS),
 guided or
 motor-driven, under gravity, point forces, torques and spring-dampers, modal beams with
 structural damping; a body may hang from a rigid body or from a modal beam's marker (the
