@@ -332,6 +332,9 @@ BAD = [  # (what, edit of the good scene's data, what the one line says)
      "joint 'slider_pin': axis applies to revolute, prismatic, cylindrical and universal joints only"),
     ("a driver on a joint that does not exist",
      lambda d: d["driver"][0].update(joint="crank"), "driver 'crank_drive': joint 'crank' does not exist"),
+    ("a driver on a revolute joint's slide",
+     lambda d: d["driver"][0].update(coordinate="slide"),
+     "driver 'crank_drive': joint 'crank_joint' (revolute) has no coordinate 'slide' (its coordinates: 'crank_joint'; it has one"),
     ("a driver on the closing joint",
      lambda d: d["driver"][0].update(joint="slider_pin"), "joint 'slider_pin' is a cut joint (it closes a loop)"),
     ("a driver on a coordinate that does not exist",
@@ -350,3 +353,63 @@ def test_the_good_scene_runs(tmp_path, capsys):
 @pytest.mark.parametrize("what,edit,says", BAD, ids=[b[0] for b in BAD])
 def test_bad_closing_joints_are_refused(tmp_path, capsys, what, edit, says):
     scene_text_refused(tmp_path, capsys, _edited(_twin_closed_by(), edit), says)
+
+
+# ----- drivers on a cylindrical joint's slide and a universal joint's second angle
+M_S, SLIDE_V, SPIN = 2.0, 0.5, 3.0  # the slider's mass, its guided slide's speed, its start spin
+
+
+def screw(driver: dict) -> dict:
+    """A rigid slider on a cylindrical joint about ground's z (its centre of mass 0.2 m off the
+    axis), spinning at SPIN, under gravity along -z, with `driver` on the joint."""
+    return {
+        "system": {"name": "screw", "dimension": 3},
+        "body": [{"name": "slider", "kind": "rigid", "mass": M_S, "inertia": [0.02, 0.03, 0.04],
+                  "com": [0.2, 0.0, 0.0], "markers": {"hole": [0.0, 0.0, 0.0]}}],
+        "joint": [{"name": "c", "kind": "cylindrical", "parent": "ground", "point": [0.0, 0.0, 1.0],
+                   "child": "slider.hole", "axis": [0.0, 0.0, 1.0], "initial": {"value": 0.0, "rate": SPIN}}],
+        "driver": [driver],
+        "gravity": {"g": [0.0, 0.0, -G]},
+        "solver": {"integrator": "rk4", "dt": 1e-3, "t_end": 1.0},
+        "output": {"interval": 0.01, "columns": {
+            "phi": "angle(c)", "w": "rate(c)", "s": "slide(c)", "v": "slide_rate(c)", "Fz": "reaction(c, z)",
+            "Mz": "reaction(c, mz)", "T": "T", "V": "V"}},
+    }
+
+
+def test_a_guided_slide_of_a_cylindrical_joint():
+    """coordinate = "slide": the slide is theta(t) = SLIDE_V t, the turn stays free (it keeps its
+    spin: nothing turns it about z), the joint carries the weight (the guide's force, M g along
+    z, with the slide at constant speed) and no moment about its axis (measured: round-off)."""
+    d = screw({"name": "lift", "kind": "guided", "joint": "c", "coordinate": "slide", "theta": f"{SLIDE_V}*t"})
+    r = run_ok(built(d), t_end=1.0, dt=1e-3, integrator="rk4")
+    assert np.abs(r["s"] - SLIDE_V * r.t).max() < 1e-14 and np.abs(r["v"] - SLIDE_V).max() < 1e-14
+    assert np.abs(r["w"] - SPIN).max() < 1e-12 and np.abs(r["phi"] - SPIN * r.t).max() < 1e-11
+    assert np.abs(r["Fz"] - M_S * G).max() < 1e-10 and np.abs(r["Mz"]).max() < 1e-10
+
+
+def test_a_motor_on_a_cylindrical_joints_turn():
+    """A motor (no coordinate: the turn) of torque tau0: the spin's rate grows as tau0 / I_z,O
+    (I_z + m 0.2^2), the slide falls freely (s = -g t^2 / 2)."""
+    tau0 = 0.3
+    d = screw({"name": "m", "kind": "motor", "joint": "c", "torque": str(tau0)})
+    r = run_ok(built(d), t_end=1.0, dt=1e-3, integrator="rk4")
+    I_O = 0.04 + M_S * 0.2**2
+    assert np.abs(r["w"] - (SPIN + tau0 / I_O * r.t)).max() < 1e-11
+    assert np.abs(r["s"] + G * r.t**2 / 2).max() < 1e-11
+
+
+def test_a_motor_on_a_universal_joints_second_angle():
+    """test_universal_tree's bob on a cross, a constant torque tau0 about its second arm: the
+    work it does is the energy's change, T + V - E(0) = tau0 (theta2 - theta2(0)) (rk4p at 1 ms
+    over 1 s: measured 1e-11 J of 0.2 J)."""
+    from test_universal_tree import SWING, _pendulum
+
+    tau0 = 0.4
+    d = _pendulum("uj_motor", SWING)
+    d["driver"] = [{"name": "m", "kind": "motor", "joint": "u", "coordinate": "angle2", "torque": str(tau0)}]
+    r = run_ok(built(d), t_end=1.0, dt=1e-3, integrator="rk4p")
+    work = tau0 * (r["th2"] - r["th2"][0])
+    E = r["T"] + r["V"]
+    assert np.abs(work).max() > 0.1
+    assert np.abs(E - E[0] - work).max() < 1e-8 * np.abs(work).max()

@@ -441,7 +441,10 @@ class Joint:
 class Driver:
     """guided: the tree joint's coordinate is theta(t), a named manoeuvre (`maneuver`, with
     `params` as (name, value) pairs) or `expression` of t; motor: a generalised force on it,
-    `expression` of t and of named joint coordinates and rates (J and J_rate)."""
+    `expression` of t and of named joint coordinates and rates (J and J_rate). A joint with two
+    coordinates (Joint.coordinates, spatial systems) is driven in its first (coordinate "": a
+    cylindrical joint's turn, a tree universal joint's first angle) or, with `coordinate` its
+    second's field (SECOND: "slide", "angle2"), in its second (System.driven)."""
 
     name: str
     kind: str
@@ -449,6 +452,7 @@ class Driver:
     expression: str = ""
     maneuver: str = ""
     params: tuple[tuple[str, float], ...] = ()
+    coordinate: str = ""  # "" the joint's first coordinate, or its second's field ("slide", "angle2")
 
 
 @dataclass(frozen=True)
@@ -563,6 +567,11 @@ class System:
         raise SpecError(f"system '{self.name}': body '{body}' has no marker '{mname}' "
                         f"(its markers: {known})")
 
+    def driven(self, d: Driver) -> str:
+        """The name of the coordinate driver d drives (Joint.coordinates): its joint's first (the
+        joint's own name), or its second (J_slide, J_angle2) with coordinate = its field."""
+        return self.joint(d.joint).coordinates[1].name if d.coordinate else d.joint
+
     def reserved_columns(self) -> dict:
         """Names the results already use besides the outputs -> what they are: t, violation,
         T, V, h (energy), every joint (its coordinate) and every elastic coordinate."""
@@ -590,10 +599,10 @@ class System:
         body hung from a beam's marker moves with its deformation). A spatial ef beam's element
         kinetic energy is then a C kernel; otherwise it needs the system's AD path
         (physics/spatial_ef)."""
-        tree, guided = self.tree(), {d.joint for d in self.drivers if d.kind == "guided"}
+        tree, guided = self.tree(), {self.driven(d) for d in self.drivers if d.kind == "guided"}
         while body != GROUND:
             j = self.joint(tree.joint_of(body))
-            if j.kind != "clamp" and j.name not in guided:
+            if j.kind != "clamp" and not (j.coordinates and all(c.name in guided for c in j.coordinates)):
                 return False
             body = j.parent.partition(".")[0] if j.parent != GROUND else GROUND
             if body != GROUND and self.body(body).flexible:
@@ -917,24 +926,33 @@ class System:
         j = self.joint(d.joint)
         if not j.has_coordinate:
             raise SpecError(f"{where}: joint '{d.joint}' is a {j.kind} (no coordinate to drive)")
-        if len(j.coordinates) > 1:  # a law per coordinate, and which one: not derived
-            raise SpecError(f"{where}: joint '{d.joint}' is {j.kind}: a driver on it is not derived "
-                            "yet (drive a revolute or prismatic joint)")
         if d.joint in tree.cut:
             raise SpecError(f"{where}: joint '{d.joint}' is a cut joint (it closes a loop); drive "
                             "a tree joint")
-        if d.joint in guided:
-            raise SpecError(f"{where}: joint '{d.joint}' already has a guided driver")
+        if not isinstance(d.coordinate, str):
+            raise SpecError(f"{where}: coordinate {d.coordinate!r} must be a string")
+        second = SECOND[j.kind][2] if len(j.coordinates) == 2 else None
+        if d.coordinate and d.coordinate != second:
+            names = ", ".join(f"'{c.name}'" for c in j.coordinates)
+            hint = (f"coordinate = \"{second}\" drives its second, none its first" if second else
+                    "it has one: give no coordinate")
+            raise SpecError(f"{where}: joint '{d.joint}' ({j.kind}) has no coordinate '{d.coordinate}' "
+                            f"(its coordinates: {names}; {hint})")
+        driven = self.driven(d)
+        if driven in guided:
+            raise SpecError(f"{where}: joint '{d.joint}' already has a guided driver"
+                            + (f" on its coordinate '{driven}'" if len(j.coordinates) > 1 else ""))
         if d.kind == "guided":
             if bool(d.expression) == bool(d.maneuver):
                 raise SpecError(f"{where}: a guided driver needs exactly one of maneuver or "
                                 "expression")
-            if any(x.joint == d.joint and x.kind == "motor" for x in self.drivers):
+            if any((x.joint, x.coordinate) == (d.joint, d.coordinate) and x.kind == "motor" for x in self.drivers):
                 raise SpecError(f"{where}: joint '{d.joint}' is guided and also has a motor")
-            if j.fixed or j.rate is not None:
+            rate = getattr(j, j.fields_of(driven)[1])
+            if j.fixed or rate is not None:
                 raise SpecError(f"{where}: joint '{d.joint}' is guided: its coordinate and rate at "
                                 "t = 0 are the driver's theta(0), theta'(0) (no fixed, no rate)")
-            guided.add(d.joint)
+            guided.add(driven)
         else:
             if not d.expression or d.maneuver:
                 raise SpecError(f"{where}: a motor driver needs an expression (and no maneuver)")
@@ -998,7 +1016,7 @@ class System:
 
 _SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2,
                      "direction": None, "slide": 0.0, "slide_rate": None, "parent_axis": None,
-                     "angle2": 0.0, "rate2": None}
+                     "angle2": 0.0, "rate2": None, "coordinate": ""}
 
 
 def system_to_dict(system: System) -> dict:

@@ -272,14 +272,15 @@ def derive_spatial(system: System) -> SystemDerivation:
     system.validate()
     tree = system.tree()
     guided = _guided(system)
-    guided_by_joint = {g.joint: g for g in guided}
+    guided_by_joint = {g.joint: g for g in guided}  # by the guided coordinate's name
     params, psyms = _params(system)
 
     coords: list[Coordinate] = []
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
-        if j.has_coordinate and j.name not in guided_by_joint:  # a cylindrical joint's two, ...
-            coords += [Coordinate(c.name, "joint", body, j.name) for c in j.coordinates]
+        if j.has_coordinate:  # a cylindrical joint's two, ..., but a guided one's
+            coords += [Coordinate(c.name, "joint", body, j.name) for c in j.coordinates
+                       if c.name not in guided_by_joint]
         elif j.kind == "spherical":  # Euler parameters: e(0) turns x to direction, e' = G^T omega/2
             e0, ed0 = initial_euler(j.direction, j.rate)
             coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
@@ -297,8 +298,11 @@ def derive_spatial(system: System) -> SystemDerivation:
     for c, x, xd in zip(coords, q, qd):
         if c.group == "joint":
             joint_sym.setdefault(c.joint, []).append((x, xd))
-    for g in guided:
-        joint_sym[g.joint] = [g.symbols[:2]]
+    by_name = {c.name: (x, xd) for c, x, xd in zip(coords, q, qd)} | {g.joint: g.symbols[:2] for g in guided}
+    for body in tree.order:  # each tree joint's coordinates in order, unknowns or guided
+        j = system.joint(tree.joint_of(body))
+        if j.coordinates:
+            joint_sym[j.name] = [by_name[c.name] for c in j.coordinates]
     der = SystemDerivation(system, tree, coords, guided, q, qd, qdd, params)
     der.spatial = {}
     der.rod_bodies, der.casadi_T, der.casadi_outputs = [], [], {}  # spatial ef beams (casadi)
@@ -843,7 +847,7 @@ def _applied(der) -> sp.Matrix:
         if d.kind == "motor":
             tau = parse_expression(d.expression, tuple(names.items()),
                                    f"system '{system.name}': driver '{d.name}'")
-            k = next(i for i, c in enumerate(der.coords) if c.joint == d.joint)
+            k = next(i for i, c in enumerate(der.coords) if c.name == system.driven(d))
             Q[k] += tau
     return Q
 
@@ -874,12 +878,18 @@ def _output(der, quantity: str) -> sp.Expr:
     system = der.system
     fn, args = parse_output(system, quantity)
     where = f"system '{system.name}': output '{quantity}'"
-    if fn in ("angle", "rate"):
-        return joint_coordinate(der, args[0], fn == "rate", where)
-    if any(fn in v[2:] for v in SECOND.values()):  # a joint's second coordinate (slide, angle2)
-        name = system.joint(args[0]).coordinates[1].name
-        k = next(i for i, c in enumerate(der.coords) if c.name == name)
-        return der.qd[k] if fn in (v[3] for v in SECOND.values()) else der.q[k]
+    second = any(fn in v[2:] for v in SECOND.values())  # a joint's second coordinate (slide, angle2)
+    if fn in ("angle", "rate") or second:  # an unknown of q, or a guided coordinate's theta(t)
+        j = system.joint(args[0])
+        name = j.coordinates[1].name if second else j.name
+        rate = fn == "rate" or fn in (v[3] for v in SECOND.values())
+        for c, x, xd in zip(der.coords, der.q, der.qd):
+            if c.name == name:
+                return xd if rate else x
+        for g in der.guided:
+            if g.joint == name:
+                return g.symbols[1] if rate else g.symbols[0]
+        return joint_coordinate(der, args[0], rate, where)  # a cut joint: refused there
     if fn == "R":  # ground <- the marker's axes (a beam's: its section's, to first order)
         return _section_rotation(der, args[0])["xyz".index(args[1]), "xyz".index(args[2])]
     if fn in ("x", "y", "z"):

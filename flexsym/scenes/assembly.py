@@ -74,7 +74,8 @@ class Assembly:
 
 
 def theta0(system: System) -> dict:
-    """(theta(0), theta'(0)) of each guided joint."""
+    """(theta(0), theta'(0)) of each guided coordinate, by its name (System.driven: a joint's
+    own name, or J_slide, J_angle2)."""
     out = {}
     for d in system.drivers:
         if d.kind != "guided":
@@ -84,7 +85,7 @@ def theta0(system: System) -> dict:
                 {sp.Symbol(k, positive=True): v for k, v in d.params})
         else:
             expr = parse_theta(d.expression)
-        out[d.joint] = (float(expr.subs(t, 0)), float(sp.diff(expr, t).subs(t, 0)))
+        out[system.driven(d)] = (float(expr.subs(t, 0)), float(sp.diff(expr, t).subs(t, 0)))
     return out
 
 
@@ -411,9 +412,9 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
     loops = _Loops(system, scale)
     guided = theta0(system)
     starts = {c.name: (c.value, c.rate) for j in loops.joints for c in j.coordinates}  # (value, rate)
-    fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
+    fixed = np.array([c in guided or j.fixed for j, c in zip(loops.joints, loops.coords)], dtype=bool)
     free = ~fixed
-    x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if c is None else starts[c][0]
+    x0 = np.array([guided[c][0] if c in guided else 0.0 if c is None else starts[c][0]
                    for j, c in zip(loops.joints, loops.coords)]) / loops.unit
     x, res = x0, np.max(np.abs(loops.phi(x0)), initial=0.0)
     if res > CLOSE_TOL:
@@ -485,14 +486,14 @@ def _rates(system: System, J: np.ndarray, slots: list, guided: dict) -> dict:
     Phi_q q' + Phi_t = 0 (refused when it cannot); J: Phi_q (dimensionless) over the rate
     slots (joint, coordinate name or a ball joint's component 0-2, unit)."""
     def given_rate(j, c):
-        if j.name in guided:
-            return guided[j.name][1]
+        if c in guided:
+            return guided[c][1]
         if isinstance(c, int):
             return None if j.rate is None else j.rate[c]
         return next(x.rate for x in j.coordinates if x.name == c)
 
     given = np.array([given_rate(j, c) or 0.0 for j, c, _ in slots]) / np.array([u for _, _, u in slots])
-    free = np.array([j.name not in guided and given_rate(j, c) is None for j, c, _ in slots], dtype=bool)
+    free = np.array([c not in guided and given_rate(j, c) is None for j, c, _ in slots], dtype=bool)
     rhs = -J @ given
     if not np.max(np.abs(rhs), initial=0.0) > 0:
         return {}
@@ -570,7 +571,7 @@ def _redundant(system: System, J: np.ndarray, slots: list, names: list, guided: 
     reactions = [o.quantity for o in system.outputs if o.quantity.replace(" ", "").startswith("reaction(")]
     if not reactions or J.size == 0:
         return
-    free = np.array([j.name not in guided for j, _, _ in slots], dtype=bool)
+    free = np.array([c not in guided for _, c, _ in slots], dtype=bool)
     Jf = J[:, free]
     big = np.max(np.abs(Jf), initial=0.0)
     moved = [i for i in range(len(Jf)) if np.max(np.abs(Jf[i]), initial=0.0) > 1e-12 * big]
