@@ -312,13 +312,18 @@ BAD = [  # (what, scene text, what the one line says)
      "joint 'c': a cylindrical joint needs an axis (three finite numbers, not all 0)"),
     ("in a planar system", PLANAR,
      "joint 'c': a cylindrical joint applies to spatial systems (dimension = 3) only"),
-    ("closing a loop", LOOP,
-     "joint 'closing' closes a loop: a cylindrical joint closing a spatial loop is not derived yet"),
-    ("a guided driver on it", GOOD + '\n[[driver]]\nname = "d"\nkind = "guided"\njoint = "c"\n'
+    ("closing a loop the given rates cannot keep", LOOP,  # a closing cylindrical is derived
+     "the joints' rates at t = 0 cannot satisfy the loops: c are given"),  # (test_spatial_cuts.py)
+    # drivers on it: tests/test_spatial_cuts.py (a guided slide, a motor on the turn)
+    ("a guided driver on its turn, its rate given", GOOD + '\n[[driver]]\nname = "d"\nkind = "guided"\njoint = "c"\n'
      'maneuver = "constant"\nomega = 1.0\n',
-     "driver 'd': joint 'c' is cylindrical: a driver on it is not derived yet"),
-    ("a motor on it", GOOD + '\n[[driver]]\nname = "d"\nkind = "motor"\njoint = "c"\ntorque = "0.1"\n',
-     "driver 'd': joint 'c' is cylindrical: a driver on it is not derived yet"),
+     "driver 'd': joint 'c' is guided: its coordinate and rate at t = 0 are the driver's"),
+    ("a torque on its slide", GOOD + '\n[[driver]]\nname = "d"\nkind = "motor"\njoint = "c"\ncoordinate = "slide"\n'
+     'torque = "0.1"\n', "a motor on slide of the cylindrical joint 'c' gives a force (write force = \"...\")"),
+    ("a driver on its second angle", GOOD + '\n[[driver]]\nname = "d"\nkind = "motor"\njoint = "c"\n'
+     'coordinate = "angle2"\ntorque = "0.1"\n',
+     "driver 'd': joint 'c' (cylindrical) has no coordinate 'angle2' (its coordinates: 'c', 'c_slide'; "
+     "coordinate = \"slide\" drives its second, none its first)"),
     ("slide of a revolute joint", GOOD.replace('s = "slide(c)"', 's = "slide(hinge)"'),
      "output 'slide(hinge)': slide(J) is a cylindrical joint's slide, and 'hinge' is a revolute joint"),
     ("an unknown coordinate function", GOOD.replace('s = "slide(c)"', 's = "slide_velocity(c)"'),

@@ -339,9 +339,11 @@ BAD = [  # (what, scene text, what the one line says)
     ("parent_axis on a revolute joint", GOOD.replace('axis = [0.0, 1.0, 0.0]\n\n[gravity]',
                                                      'axis = [0.0, 1.0, 0.0]\nparent_axis = [1.0, 0.0, 0.0]\n\n[gravity]'),
      "joint 'hinge': parent_axis applies to universal joints of spatial systems only"),
-    ("a guided driver on it", GOOD + GUIDED, "driver 'd': joint 'u' is universal: a driver on it is not derived yet"),
-    ("a motor on it", GOOD + '\n[[driver]]\nname = "d"\nkind = "motor"\njoint = "u"\ntorque = "0.1"\n',
-     "driver 'd': joint 'u' is universal: a driver on it is not derived yet"),
+    # drivers on it: tests/test_spatial_cuts.py (a motor on its second angle)
+    ("a guided driver on its first angle, its rate given", GOOD + GUIDED,
+     "driver 'd': joint 'u' is guided: its coordinate and rate at t = 0 are the driver's"),
+    ("a motor on its slide", GOOD + '\n[[driver]]\nname = "d"\nkind = "motor"\njoint = "u"\ncoordinate = "slide"\n'
+     'torque = "0.1"\n', "driver 'd': joint 'u' (universal) has no coordinate 'slide' (its coordinates: 'u', 'u_angle2'"),
     ("a non-finite angle2", GOOD.replace("angle2 = -0.1", "angle2 = nan"),
      "[[joint]] 'u' initial angle2: must be a finite number"),
     ("a string rate2", GOOD.replace("rate2 = 0.3", 'rate2 = "fast"'),

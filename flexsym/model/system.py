@@ -29,7 +29,15 @@ GROUND = "ground"
 JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
 DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
 SPATIAL_JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
-SPATIAL_CUT_KINDS = ("spherical", "universal")  # closing a loop in 3D: their constraint rows  # derived in 3D so far (physics/spatial.py)
+# Joints closing a loop in 3D, by kind: their constraint rows (physics/spatial._cut_rows, the
+# assembly's scenes/assembly.cut_axes), as data: the gap rows ("point": the two points coincide,
+# three rows; "across": only across the axis, two rows along directions fixed in the parent) and
+# the rotation rows ("": none; "cross": a universal joint's one; "axis": the child's axis stays
+# parallel to the parent's, two; "lock": the relative rotation stays what it is at t = 0, three)
+SPATIAL_CUT_ROWS = {"spherical": ("point", ""), "universal": ("point", "cross"),
+                    "revolute": ("point", "axis"), "cylindrical": ("across", "axis"),
+                    "prismatic": ("across", "lock"), "clamp": ("point", "lock")}
+SPATIAL_CUT_KINDS = tuple(SPATIAL_CUT_ROWS)
 TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
 SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
 STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
@@ -368,7 +376,10 @@ class Joint:
     child's frame parallel to the parent's at t = 0, `rate` its angular velocity relative to the
     parent then (three numbers, parent's frame); cylindrical (spatial systems): a revolute's
     turn about `axis` and a prismatic's slide along it, `initial`/`rate` the angle's and
-    `slide`/`slide_rate` the slide's; universal (spatial systems): closing a loop, the child's
+    `slide`/`slide_rate` the slide's (closing a spatial loop, a revolute, prismatic or
+    cylindrical joint or a clamp has no coordinate: its rows, SPATIAL_CUT_ROWS, hold the child's
+    motion relative to the parent as the joint allows it from the assembled start, its axis
+    in the parent's frame); universal (spatial systems): closing a loop, the child's
     `axis` (child's frame) stays across a cross axis fixed in the parent (no coordinate); in
     the tree, two turns in series, about `parent_axis` (parent's frame) by the angle
     `initial`/`rate`, then about `axis` (child's frame) by `angle2`/`rate2` (Joint.coordinates
@@ -430,7 +441,10 @@ class Joint:
 class Driver:
     """guided: the tree joint's coordinate is theta(t), a named manoeuvre (`maneuver`, with
     `params` as (name, value) pairs) or `expression` of t; motor: a generalised force on it,
-    `expression` of t and of named joint coordinates and rates (J and J_rate)."""
+    `expression` of t and of named joint coordinates and rates (J and J_rate). A joint with two
+    coordinates (Joint.coordinates, spatial systems) is driven in its first (coordinate "": a
+    cylindrical joint's turn, a tree universal joint's first angle) or, with `coordinate` its
+    second's field (SECOND: "slide", "angle2"), in its second (System.driven)."""
 
     name: str
     kind: str
@@ -438,6 +452,7 @@ class Driver:
     expression: str = ""
     maneuver: str = ""
     params: tuple[tuple[str, float], ...] = ()
+    coordinate: str = ""  # "" the joint's first coordinate, or its second's field ("slide", "angle2")
 
 
 @dataclass(frozen=True)
@@ -552,6 +567,11 @@ class System:
         raise SpecError(f"system '{self.name}': body '{body}' has no marker '{mname}' "
                         f"(its markers: {known})")
 
+    def driven(self, d: Driver) -> str:
+        """The name of the coordinate driver d drives (Joint.coordinates): its joint's first (the
+        joint's own name), or its second (J_slide, J_angle2) with coordinate = its field."""
+        return self.joint(d.joint).coordinates[1].name if d.coordinate else d.joint
+
     def reserved_columns(self) -> dict:
         """Names the results already use besides the outputs -> what they are: t, violation,
         T, V, h (energy), every joint (its coordinate) and every elastic coordinate."""
@@ -579,10 +599,10 @@ class System:
         body hung from a beam's marker moves with its deformation). A spatial ef beam's element
         kinetic energy is then a C kernel; otherwise it needs the system's AD path
         (physics/spatial_ef)."""
-        tree, guided = self.tree(), {d.joint for d in self.drivers if d.kind == "guided"}
+        tree, guided = self.tree(), {self.driven(d) for d in self.drivers if d.kind == "guided"}
         while body != GROUND:
             j = self.joint(tree.joint_of(body))
-            if j.kind != "clamp" and j.name not in guided:
+            if j.kind != "clamp" and not (j.coordinates and all(c.name in guided for c in j.coordinates)):
                 return False
             body = j.parent.partition(".")[0] if j.parent != GROUND else GROUND
             if body != GROUND and self.body(body).flexible:
@@ -633,10 +653,24 @@ class System:
                                 "names it)")
         tree = spanning_tree(self)
         for name in tree.cut if n == 3 else ():
-            if self.joint(name).kind not in SPATIAL_CUT_KINDS:
-                raise SpecError(f"{where}: joint '{name}' closes a loop: a {self.joint(name).kind} "
+            j = self.joint(name)
+            if j.kind not in SPATIAL_CUT_KINDS:
+                raise SpecError(f"{where}: joint '{name}' closes a loop: a {j.kind} "
                                 f"joint closing a spatial loop is not derived yet (closing: "
                                 f"{', '.join(SPATIAL_CUT_KINDS)})")
+            given = [k for k, v in (("initial", j.initial), ("slide", j.slide), ("angle2", j.angle2))
+                     if v != 0] + [k for k, v in (("rate", j.rate), ("slide_rate", j.slide_rate),
+                                                  ("rate2", j.rate2)) if v is not None]
+            ef = next((r for r in (j.parent, j.child) if r != GROUND and getattr(getattr(
+                self.body(r.partition(".")[0]), "model", None), "kind", None) == "fe"), None)
+            if ef and j.kind not in ("spherical", "universal"):
+                raise SpecError(f"{where}: joint '{name}' closes a loop at '{ef}': the orientation of a "
+                                f"spatial ef beam's section is not derived yet, so a {j.kind} joint "
+                                "cannot close a loop there (a spherical or universal joint can)")
+            if j.kind != "spherical" and (given or j.fixed):
+                raise SpecError(f"{where}: joint '{name}' closes a loop: {', '.join(given or ['fixed'])} "
+                                "applies to joints in the tree (a joint closing a loop has no "
+                                "coordinate: its rows hold the child's relative motion)")
         for _, name in tree.parent_joint if n == 3 else ():
             parent = self.joint(name).parent.partition(".")[0]
             if parent != GROUND and getattr(getattr(self.body(parent), "model", None), "kind", None) == "fe":
@@ -888,24 +922,33 @@ class System:
         j = self.joint(d.joint)
         if not j.has_coordinate:
             raise SpecError(f"{where}: joint '{d.joint}' is a {j.kind} (no coordinate to drive)")
-        if len(j.coordinates) > 1:  # a law per coordinate, and which one: not derived
-            raise SpecError(f"{where}: joint '{d.joint}' is {j.kind}: a driver on it is not derived "
-                            "yet (drive a revolute or prismatic joint)")
         if d.joint in tree.cut:
             raise SpecError(f"{where}: joint '{d.joint}' is a cut joint (it closes a loop); drive "
                             "a tree joint")
-        if d.joint in guided:
-            raise SpecError(f"{where}: joint '{d.joint}' already has a guided driver")
+        if not isinstance(d.coordinate, str):
+            raise SpecError(f"{where}: coordinate {d.coordinate!r} must be a string")
+        second = SECOND[j.kind][2] if len(j.coordinates) == 2 else None
+        if d.coordinate and d.coordinate != second:
+            names = ", ".join(f"'{c.name}'" for c in j.coordinates)
+            hint = (f"coordinate = \"{second}\" drives its second, none its first" if second else
+                    "it has one: give no coordinate")
+            raise SpecError(f"{where}: joint '{d.joint}' ({j.kind}) has no coordinate '{d.coordinate}' "
+                            f"(its coordinates: {names}; {hint})")
+        driven = self.driven(d)
+        if driven in guided:
+            raise SpecError(f"{where}: joint '{d.joint}' already has a guided driver"
+                            + (f" on its coordinate '{driven}'" if len(j.coordinates) > 1 else ""))
         if d.kind == "guided":
             if bool(d.expression) == bool(d.maneuver):
                 raise SpecError(f"{where}: a guided driver needs exactly one of maneuver or "
                                 "expression")
-            if any(x.joint == d.joint and x.kind == "motor" for x in self.drivers):
+            if any((x.joint, x.coordinate) == (d.joint, d.coordinate) and x.kind == "motor" for x in self.drivers):
                 raise SpecError(f"{where}: joint '{d.joint}' is guided and also has a motor")
-            if j.fixed or j.rate is not None:
+            rate = getattr(j, j.fields_of(driven)[1])
+            if j.fixed or rate is not None:
                 raise SpecError(f"{where}: joint '{d.joint}' is guided: its coordinate and rate at "
                                 "t = 0 are the driver's theta(0), theta'(0) (no fixed, no rate)")
-            guided.add(d.joint)
+            guided.add(driven)
         else:
             if not d.expression or d.maneuver:
                 raise SpecError(f"{where}: a motor driver needs an expression (and no maneuver)")
@@ -969,7 +1012,7 @@ class System:
 
 _SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2,
                      "direction": None, "slide": 0.0, "slide_rate": None, "parent_axis": None,
-                     "angle2": 0.0, "rate2": None}
+                     "angle2": 0.0, "rate2": None, "coordinate": ""}
 
 
 def system_to_dict(system: System) -> dict:

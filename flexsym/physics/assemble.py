@@ -361,7 +361,7 @@ def _guided(system: System) -> list[Guided]:
             except SpecError as exc:
                 raise SpecError(f"{where}: {exc}") from None
             params = []
-        j = d.joint
+        j = system.driven(d)  # the joint's name, or its second coordinate's (J_slide, J_angle2)
         syms = (sp.Symbol(j, real=True), sp.Symbol(f"{j}_d", real=True),
                 sp.Symbol(f"{j}_dd", real=True))
         out.append(Guided(j, d.name, theta, tuple(params), syms))

@@ -6,7 +6,8 @@ What is derived so far: rigid bodies, modal beams (uniform, or from finite-eleme
 fedata.BeamBody, below) and the geometrically exact `ef` (spatial_ef.py) joined in a tree by
 revolute, prismatic, cylindrical and universal joints (turns and slides in series about axes
 fixed in the frame they move; axis_motion), spherical joints (Euler parameters on |e| = 1, a
-constraint row) and clamps, with loops closed by spherical and universal joints (_cut_rows),
+constraint row) and clamps, with loops closed by spherical, universal, revolute, prismatic,
+cylindrical joints and clamps (_cut_rows: one mechanism, the kinds as data, SPATIAL_CUT_ROWS),
 guided or
 motor-driven, under gravity, point forces, torques and spring-dampers, modal beams with
 structural damping; a body may hang from a rigid body or from a modal beam's marker (the
@@ -271,14 +272,15 @@ def derive_spatial(system: System) -> SystemDerivation:
     system.validate()
     tree = system.tree()
     guided = _guided(system)
-    guided_by_joint = {g.joint: g for g in guided}
+    guided_by_joint = {g.joint: g for g in guided}  # by the guided coordinate's name
     params, psyms = _params(system)
 
     coords: list[Coordinate] = []
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
-        if j.has_coordinate and j.name not in guided_by_joint:  # a cylindrical joint's two, ...
-            coords += [Coordinate(c.name, "joint", body, j.name) for c in j.coordinates]
+        if j.has_coordinate:  # a cylindrical joint's two, ..., but a guided one's
+            coords += [Coordinate(c.name, "joint", body, j.name) for c in j.coordinates
+                       if c.name not in guided_by_joint]
         elif j.kind == "spherical":  # Euler parameters: e(0) turns x to direction, e' = G^T omega/2
             e0, ed0 = initial_euler(j.direction, j.rate)
             coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
@@ -296,8 +298,11 @@ def derive_spatial(system: System) -> SystemDerivation:
     for c, x, xd in zip(coords, q, qd):
         if c.group == "joint":
             joint_sym.setdefault(c.joint, []).append((x, xd))
-    for g in guided:
-        joint_sym[g.joint] = [g.symbols[:2]]
+    by_name = {c.name: (x, xd) for c, x, xd in zip(coords, q, qd)} | {g.joint: g.symbols[:2] for g in guided}
+    for body in tree.order:  # each tree joint's coordinates in order, unknowns or guided
+        j = system.joint(tree.joint_of(body))
+        if j.coordinates:
+            joint_sym[j.name] = [by_name[c.name] for c in j.coordinates]
     der = SystemDerivation(system, tree, coords, guided, q, qd, qdd, params)
     der.spatial = {}
     der.rod_bodies, der.casadi_T, der.casadi_outputs = [], [], {}  # spatial ef beams (casadi)
@@ -350,6 +355,9 @@ def derive_spatial(system: System) -> SystemDerivation:
         R = fp.R + fp.A * m_p - A_ * m_c
         frames[body] = Frame(A_, R, omega, V, Q.T * fp.g)
     der.spatial["frames"] = frames
+    early = not any(b.flexible and is_ef(b) for b in system.bodies)
+    if early:  # the loops' rows and their checks before the costly work (an ef beam's markers: after it)
+        _cut_rows(der)
 
     V_grav, Q_ = sp.Integer(0), sp.zeros(len(coords), 1)
     gvec = _vec(grav)
@@ -418,7 +426,8 @@ def derive_spatial(system: System) -> SystemDerivation:
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
     if reads_qdd:
         der.M = (der.M - B).applyfunc(sp.expand)
-    _cut_rows(der)
+    if not early:
+        _cut_rows(der)
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
     return der
@@ -526,12 +535,33 @@ def _section_angles(der, beam: str, x: float) -> sp.Matrix:
     return sp.Matrix([_at(der, beam, x, "phi"), -_at(der, beam, x, "vz_s") / L, _at(der, beam, x, "v_s") / L])
 
 
+def _cut_point(der, ref: str, point) -> sp.Matrix:
+    """A cut joint's side's point (ground's: the joint's point)."""
+    return _vec(point) if ref == GROUND else _marker_point(der, ref)
+
+
+def _cut_axes_of(der, ref: str) -> sp.Matrix:
+    """Ground <- a cut joint's side's section axes (ground's: I)."""
+    return sp.eye(3) if ref == GROUND else _section_rotation(der, ref)
+
+
 def _cut_rows(der) -> None:
-    """Constraint rows of the joints that close loops: a spherical joint's three (the parent's
-    point minus the child's, ground components), a universal joint's three and one more: the
-    child's axis e1 stays perpendicular to a direction e2 fixed in the parent's section, e2 at
-    t = 0 perpendicular to e1 and to the parent's x axis (scaled to a length, as every row).
-    Refused when a loop does not close at t = 0 (3D assembly is not derived yet)."""
+    """Constraint rows of the joints that close loops, by kind as data (SPATIAL_CUT_ROWS,
+    assembly.cut_axes), every row scaled to a length:
+     * gap rows: the parent's point minus the child's, ground components (spherical, universal,
+       revolute, clamp: .x, .y, .z), or along n1, n2 across the axis a, fixed in the parent's
+       section (prismatic, cylindrical: .n1, .n2; the slide along a is free);
+     * rotation rows u_c . w_p (u fixed in the child's section, w in the parent's), from the
+       assembled start (cut_axes): a universal joint's one (.cross: its child's axis e1 stays
+       perpendicular to e2, fixed in the parent's section, e2 at t = 0 perpendicular to e1 and to
+       the parent's x axis); revolute, cylindrical: the child's copy of a across n1 and n2 (.a1,
+       .a2: the axes stay parallel); prismatic, clamp: the relative rotation locked (.r1, .r2,
+       .r3: the child's copy of the parent's triad f against the parent's, g2.f3, g3.f1, g1.f2).
+    der.spatial["cuts"][name] = (first row, the rows' loads: ("gap", n, parent-fixed) per gap
+    row, ("turn", u, w) per rotation row) for cut_load. Refused when a loop does not close at
+    t = 0 (the scene reader assembles it first)."""
+    from flexsym.scenes.assembly import cut_axes
+
     system = der.system
     scale = exact(length_scale(system))
     der.spatial["cuts"] = {}
@@ -539,9 +569,11 @@ def _cut_rows(der) -> None:
     for name in der.tree.cut:
         j = system.joint(name)
         first = len(der.constraints)
-        gap = _marker_point(der, j.parent) - _marker_point(der, j.child)
-        der.constraints += [(f"{name}.{c}", gap[k]) for k, c in enumerate("xyz")]
-        axes = None
+        loads = []
+        if j.kind in ("spherical", "universal"):  # written first: their rows as they were
+            gap = _cut_point(der, j.parent, j.point) - _marker_point(der, j.child)
+            der.constraints += [(f"{name}.{c}", gap[k]) for k, c in enumerate("xyz")]
+            loads += [("gap", None, False)] * 3
         if j.kind == "universal":
             start = start or _start_values(der)
             e1 = der.spatial["frames"][system.marker(j.child)[0]].A * _vec(j.axis)
@@ -553,8 +585,26 @@ def _cut_rows(der) -> None:
             e2_local = sp.Matrix([exact(float(v)) for v in (Rp.xreplace(start).evalf().T * e2_0)])
             e2 = Rp * e2_local
             der.constraints.append((f"{name}.cross", scale * e1.dot(e2)))
-            axes = (e1, e2, scale)
-        der.spatial["cuts"][name] = (first, axes)
+            loads.append(("turn", e1, e2))
+        elif j.kind != "spherical":
+            start = start or _start_values(der)
+            Ap, Ac = _cut_axes_of(der, j.parent), _cut_axes_of(der, j.child)
+            p, c = _cut_point(der, j.parent, j.point), _marker_point(der, j.child)
+            A0 = [np.array(A.xreplace(start).evalf(), dtype=float) for A in (Ap, Ac)]
+            across, pairs = cut_axes(j, *A0)
+            if across is None:
+                der.constraints += [(f"{name}.{k}", p[i] - c[i]) for i, k in enumerate("xyz")]
+                loads += [("gap", None, False)] * 3
+            else:
+                for k, n in enumerate(across):
+                    n = Ap * sp.Matrix([exact(float(v)) for v in n])
+                    der.constraints.append((f"{name}.n{k + 1}", (p - c).dot(n)))
+                    loads.append(("gap", n, True))
+            for label, u, w in pairs:
+                u, w = (A * sp.Matrix([exact(float(v)) for v in x]) for A, x in ((Ac, u), (Ap, w)))
+                der.constraints.append((f"{name}.{label}", scale * u.dot(w)))
+                loads.append(("turn", u, w))
+        der.spatial["cuts"][name] = (first, loads, scale)
     if der.tree.cut:
         start = start or _start_values(der)
         for row, phi in der.constraints:
@@ -586,17 +636,34 @@ def cut_loads(der, beam: str) -> list[tuple[sp.Matrix, sp.Matrix, str]]:
 
 
 def cut_load(der, name: str, side: str) -> tuple[sp.Matrix, sp.Matrix]:
-    """(force, torque) in ground components that cut joint `name` exerts on its `side`:
-    minus Phi_q^T lambda split by side (rows parent - child: the parent gets -lambda, the
-    child +lambda; a universal joint's row e1.e2 gives the torques)."""
-    first, axes = der.spatial["cuts"][name]
-    lam = der.lam[first:first + 3, 0]
-    torque = sp.zeros(3, 1)
-    if axes is not None:
-        e1, e2, scale = axes
-        mu = der.lam[first + 3, 0] * scale
-        torque = -mu * (_cross(e2, e1) if side == "parent" else _cross(e1, e2))
-    return (-lam if side == "parent" else lam), torque
+    """(force, torque about the side's point) in ground components that cut joint `name` exerts
+    on its `side`: minus Phi_q^T lambda split by side, row by row (cut_rows' loads). A gap row
+    n . (p - c): -lambda n on the parent, +lambda n on the child, and where n turns with the
+    parent (across an axis) the parent's torque -lambda n x (p - c) (the force acts where the
+    child's point is); a rotation row s u . w (u the child's, w the parent's): the torques
+    -lambda s u x w on the child and -lambda s w x u on the parent."""
+    first, loads, scale = der.spatial["cuts"][name]
+    force, torque = sp.zeros(3, 1), sp.zeros(3, 1)
+    parent = side == "parent"
+    gap = None
+    for k, load in enumerate(loads):
+        lam = der.lam[first + k, 0]
+        if load[0] == "gap":
+            n, turns = load[1], load[2]
+            if n is None:  # along ground's axis k (the rows .x, .y, .z)
+                force[k % 3] += -lam if parent else lam
+                continue
+            force += -lam * n if parent else lam * n
+            if parent and turns:
+                if gap is None:
+                    j = der.system.joint(name)
+                    gap = _cut_point(der, j.parent, j.point) - _marker_point(der, j.child)
+                torque += -lam * _cross(n, gap)
+        else:
+            u, w = load[1], load[2]
+            mu = lam * scale
+            torque += -mu * (_cross(w, u) if parent else _cross(u, w))
+    return force, torque
 
 
 def _motion_symbols(body: str) -> tuple[sp.Matrix, sp.Matrix]:
@@ -780,7 +847,7 @@ def _applied(der) -> sp.Matrix:
         if d.kind == "motor":
             tau = parse_expression(d.expression, tuple(names.items()),
                                    f"system '{system.name}': driver '{d.name}'")
-            k = next(i for i, c in enumerate(der.coords) if c.joint == d.joint)
+            k = next(i for i, c in enumerate(der.coords) if c.name == system.driven(d))
             Q[k] += tau
     return Q
 
@@ -811,12 +878,18 @@ def _output(der, quantity: str) -> sp.Expr:
     system = der.system
     fn, args = parse_output(system, quantity)
     where = f"system '{system.name}': output '{quantity}'"
-    if fn in ("angle", "rate"):
-        return joint_coordinate(der, args[0], fn == "rate", where)
-    if any(fn in v[2:] for v in SECOND.values()):  # a joint's second coordinate (slide, angle2)
-        name = system.joint(args[0]).coordinates[1].name
-        k = next(i for i, c in enumerate(der.coords) if c.name == name)
-        return der.qd[k] if fn in (v[3] for v in SECOND.values()) else der.q[k]
+    second = any(fn in v[2:] for v in SECOND.values())  # a joint's second coordinate (slide, angle2)
+    if fn in ("angle", "rate") or second:  # an unknown of q, or a guided coordinate's theta(t)
+        j = system.joint(args[0])
+        name = j.coordinates[1].name if second else j.name
+        rate = fn == "rate" or fn in (v[3] for v in SECOND.values())
+        for c, x, xd in zip(der.coords, der.q, der.qd):
+            if c.name == name:
+                return xd if rate else x
+        for g in der.guided:
+            if g.joint == name:
+                return g.symbols[1] if rate else g.symbols[0]
+        return joint_coordinate(der, args[0], rate, where)  # a cut joint: refused there
     if fn == "R":  # ground <- the marker's axes (a beam's: its section's, to first order)
         return _section_rotation(der, args[0])["xyz".index(args[1]), "xyz".index(args[2])]
     if fn in ("x", "y", "z"):

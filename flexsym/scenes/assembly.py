@@ -74,7 +74,8 @@ class Assembly:
 
 
 def theta0(system: System) -> dict:
-    """(theta(0), theta'(0)) of each guided joint."""
+    """(theta(0), theta'(0)) of each guided coordinate, by its name (System.driven: a joint's
+    own name, or J_slide, J_angle2)."""
     out = {}
     for d in system.drivers:
         if d.kind != "guided":
@@ -84,7 +85,7 @@ def theta0(system: System) -> dict:
                 {sp.Symbol(k, positive=True): v for k, v in d.params})
         else:
             expr = parse_theta(d.expression)
-        out[d.joint] = (float(expr.subs(t, 0)), float(sp.diff(expr, t).subs(t, 0)))
+        out[system.driven(d)] = (float(expr.subs(t, 0)), float(sp.diff(expr, t).subs(t, 0)))
     return out
 
 
@@ -209,18 +210,69 @@ def _local3(system, ref) -> sp.Matrix:
     return sp.Matrix([m.x, m.y, m.z])
 
 
+def across(axis) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(a, n1, n2): the unit axis and two unit directions across it and each other, a right-handed
+    triad by one rule (n1 = a x e_k / |.|, e_k the coordinate axis least along a; n2 = a x n1):
+    the directions a closing revolute, cylindrical or prismatic joint's rows are taken along."""
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    n1 = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+    n1 /= np.linalg.norm(n1)
+    return a, n1, np.cross(a, n1)
+
+
+def cut_axes(j, A_p0: np.ndarray, A_c0: np.ndarray) -> tuple[list | None, list]:
+    """A spatial joint closing a loop as data (SPATIAL_CUT_ROWS), from the two sides' axes at the
+    assembled t = 0 (A_p0, A_c0: ground <- the parent's and the child's section, numpy; ground: I):
+    (gap, pairs). gap: None (the two points coincide: three rows along ground's axes) or the
+    parent-frame directions the gap is measured along ("across": n1, n2 of the axis, `across`);
+    pairs: (label, u, w) of the rotation rows u_c . w_p = 0, u fixed in the child's section, w in
+    the parent's (their frames' components): "axis": the parent's axis a carried into the child
+    at t = 0 (u = A_c0^T A_p0 a) across n1 and across n2; "lock": the parent's triad f = (a, n1,
+    n2) (a clamp: its section's axes) carried likewise, g_i . f_j for (i, j) = (2, 3), (3, 1),
+    (1, 2), to first order the relative rotation's components along f_1, f_2, f_3 (each row's
+    gradient at t = 0 a unit turn: well conditioned). All rows vanish at t = 0 by construction
+    but the gap's, which the assembly closes. A universal joint's cross row is
+    physics/spatial._cut_rows' own (as it was first written)."""
+    from flexsym.model.system import SPATIAL_CUT_ROWS
+
+    gap_kind, turn = SPATIAL_CUT_ROWS[j.kind]
+    if gap_kind == "point" and turn in ("", "cross"):
+        return None, []
+    if j.kind == "clamp":
+        f = list(np.eye(3))
+    else:
+        f = list(across(j.axis))
+    carry = A_c0.T @ A_p0  # child <- parent at t = 0
+    g = [carry @ v for v in f]
+    if turn == "axis":
+        pairs = [("a1", g[0], f[1]), ("a2", g[0], f[2])]
+    else:
+        pairs = [("r1", g[1], f[2]), ("r2", g[2], f[0]), ("r3", g[0], f[1])]
+    return (None if gap_kind == "point" else [f[1], f[2]]), pairs
+
+
+def _end3(system, frames, j, side: str):
+    """(A, the point) of a joint's side: a body's marker, or ground's point."""
+    ref = getattr(j, side)
+    if ref == GROUND:
+        return sp.eye(3), sp.Matrix(j.point)
+    A, R = frames[ref.partition(".")[0]]
+    return A, R + A * _local3(system, ref)
+
+
 def cut_rows3(system: System, frames: dict) -> list[tuple[str, object, bool]]:
-    """(cut joint, Phi row, is a length) of a spatial system's loops with undeformed bodies: a
-    spherical or universal joint's two points coincide (a universal joint's cross axis is
-    perpendicular at t = 0 by its definition, physics/spatial.py)."""
+    """(cut joint, Phi row, is a length) of a spatial system's loops with undeformed bodies: the
+    two points coincide, or (prismatic, cylindrical: cut_axes) their gap has no component
+    across the axis fixed in the parent; the rotation rows vanish at t = 0 by their definition
+    (cut_axes; a universal joint's cross axis: physics/spatial.py), rates3 holds their rates."""
     rows = []
     for name in system.tree().cut:
         j = system.joint(name)
-        ends = []
-        for ref in (j.parent, j.child):
-            A, R = frames[ref.partition(".")[0]]
-            ends.append(R + A * _local3(system, ref))
-        rows += [(name, ends[0][k] - ends[1][k], True) for k in range(3)]
+        (A_p, p), (_, c) = _end3(system, frames, j, "parent"), _end3(system, frames, j, "child")
+        if j.kind in ("prismatic", "cylindrical"):
+            rows += [(name, (p - c).dot(A_p * sp.Matrix(n)), True) for n in across(j.axis)[1:]]
+        else:
+            rows += [(name, p[k] - c[k], True) for k in range(3)]
     return rows
 
 
@@ -361,9 +413,9 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
     loops = _Loops(system, scale)
     guided = theta0(system)
     starts = {c.name: (c.value, c.rate) for j in loops.joints for c in j.coordinates}  # (value, rate)
-    fixed = np.array([j.name in guided or j.fixed for j in loops.joints], dtype=bool)
+    fixed = np.array([c in guided or j.fixed for j, c in zip(loops.joints, loops.coords)], dtype=bool)
     free = ~fixed
-    x0 = np.array([guided[j.name][0] if j.name in guided else 0.0 if c is None else starts[c][0]
+    x0 = np.array([guided[c][0] if c in guided else 0.0 if c is None else starts[c][0]
                    for j, c in zip(loops.joints, loops.coords)]) / loops.unit
     x, res = x0, np.max(np.abs(loops.phi(x0)), initial=0.0)
     if res > CLOSE_TOL:
@@ -397,7 +449,8 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
             joints[j.name] = replace(joints[j.name], **{_key(j, c, 0): float(b * u)})
     placed = replace(system, joints=tuple(joints[j.name] for j in system.joints))
     if system.dimension == 3:  # at the assembled positions
-        J, slots = rates3(placed, guided, scale)
+        J, slots, names = rates3(placed, guided, scale)
+        _redundant(placed, J, slots, names, guided)
     else:
         J, slots = jac, list(zip(loops.joints, loops.coords, loops.unit))
     for (j, c), rate in _rates(placed, J, slots, guided).items():
@@ -434,14 +487,14 @@ def _rates(system: System, J: np.ndarray, slots: list, guided: dict) -> dict:
     Phi_q q' + Phi_t = 0 (refused when it cannot); J: Phi_q (dimensionless) over the rate
     slots (joint, coordinate name or a ball joint's component 0-2, unit)."""
     def given_rate(j, c):
-        if j.name in guided:
-            return guided[j.name][1]
+        if c in guided:
+            return guided[c][1]
         if isinstance(c, int):
             return None if j.rate is None else j.rate[c]
         return next(x.rate for x in j.coordinates if x.name == c)
 
     given = np.array([given_rate(j, c) or 0.0 for j, c, _ in slots]) / np.array([u for _, _, u in slots])
-    free = np.array([j.name not in guided and given_rate(j, c) is None for j, c, _ in slots], dtype=bool)
+    free = np.array([c not in guided and given_rate(j, c) is None for j, c, _ in slots], dtype=bool)
     rhs = -J @ given
     if not np.max(np.abs(rhs), initial=0.0) > 0:
         return {}
@@ -489,19 +542,50 @@ def rates3(system: System, guided: dict, scale: float):
         else:
             q[c] = q[c] + hk * u
     frames = poses3(system, q)
-    rows = [e / scale for _, e, _ in cut_rows3(system, frames)]
+    gaps = cut_rows3(system, frames)
+    rows, names = [e / scale for _, e, _ in gaps], [n for n, _, _ in gaps]
     at0 = {hk: 0 for hk in h}
     for name in system.tree().cut:
         j = system.joint(name)
         if j.kind != "universal":
+            A = [_end3(system, frames, j, side)[0] for side in ("parent", "child")]
+            _, pairs = cut_axes(j, *(np.array(a.xreplace(at0), dtype=float) for a in A))
+            rows += [(A[1] * sp.Matrix(u)).dot(A[0] * sp.Matrix(w)) for _, u, w in pairs]
+            names += [name] * len(pairs)
             continue
         e1 = frames[j.child.partition(".")[0]][0] * sp.Matrix(j.axis) / math.sqrt(sum(c * c for c in j.axis))
         A_p = frames[j.parent.partition(".")[0]][0]  # an undeformed beam's section: its frame
         e1_0, A_p0 = np.array(e1.xreplace(at0), dtype=float).ravel(), np.array(A_p.xreplace(at0), dtype=float)
         e2_0 = np.cross(e1_0, A_p0[:, 0])
         rows.append(e1.dot(A_p * sp.Matrix(A_p0.T @ (e2_0 / np.linalg.norm(e2_0)))))
+        names.append(name)
     J = sp.Matrix(rows).jacobian(h).xreplace(at0) if h else sp.zeros(len(rows), 0)
-    return np.array(J.evalf(), dtype=float).reshape(len(rows), len(h)), slots
+    return np.array(J.evalf(), dtype=float).reshape(len(rows), len(h)), slots, names
+
+
+def _redundant(system: System, J: np.ndarray, slots: list, names: list, guided: dict) -> None:
+    """A spatial loop's rows at the assembled t = 0 (rates3's Phi_q over the tree's rates that
+    are not guided): rows that no rate moves (a planar loop's out-of-plane rows, run in 3D) are
+    left out; if the others are dependent (a redundant loop), the motion runs (the runtime's
+    block solve drops dependent rows: runtime_c/src/constrained.c cs_kkt) but the multipliers
+    are one solution of many, so a reaction output is refused here, before any work."""
+    reactions = [o.quantity for o in system.outputs if o.quantity.replace(" ", "").startswith("reaction(")]
+    if not reactions or J.size == 0:
+        return
+    free = np.array([c not in guided for _, c, _ in slots], dtype=bool)
+    Jf = J[:, free]
+    big = np.max(np.abs(Jf), initial=0.0)
+    moved = [i for i in range(len(Jf)) if np.max(np.abs(Jf[i]), initial=0.0) > 1e-12 * big]
+    rank = _rank(Jf[moved])
+    if rank < len(moved):
+        u = np.linalg.svd(Jf[moved])[0]
+        null = u[:, rank:]  # the rows' dependent combinations
+        joints = [n for n in system.tree().cut if any(names[moved[i]] == n for i in range(len(moved))
+                                                      if np.max(np.abs(null[i]), initial=0.0) > 1e-6)]
+        raise SpecError(f"system '{system.name}': joint(s) {', '.join(joints)}: the loops' constraints are "
+                        f"redundant at t = 0 ({len(moved)} rows of rank {rank}): the reactions are "
+                        f"statically indeterminate, output '{reactions[0]}' is refused (the motion runs "
+                        "without it; or close the loop with a joint that leaves the redundant freedom)")
 
 
 def _random(loops: _Loops, k: int) -> np.ndarray:

@@ -28,7 +28,10 @@ scene (flexsym/scenes/scene.py), unchanged.
     [[driver]]  name, kind = "guided", joint, and maneuver = "spin-up" (omega, duration) |
                 "constant" (omega) or theta = "expression of t";
                 name, kind = "motor", joint, torque (revolute) | force (prismatic) =
-                "expression of t, J and J_rate for every joint J with a coordinate"
+                "expression of t, J and J_rate for every joint J with a coordinate"; on a
+                spatial joint with two coordinates, coordinate = "slide" (a cylindrical
+                joint's, with force) or "angle2" (a tree universal joint's) drives the second
+                (System.driven; none: the first)
     [gravity]   g = [gx, gy]  (m/s^2)
     [[load]]    kind = "force": marker, fx, fy, frame = ground | body;
                 kind = "torque": body, torque = "expression" (spatial: ["tx", "ty", "tz"], frame =
@@ -86,8 +89,8 @@ KEYS = {
     "beam3": {"name", "kind", "model", "markers", "damping", *SPATIAL_KEYS, *FE_KEYS},
     "joint": {"name", "kind", "parent", "child", "point", "axis", "offset", "initial", "direction",
               "parent_axis"},
-    "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta"},
-    "motor": {"name", "kind", "joint", "torque", "force"},
+    "guided": {"name", "kind", "joint", "maneuver", "omega", "duration", "theta", "coordinate"},
+    "motor": {"name", "kind", "joint", "torque", "force", "coordinate"},
     "gravity": {"g"},
     "force": {"kind", "name", "marker", "fx", "fy", "fz", "frame"},
     "torque": {"kind", "name", "body", "torque", "frame"},
@@ -211,9 +214,11 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     drivers = tuple(_driver(r, k, tab) for k, tab in enumerate(_entries(r, data, "driver")))
     kinds = {j.name: j.kind for j in joints}
     for k, (d, tab) in enumerate(zip(drivers, _entries(r, data, "driver"))):
-        law = {"revolute": "torque", "prismatic": "force"}.get(kinds.get(d.joint))
+        law = {"revolute": "torque", "prismatic": "force", "universal": "torque",
+               "cylindrical": "force" if d.coordinate == "slide" else "torque"}.get(kinds.get(d.joint))
         if d.kind == "motor" and law is not None and law not in tab:
-            r.fail(f"{_label('driver', k, tab)}", f"a motor on the {kinds[d.joint]} joint "
+            what = f"{d.coordinate} of the" if d.coordinate else "the"
+            r.fail(f"{_label('driver', k, tab)}", f"a motor on {what} {kinds[d.joint]} joint "
                    f"'{d.joint}' gives a {law} (write {law} = \"...\")")
     loads = tuple(_load(r, k, tab, dim) for k, tab in enumerate(_entries(r, data, "load")))
     if "gravity" in data:
@@ -468,18 +473,19 @@ def _driver(r: _Items, k: int, tab: dict) -> Driver:
         r.fail(f"{where} kind", f"must be \"guided\" or \"motor\" (got {kind!r})")
     r.table(where, tab, KEYS[kind])
     name, joint = r.string(where, tab, "name"), r.string(where, tab, "joint")
+    which = {"coordinate": r.string(where, tab, "coordinate")} if "coordinate" in tab else {}
     if kind == "motor":
         laws = [key for key in ("torque", "force") if key in tab]
         if len(laws) != 1:
             r.fail(where, "a motor needs torque = \"...\" (revolute) or force = \"...\" (prismatic)")
-        return Driver(name, kind, joint, expression=r.string(where, tab, laws[0]))
+        return Driver(name, kind, joint, expression=r.string(where, tab, laws[0]), **which)
     if ("theta" in tab) == ("maneuver" in tab):
         r.fail(where, "a guided driver needs maneuver = \"spin-up\" | \"constant\" or theta = \"...\"")
     if "theta" in tab:
         extra = sorted(set(tab) & {"omega", "duration"})
         if extra:
             r.fail(f"{where} {extra[0]}", "does not apply to theta = \"...\"")
-        return Driver(name, kind, joint, expression=r.string(where, tab, "theta"))
+        return Driver(name, kind, joint, expression=r.string(where, tab, "theta"), **which)
     man = r.string(where, tab, "maneuver")
     if man not in MANEUVERS:
         r.fail(f"{where} maneuver", f"unknown manoeuvre '{man}' (known: {', '.join(MANEUVERS)})")
@@ -490,7 +496,7 @@ def _driver(r: _Items, k: int, tab: dict) -> Driver:
     params = tuple((p, r.number(where, tab, key)) for key, p in keys.items())
     if internal == "spin_up" and params[1][1] <= 0:
         r.fail(f"{where} duration", f"must be > 0 (got {params[1][1]!r})")
-    return Driver(name, kind, joint, maneuver=internal, params=params)
+    return Driver(name, kind, joint, maneuver=internal, params=params, **which)
 
 
 def _load(r: _Items, k: int, tab: dict, dim: int = 2):
@@ -538,7 +544,8 @@ def check_system(system: System, t_end: float = 20.0) -> System:
     for d in system.drivers:
         label = f"{where}: driver '{d.name}'"
         if d.kind == "motor":
-            law = f"{label} {'torque' if joints[d.joint].kind == 'revolute' else 'force'}"
+            motion = next(c.motion for c in joints[d.joint].coordinates if c.name == system.driven(d))
+            law = f"{label} {'torque' if motion == 'turn' else 'force'}"
             _at_rest(_expression(d.expression, names, law), coords, names, t_end, d.expression, law)
         elif d.expression:
             try:
