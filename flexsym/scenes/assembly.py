@@ -576,7 +576,7 @@ def _redundant(system: System, J: np.ndarray, slots: list, names: list, guided: 
     Jf = J[:, free]
     big = np.max(np.abs(Jf), initial=0.0)
     moved = [i for i in range(len(Jf)) if np.max(np.abs(Jf[i]), initial=0.0) > 1e-12 * big]
-    rank = _rank(Jf[moved])
+    rank = numeric_rank(Jf[moved])
     if rank < len(moved):
         u = np.linalg.svd(Jf[moved])[0]
         null = u[:, rank:]  # the rows' dependent combinations
