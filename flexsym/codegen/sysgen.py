@@ -119,6 +119,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
             tr.symbols[ef_guided_force(g.joint)] = (
                 ca.mtimes(ca.jacobian(p_th, q), qd) + ca.mtimes(ca.jacobian(p_th, qd), qdd)
                 + ca.mtimes(ca.jacobian(p_th, d), ddot) - ca.jacobian(T_ef, d[1 + 3 * k]))
+    else:
+        tr.symbols[EF_T] = ca.SX(0.0)  # the T output's placeholder (spatial: nothing by AD)
     if der.ef_damping and any(e.has(EF_D) for e in der.outputs.values()):
         tr.symbols[EF_D] = ef_dissipation(der, tr, x)  # the output `dissipation` (2 D)
     for sym, value in getattr(der, "casadi_outputs", {}).items():  # spatial ef: placeholders
@@ -151,7 +153,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
              [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
         ]
     return make_kernels(constraint_kernels + _ef_element_kernel(der) + _rod_element_kernel(der)
-                        + _rod_kinetic_kernels(der, tr, x, ddot)
+                        + _rod_kinetic_kernels(der, tr, x, ddot) + _rod_free_kernels(der, tr, x, ddot)
                         + _ef_damping_kernel(der) + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
@@ -237,6 +239,80 @@ def _rod_kinetic_kernels(der: SystemDerivation, tr, x: dict, ddot) -> list:
              [("dr_de", ca.jacobian(r, e)), ("dr_ded", ca.jacobian(r, ed))])]
 
 
+def _free_frame(der: SystemDerivation, tr, x: dict, body: dict):
+    """(w, fidx) of a spatial ef beam on a free frame: w = (omega, V) in frame components
+    (casadi, of q, q', d, p) and the indices of the coordinates it depends on."""
+    w = ca.vertcat(*[tr(c) for c in body["frame"].omega], *[tr(c) for c in body["frame"].V])
+    dep = ca.jacobian(w, ca.vertcat(x["q"], x["qd"])).sparsity()
+    n = len(der.q)
+    cols = {c % n for c in dep.get_col()}
+    return w, sorted(cols)
+
+
+def _rod_free_kernels(der: SystemDerivation, tr, x: dict, ddot) -> list:
+    """Spatial ef beams on a free frame (moved by the coordinates): Lagrange's equations in the
+    quasi-velocities w = (omega, V), the frame's angular velocity and origin velocity in its own
+    components, w = J(q, d) q' + w_d(q, d), w' = J q'' + c. An element's T_e(e, e', w) depends on
+    the frame's pose only through w, so with z = (w, e'), p = dT_e/dz:
+        element rows      R_e = d/dt dT_e/de' - dT_e/de
+        frame coordinate  Q_j = J_j . d/dt p_w + B_j . p_w,  B = dJ/dt - dw/dq
+    (B: the frame's transpositional term, by AD of its kinematics; for w the body twist it is
+    the Hamel/Euler form's omega x, V x). One element's kernels (casadi AD, generated once):
+    rod_free_mass H = d2T_e/dz2 (18 x 18, e alone), rod_free_force R = d/dt p (w, e rows) at
+    e'' = 0 and w' = c, and p_w; rod_free_energy T_e and T2_e - T0_e; rod_free_jac R, p_w and
+    their derivatives in e, e', w. Per such beam k, rod_free_frame{k}(q, qd, d, p) -> w, J, c, B
+    on its frame's coordinates (fidx), rod_free_frame_jac{k} -> dw/dq, dw'/dq, dw'/dq' and
+    rod_free_frame_hess{k} -> d(J^T F + B^T P)/dq, /dq' at fixed F, P. system.c (rod_free_add) sums the elements' blocks
+    and adds M += [J^T H_ww J, J^T H_we; H_ew J, H_ee] etc. on the coordinates' indices."""
+    bodies = [b for b in getattr(der, "rod_bodies", ()) if b.get("free_c")]
+    if not bodies:
+        return []
+    from flexsym.physics.rod3d import kinetic_energy
+    e, ed, edd = ca.SX.sym("e", 12), ca.SX.sym("ed", 12), ca.SX.sym("edd", 12)
+    w, wd, wq, pe = ca.SX.sym("w", 6), ca.SX.sym("wd", 6), ca.SX.sym("wq", 6), ca.SX.sym("pe", 9)
+    T = kinetic_energy(e, ed, w[0:3], w[3:6], pe[0], pe[1:8], pe[8])  # pe[8]: bending_inertia
+    z, zd = ca.vertcat(w, ed), ca.vertcat(wd, edd)
+    H, p_ = ca.hessian(T, z)
+    R = ca.mtimes(H, zd) + ca.mtimes(ca.jacobian(p_, e), ed) - ca.vertcat(ca.SX.zeros(6), ca.gradient(T, e))
+    pw = p_[0:6]  # = H_wz z: T_e is a quadratic form in z (dp_w/dw = H_ww, dp_w/de' = H_we)
+    R0 = ca.substitute(R, edd, ca.SX.zeros(12))
+    zq = ca.vertcat(wq, ed)
+    h = ca.mtimes(zq.T, ca.mtimes(H, zq)) / 2 - ca.substitute(T, ca.vertcat(ed, w), ca.vertcat(ca.SX.zeros(12), w - wq))
+    out = [("rod_free_mass", "one rod3d element: H = d2T/dz2, z = (omega, V, e')",
+            [("e", e), ("pe", pe)], [("H", H)]),
+           ("rod_free_force", "one rod3d element on a free frame: R = d/dt dT/dz - (0, dT/de) at e'' = 0, w' = wd; p_w = dT/dw",
+            [("e", e), ("ed", ed), ("w", w), ("wd", wd), ("pe", pe)], [("R", R0), ("pw", pw)]),
+           ("rod_free_energy", "one rod3d element on a free frame: T and T2 - T0 (wq = J q', the rate part of w)",
+            [("e", e), ("ed", ed), ("w", w), ("wq", wq), ("pe", pe)], [("T", T), ("h", h)]),
+           ("rod_free_jac", "one rod3d element on a free frame: R, p_w, H and their derivatives in e, e', w",
+            [("e", e), ("ed", ed), ("edd", edd), ("w", w), ("wd", wd), ("pe", pe)],
+            [("R", R), ("pw", pw), ("H", H), ("R_e", ca.jacobian(R, e)), ("R_ed", ca.jacobian(R, ed)),
+             ("R_w", ca.jacobian(R, w)), ("pw_e", ca.jacobian(pw, e))])]
+    q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
+    F, P = ca.SX.sym("F", 6), ca.SX.sym("P", 6)
+    for k, b in enumerate(bodies):
+        wv, fidx = _free_frame(der, tr, x, b)
+        qf, qdf = ca.vertcat(*[q[i] for i in fidx]), ca.vertcat(*[qd[i] for i in fidx])
+        J = ca.jacobian(wv, qdf)
+        c = ca.mtimes(ca.jacobian(wv, q), qd) + ca.mtimes(ca.jacobian(wv, d), ddot)
+        # dJ/dt column by column (J reads q and d only: w is linear in q')
+        cols = [ca.mtimes(ca.jacobian(J[:, j], q), qd) + ca.mtimes(ca.jacobian(J[:, j], d), ddot)
+                for j in range(len(fidx))]
+        B = ca.horzcat(*cols) - ca.jacobian(wv, qf)
+        wdot = ca.mtimes(J, ca.vertcat(*[qdd[i] for i in fidx])) + c
+        G = ca.mtimes(J.T, F) + ca.mtimes(B.T, P)
+        out += [(f"rod_free_frame{k}", f"the free frame of {b['name']}: w = (omega, V), J = dw/dq', c (w' = J q'' + c), B = dJ/dt - dw/dq",
+                 [("q", q), ("qd", qd), ("d", d), ("p", p)], [("w", wv), ("J", J), ("c", c), ("B", B)]),
+                (f"rod_free_frame_jac{k}", f"the free frame of {b['name']}: dw/dq, dw'/dq, dw'/dq' (w' = J q'' + c)",
+                 [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)],
+                 [("w_q", ca.jacobian(wv, qf)), ("a_q", ca.jacobian(wdot, qf)), ("a_qd", ca.jacobian(wdot, qdf))]),
+                (f"rod_free_frame_hess{k}", f"the free frame of {b['name']}: d(J^T F + B^T P)/dq, /dq' at fixed F, P",
+                 [("q", q), ("qd", qd), ("d", d), ("p", p), ("F", F), ("P", P)],
+                 [("G_q", ca.jacobian(G, qf)), ("G_qd", ca.jacobian(G, qdf))])]
+        b["fidx"] = fidx
+    return out
+
+
 def rod_elements(der: SystemDerivation) -> list[dict]:
     """Per spatial ef beam, what system.c needs to assemble its rod3d elements: the parameter
     indices of [L, E, G, rho, A, Iy, I, J], the element count, and per element and entry
@@ -247,6 +323,8 @@ def rod_elements(der: SystemDerivation) -> list[dict]:
         n, idx = body["n"], body["idx"]
         node = [[(i, float(k) / n if c == 0 else 0.0) for c, i in enumerate(idx[k])] for k in range(n + 1)]
         out.append({"name": body["name"], "n": n, "kinetic_in_c": body["kinetic_in_c"],
+                    "free_c": bool(body.get("free_c")), "fidx": body.get("fidx", []),
+                    "rotary": body["pidx"].get("bending_inertia"),
                     "params": [body["pidx"][k] for k in ("L", "E", "G", "rho", "A", "Iy", "I", "J")],
                     "elements": [[(i, c_double(a)) for i, a in node[k] + node[k + 1]] for k in range(n)]})
     return out
@@ -403,12 +481,12 @@ def _unbounded(system: System, c) -> bool:
     return c.group == "node" and c.name.rsplit("_", 1)[-1].startswith("d")
 
 
-def generate_system_files(system: System, log=None) -> dict[str, str]:
+def generate_system_files(system: System, log=None, ef_free_ad: bool = False) -> dict[str, str]:
     """The generated folder's files; log(msg): a line per stage (derivation, kernels), so a
-    long derivation (ef bodies: 10-45 s) is not silent."""
+    long derivation (ef bodies: 10-45 s) is not silent. ef_free_ad: derive_spatial's (a check)."""
     log = log or (lambda msg: None)
     start = time.perf_counter()
-    der = derive_spatial(system) if system.dimension == 3 else derive_system(system)
+    der = derive_spatial(system, ef_free_ad) if system.dimension == 3 else derive_system(system)
     log(f"derived ({len(der.q)} coordinates, {len(der.constraints)} constraint rows) in "
         f"{time.perf_counter() - start:.1f} s; building the C kernels (casadi)")
     start = time.perf_counter()
@@ -420,7 +498,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
     mass = next(k.function for k in kernels if k.name == "mass")
     qs, ds, ps = mass.sx_in()
     mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds)) and not any(
-        b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ()))  # rod elements: M_e(e) in C
+        b["kinetic_in_c"] or b.get("free_c") for b in getattr(der, "rod_bodies", ()))  # rod elements: M_e(e) in C
     scale = length_scale(system)
     initial = [tuple(c_double(v) for v in start_of(system, c)) for c in der.coords]
     outputs_fn = next(k.function for k in kernels if k.name == "outputs")
@@ -453,6 +531,7 @@ def generate_system_files(system: System, log=None) -> dict[str, str]:
         "ef_bodies": ef_elements(der), "ef_damped": bool(der.ef_damping),
         "rod_bodies": rod_elements(der), "bandwidth": _bandwidth(der),
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
+        "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
     }
     if ctx["static_start"]:

@@ -334,7 +334,8 @@ def check_params(params: dict, where: Where = API, maneuver: str | None = None) 
     from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
     from flexsym.model.maneuver import MANEUVERS, maneuver_of
 
-    beam = {p.name for p in BEAM_PARAMS + SPATIAL_BEAM_PARAMS}  # a model without one refuses it
+    # a model without one refuses it; bending_inertia: a spatial ef beam's on a free frame
+    beam = {p.name for p in BEAM_PARAMS + SPATIAL_BEAM_PARAMS} | {"bending_inertia"}
     man = ({p.name for p in maneuver_of(maneuver).params} if maneuver is not None
            else {p.name for m in MANEUVERS.values() for p in m.params})
     out = {}

@@ -91,7 +91,7 @@ from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force
 from flexsym.physics.outputs import field_at
 from flexsym.physics.spatial_ef import (ef_at, ef_body, ef_coordinates, ef_elastic_output,
-                                        ef_kinetic_output, ef_section, is_ef)
+                                        ef_kinetic_output, ef_rotation, ef_section, is_ef)
 from flexsym.model.maneuver import parse_expression, t
 from flexsym.scenes.assembly import joint_motion
 
@@ -268,7 +268,9 @@ def _load_case_axial_force(der, b: FlexibleBeam, fr: Frame, x: float) -> sp.Expr
                     for c in f])
 
 
-def derive_spatial(system: System) -> SystemDerivation:
+def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation:
+    """ef_free_ad: spatial ef beams on a free frame get their elements' kinetic energy through the
+    whole-system AD path (der.casadi_T) instead of the per-element C kernels (a check)."""
     system.validate()
     tree = system.tree()
     guided = _guided(system)
@@ -304,6 +306,7 @@ def derive_spatial(system: System) -> SystemDerivation:
         if j.coordinates:
             joint_sym[j.name] = [by_name[c.name] for c in j.coordinates]
     der = SystemDerivation(system, tree, coords, guided, q, qd, qdd, params)
+    der.ef_free_ad = ef_free_ad
     der.spatial = {}
     der.rod_bodies, der.casadi_T, der.casadi_outputs = [], [], {}  # spatial ef beams (casadi)
     der.casadi_T_out = []
@@ -508,7 +511,7 @@ def _start_values(der) -> dict:
         th, thd = drive0[g.joint]
         vals[g.symbols[0]], vals[g.symbols[1]] = th, thd
     vals |= {sym: v for _, sym, v in der.params}
-    return vals
+    return vals | getattr(der, "ef_start", {})  # an ef node's section rotation: I
 
 
 def _section_turns(th: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
@@ -524,6 +527,8 @@ def _section_rotation(der, ref: str) -> sp.Matrix:
     fr = der.spatial["frames"][body]
     if not der.system.body(body).flexible:
         return fr.A
+    if is_ef(der.system.body(body)):  # a node's section: exp(psi), exact (spatial_ef.ef_rotation)
+        return fr.A * ef_rotation(der, body, m.x)
     Rx, Ry, Rz = _section_turns(_section_angles(der, body, m.x))
     return fr.A * Rz * Ry * Rx
 
@@ -579,6 +584,7 @@ def _cut_rows(der) -> None:
             e1 = der.spatial["frames"][system.marker(j.child)[0]].A * _vec(j.axis)
             e1 = e1 / sp.sqrt(_vec(j.axis).dot(_vec(j.axis)))
             Rp = _section_rotation(der, j.parent)
+            start |= getattr(der, "ef_start", {})  # an ef node's section: placeholders
             e1_0 = [float(v) for v in e1.xreplace(start).evalf()]
             x_0 = [float(v) for v in (Rp * sp.Matrix([1, 0, 0])).xreplace(start).evalf()]
             e2_0 = _vec(_unit(np.cross(e1_0, x_0)))

@@ -7,8 +7,12 @@ Coordinates per free node k = 1..n (frame components): the displacement (ux, uy,
 undeformed position (k L / n, 0, 0) and the section's rotation vector (px, py, pz); all zero
 at the undeformed start. Gravity is linear in the nodes and stays in sympy. The elements'
 kinetic energy (in the frame's actual omega and V) is an element kernel called per element by
-system.c when the drive alone moves the frame, else it joins the AD path (der.casadi_T, whose
-kernels grow by ~2e4 operations per element); their elastic energy is one casadi element
+system.c: when the drive alone moves the frame, in the frame's given motion; when the
+coordinates move it (a free frame), in quasi-velocities (the element's Hessian in z = (omega,
+V, e'), its Lagrange rows and its frame 6-vector, assembled with the frame's Jacobian J =
+dw/dq' by system.c, sysgen._rod_free_kernels). derive_spatial(ef_free_ad=True) puts a free
+frame's elements into the whole-system AD path instead (der.casadi_T, whose kernels grow by
+~2e4 operations per element), a check of the C path; their elastic energy is one casadi element
 kernel called per element by system.c (sysgen._rod_element_kernel, der.rod_bodies). Outputs
 that need the element (section forces, the elastic energy) are placeholders in the sympy
 outputs, each given its casadi value by sysgen (der.casadi_outputs).
@@ -19,6 +23,7 @@ import casadi as ca
 import numpy as np
 import sympy as sp
 
+from flexsym.core.errors import SpecError
 from flexsym.model.exact_numbers import exact
 from flexsym.physics.rod3d import element_functions
 
@@ -43,6 +48,13 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
     idx = [[-1] * 6] + [[qindex[f"{b.name}_{c}{k}"] for c in EF_NODE] for k in range(1, n + 1)]
     pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
     pidx = {k: pindex[v] for k, v in P.items()}
+    if not der.system.frame_driven(b.name):
+        # a free frame's beam: its sections' bending rotary inertia rho b (I_y, I_z) with the
+        # factor b a run-time parameter (rod3d's bending_inertia; 1: physical). A small b is the
+        # modal models' and the benchmark's beam (none); b = 0 makes M singular.
+        pname = "bending_inertia" if sum(x.flexible for x in der.system.bodies) == 1 else f"{b.name}_bending_inertia"
+        pidx["bending_inertia"] = len(der.params)
+        der.params.append((pname, sp.Symbol(pname, positive=True), 1.0))
     L, rho, A = P["L"], P["rho"], P["A"]
 
     def node(k):  # sympy position of node k in the frame
@@ -57,8 +69,13 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
     # terms by casadi AD within the element); else it joins the system's AD path (der.casadi_T),
     # whose kernels grow by ~2e4 operations per element
     in_c = der.system.frame_driven(b.name)
-    der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c, frame=fr))
-    info["kinetic_in_c"] = in_c
+    # a free frame (moved by the coordinates): the elements' kinetic energy in quasi-velocities,
+    # element kernels called per element in C as well (sysgen._rod_free_kernels), unless the
+    # derivation asks for the whole-system AD path (der.ef_free_ad: a check of the C path)
+    free_c = not in_c and not getattr(der, "ef_free_ad", False)
+    der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c,
+                               free_c=free_c, frame=fr))
+    info["kinetic_in_c"], info["free_c"] = in_c, free_c
     der.terms.append((b.name, "rod3d_elastic", ("node",), None, None))
 
     def kinetic(tr, x, info=info):
@@ -67,9 +84,10 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
         V = ca.vertcat(*[tr(e) for e in fr.V])
         nodes, rates = rod_nodes(info, x["q"], x["p"]), rod_nodes(info, x["qd"], None)
         le, sec = x["p"][pidx["L"]] / n, rod_section(info, x["p"])
+        bi = x["p"][pidx["bending_inertia"]] if "bending_inertia" in pidx else 1.0
         return sum((f(ca.vertcat(nodes[k], nodes[k + 1]), ca.vertcat(rates[k], rates[k + 1]),
-                      omega, V, le, sec, 1.0) for k in range(n)), ca.SX(0.0))
-    if in_c:
+                      omega, V, le, sec, bi) for k in range(n)), ca.SX(0.0))
+    if in_c or free_c:
         der.casadi_T_out.append(kinetic)  # only the T output reads it (energy: system.c)
     else:
         der.casadi_T.append(kinetic)
@@ -103,6 +121,38 @@ def ef_at(der, body: str, x: float) -> sp.Matrix:
     j = min(int(sp.floor(s_)), n - 1)
     tt = s_ - j
     return (1 - tt) * info["node"](j) + tt * info["node"](j + 1)
+
+
+def ef_rotation(der, body: str, x: float) -> sp.Matrix:
+    """Frame <- section axes at a node's station x (a marker of a spatial ef beam, e.g. its tip,
+    where a cut universal joint's fixed direction sits): exp(psi) of the node's rotation vector,
+    exact (rod3d's quaternion, its series regular at psi = 0), as nine placeholders given their
+    casadi values by sysgen (der.casadi_outputs; sympy would expand the series), each with its
+    value at the undeformed start (der.ef_start: the identity)."""
+    info = der.spatial[body]
+    n = info["n"]
+    k = exact(x) / exact(info["length"]) * n
+    if k != int(k):
+        raise SpecError(f"system '{der.system.name}': a joint on the ef beam '{body}' at x = {x} "
+                        f"must sit on one of its {n} elements' nodes")
+    k = int(k)
+    if k == 0:
+        return sp.eye(3)
+    rot = info.setdefault("rotations", {})
+    if k not in rot:
+        from flexsym.physics.rod3d import qmatrix, quaternion
+
+        syms = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"rod_{body}_R{k}_{i}{j}", real=True))
+        for i in range(3):
+            for j in range(3):
+                def value(tr, xx, i=i, j=j, idx=info["idx"][k][3:6]):
+                    return qmatrix(quaternion(ca.vertcat(*[xx["q"][c] for c in idx])))[i, j]
+                der.casadi_outputs[syms[i, j]] = value
+        if not hasattr(der, "ef_start"):
+            der.ef_start = {}
+        der.ef_start |= {syms[i, j]: sp.Integer(int(i == j)) for i in range(3) for j in range(3)}
+        rot[k] = syms
+    return rot[k]
 
 
 def ef_section(der, beam, x: float, fn: str) -> sp.Expr:
