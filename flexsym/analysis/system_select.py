@@ -80,8 +80,10 @@ def check_selectable(scene) -> None:
     free = [b.name for b in system.bodies if b.flexible and not system.frame_driven(b.name)]
     if system.dimension == 3 and free:
         raise SpecError(f"{scene.path}: select needs the ef reference, and a spatial ef beam on a "
-                        f"joint that moves freely ('{free[0]}') is not derived at a usable cost "
-                        "yet (its frame must move by guided drivers and clamps alone)")
+                        f"joint that moves freely ('{free[0]}') is not a reference select can use "
+                        "yet: it carries the sections' bending rotary inertia the modal beams leave "
+                        "out, and converges in minutes (see docs/validation/spatial.md; its frame "
+                        "must move by guided drivers and clamps alone)")
 
 
 def select_system(scene, tol: float, repeat: int = 3, log=print):
