@@ -140,6 +140,8 @@ ELSEWHERE = '\n[[joint]]\nname = "hang"\nkind = "revolute"\nparent = "ground"\np
     (OK_MODEL, "", ELSEWHERE, "reaction(pin, x)", "output 'reaction(pin, x)' needs its momentum"),
 
     (OK_MODEL, "damping = { beta = 1e-4 }", ELSEWHERE, "v(arm, tip)", "structural damping is not derived"),
+    (OK_MODEL, "", ELSEWHERE + '\n[[load]]\nkind = "force"\nmarker = "arm.tip"\nfx = 1.0\nfy = 0.0\n',
+     "v(arm, tip)", "acts on it beyond its root"),
 ])
 def test_what_is_not_derived_is_refused_in_one_line(tmp_path, capsys, model, damping, joint, output, says):
     scene_text_refused(tmp_path, capsys, SCENE.format(model=model, damping=damping, joint=joint, output=output),

@@ -123,6 +123,7 @@ def test_the_planar_slider_crank_closed_in_3d_reproduces_the_planar_rows(cut):
         assert np.abs(p["Fy"]).max() > 1.0  # the loop does carry loads
 
 
+@pytest.mark.study  # 47 s (the ball joint's derivation); the closing cylindrical's rows are in the energy test
 def test_a_ball_joint_and_a_closing_cylindrical_reproduce_the_planar_rows():
     """The crank pin a ball joint (Euler parameters), the slider's pin a cylindrical joint about z
     closing the loop (its four rows independent: the ball's three turns and the slide against

@@ -49,6 +49,35 @@ def _system_struct():
     return System, P
 
 
+
+def _ad_path(system, beam: str, n: int):
+    """The whole-system AD path's derivation (derive_spatial(ef_free_ad=True)) and a casadi
+    function (q, q', q'', d, p) -> [M, f, dr/dq, dr/dq', (T, V, h)] of it, with the rod
+    elements' elastic energy (which system.c adds on both paths) added here by casadi."""
+    import casadi as ca
+
+    from flexsym.codegen.sysgen import build_system_kernels
+    from flexsym.physics.rod3d import element_functions
+    from flexsym.physics.spatial import derive_spatial
+    from flexsym.physics.spatial_ef import rod_nodes, rod_section
+
+    der = derive_spatial(system, ef_free_ad=True)
+    kernels = {k.name: k.function for k in build_system_kernels(der)}
+    nq, npar, nd = len(der.q), len(der.params), len(der.drive_symbols)
+    q, qd, qdd = ca.SX.sym("q", nq), ca.SX.sym("qd", nq), ca.SX.sym("qdd", nq)
+    p, d = ca.SX.sym("p", npar), ca.SX.sym("d", nd)
+    info = der.spatial[beam]
+    nodes = rod_nodes(info, q, p)
+    le, sec = p[info["pidx"]["L"]] / n, rod_section(info, p)
+    Ve = sum((element_functions()["elastic"](ca.vertcat(nodes[k], nodes[k + 1]), le, sec)
+              for k in range(n)), ca.SX(0))
+    M, = kernels["mass"].call([q, d, p])
+    f, = kernels["force"].call([q, qd, d, p])
+    Jq, Jv = kernels["residual_jac"].call([q, qd, qdd, d, p])
+    en, = kernels["energy"].call([q, qd, d, p])
+    return der, ca.Function("ref", [q, qd, qdd, d, p], [M, f - ca.gradient(Ve, q), Jq + ca.hessian(Ve, q)[0],
+                                                         Jv, en + ca.vertcat(0, Ve, Ve)])
+
 def test_s6_ef_c_path_against_the_whole_system_ad_path(s6ef):
     """M, f, dr/dq, dr/dq' and [T, V, h] of the generated C (the elements' kinetic energy in the
     frame's quasi-velocities, assembled per element) against the old formulation, the elements'
@@ -56,31 +85,14 @@ def test_s6_ef_c_path_against_the_whole_system_ad_path(s6ef):
     (derive_spatial(ef_free_ad=True); the rod elements' elastic energy, which system.c adds on
     both paths, added here by casadi) at random states, to 1e-10 of each result's largest
     entry (the bending rotary inertia at 0.37 of the physical). Measured at n = 2: 4e-17 .. 3e-16."""
-    import casadi as ca
 
     from flexsym.codegen.generate import model_accessor
-    from flexsym.codegen.sysgen import build_system_kernels
-    from flexsym.physics.rod3d import element_functions
-    from flexsym.physics.spatial import derive_spatial
-    from flexsym.physics.spatial_ef import rod_nodes, rod_section
 
     system = system_from_dict(_s6_ef(N, T="T", V="V", viol="violation"), name="spherical_pendulum")
-    der = derive_spatial(system, ef_free_ad=True)
+    der, ad = _ad_path(system, "strip", N)
     assert not der.rod_bodies[0]["free_c"] and len(der.casadi_T) == 1
-    kernels = {k.name: k.function for k in build_system_kernels(der)}
     nq, npar = len(der.q), len(der.params)
-    q, qd, qdd, p = ca.SX.sym("q", nq), ca.SX.sym("qd", nq), ca.SX.sym("qdd", nq), ca.SX.sym("p", npar)
-    d = ca.SX.sym("d", 0)
-    info = der.spatial["strip"]
-    nodes = rod_nodes(info, q, p)
-    le, sec = p[info["pidx"]["L"]] / N, rod_section(info, p)
-    Ve = sum((element_functions()["elastic"](ca.vertcat(nodes[k], nodes[k + 1]), le, sec) for k in range(N)), ca.SX(0))
-    M, = kernels["mass"].call([q, d, p])
-    f, = kernels["force"].call([q, qd, d, p])
-    Jq, Jv = kernels["residual_jac"].call([q, qd, qdd, d, p])
-    en, = kernels["energy"].call([q, qd, d, p])
-    ref = ca.Function("ref", [q, qd, qdd, p], [M, f - ca.gradient(Ve, q), Jq + ca.hessian(Ve, q)[0], Jv,
-                                               en + ca.vertcat(0, Ve, Ve)])
+    ref = lambda q_, qd_, qdd_, p_: ad(q_, qd_, qdd_, np.zeros(0), p_)  # noqa: E731
 
     System, P = _system_struct()
     lib = ctypes.CDLL(str(s6ef.library))
@@ -176,13 +188,8 @@ def test_s7_ef_c_path_against_the_whole_system_ad_path():
     loop's cut universal joint sits on the tip node's section. M, f, dr/dq, dr/dq' and the
     energies of the C path against the whole-system AD path at random states and drives, as
     for S6. Measured: 3e-18 .. 2.6e-16 (a build of about 2 minutes)."""
-    import casadi as ca
 
     from flexsym.codegen.generate import model_accessor
-    from flexsym.codegen.sysgen import build_system_kernels
-    from flexsym.physics.rod3d import element_functions
-    from flexsym.physics.spatial import derive_spatial
-    from flexsym.physics.spatial_ef import rod_nodes, rod_section
 
     n = 2
     data = tomllib.loads((ROOT / "scenes" / "spatial_slider_crank.toml").read_text())
@@ -190,21 +197,8 @@ def test_s7_ef_c_path_against_the_whole_system_ad_path():
         if b["kind"] == "beam":
             b["model"] = {"variant": "ef", "elements": n}
     system = system_from_dict(data, name=data["system"]["name"])
-    der = derive_spatial(system, ef_free_ad=True)
-    kernels = {k.name: k.function for k in build_system_kernels(der)}
-    nq, npar, nd = len(der.q), len(der.params), len(der.drive_symbols)
-    q, qd, qdd = ca.SX.sym("q", nq), ca.SX.sym("qd", nq), ca.SX.sym("qdd", nq)
-    p, d = ca.SX.sym("p", npar), ca.SX.sym("d", nd)
-    info = der.spatial["rod"]
-    nodes = rod_nodes(info, q, p)
-    le, sec = p[info["pidx"]["L"]] / n, rod_section(info, p)
-    Ve = sum((element_functions()["elastic"](ca.vertcat(nodes[k], nodes[k + 1]), le, sec) for k in range(n)), ca.SX(0))
-    M, = kernels["mass"].call([q, d, p])
-    f, = kernels["force"].call([q, qd, d, p])
-    Jq, Jv = kernels["residual_jac"].call([q, qd, qdd, d, p])
-    en, = kernels["energy"].call([q, qd, d, p])
-    ref = ca.Function("ref", [q, qd, qdd, d, p], [M, f - ca.gradient(Ve, q), Jq + ca.hessian(Ve, q)[0], Jv,
-                                                  en + ca.vertcat(0, Ve, Ve)])
+    der, ref = _ad_path(system, "rod", n)
+    nq, nd = len(der.q), len(der.drive_symbols)
     lib = ctypes.CDLL(str(built(data).library))
     System, P = _system_struct()
     acc = getattr(lib, model_accessor(system.name))

@@ -249,6 +249,7 @@ def test_an_undriven_loop_holds_its_first_joint(tmp_path, capsys):
     assert "(joints held but rocker_joint, coupler_pin, which follow the loop;" in start
 
 
+@pytest.mark.study  # 14 s; the planar loops above run the same KKT start
 def test_a_spatial_loop_starts_in_equilibrium(tmp_path, capsys):
     """S7's spatial slider-crank under gravity across its plane, its crank held: the rod starts
     sagged, the slider and the ball joint following the loop, and stays there (started

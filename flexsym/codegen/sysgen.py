@@ -49,6 +49,9 @@ _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.ro
         "physics.exact_kinematics", "physics.exact_body", "model.system", "codegen.sysgen")
 
 
+LARGE_KERNELS = 100_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)
+
+
 def fingerprint(system: System) -> str:
     h = hashlib.sha256(generator_hash().encode())
     for f in [module_file(m) for m in _OWN] + sorted((templates_dir() / "system").glob("*.j2")):
@@ -533,7 +536,9 @@ def generate_system_files(system: System, log=None, ef_free_ad: bool = False) ->
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
         "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
+        "kernel_ops": sum(k.total_ops for k in emitted),
     }
+    ctx["large_kernels"] = ctx["kernel_ops"] > LARGE_KERNELS
     if ctx["static_start"]:
         ctx["static_free"], ctx["static_rows"] = _static_unknowns(system, der, kernels)
     env = _environment()

@@ -722,13 +722,16 @@ def beam_fields_at(der: SystemDerivation, body: str, x: float):
     return fa(part.fields.u), fa(part.fields.v), fa(part.fields.v_s) / L_
 
 
-def joint_coordinate(der: SystemDerivation, joint: str, rate: bool, where: str) -> sp.Expr:
-    """A joint's coordinate (or its rate): an unknown of q, or a guided joint's theta(t)."""
+def joint_coordinate(der: SystemDerivation, joint: str, rate: bool, where: str,
+                     coordinate: str | None = None) -> sp.Expr:
+    """A joint's coordinate (or its rate), or the one named `coordinate` (a spatial joint's
+    second, Joint.coordinates): an unknown of q, or a guided coordinate's theta(t)."""
+    name = coordinate or joint
     for c, x, xd in zip(der.coords, der.q, der.qd):
-        if c.joint == joint:
+        if (c.name == name) if coordinate else (c.joint == joint):
             return xd if rate else x
     for g in der.guided:
-        if g.joint == joint:
+        if g.joint == name:
             return g.symbols[1] if rate else g.symbols[0]
     raise SpecError(f"{where}: joint '{joint}' is a cut joint (no coordinate)")
 

@@ -889,13 +889,7 @@ def _output(der, quantity: str) -> sp.Expr:
         j = system.joint(args[0])
         name = j.coordinates[1].name if second else j.name
         rate = fn == "rate" or fn in (v[3] for v in SECOND.values())
-        for c, x, xd in zip(der.coords, der.q, der.qd):
-            if c.name == name:
-                return xd if rate else x
-        for g in der.guided:
-            if g.joint == name:
-                return g.symbols[1] if rate else g.symbols[0]
-        return joint_coordinate(der, args[0], rate, where)  # a cut joint: refused there
+        return joint_coordinate(der, args[0], rate, where, coordinate=name)  # a cut joint: refused
     if fn == "R":  # ground <- the marker's axes (a beam's: its section's, to first order)
         return _section_rotation(der, args[0])["xyz".index(args[1]), "xyz".index(args[2])]
     if fn in ("x", "y", "z"):
