@@ -50,6 +50,21 @@ def _system_struct():
 
 
 
+
+def _c_kernels_agree(s, want, q, qd, qdd, d, p) -> None:
+    """The model struct's C mass, force, residual Jacobians and energies at (q, q', q'', d, p)
+    equal `want` (the AD path's) to 1e-10 of each result's largest entry."""
+    P = ctypes.POINTER(ctypes.c_double)
+    ptr = lambda a: a.ctypes.data_as(P)  # noqa: E731
+    nq = len(q)
+    M, f, Jq, Jv, en = np.zeros(nq * nq), np.zeros(nq), np.zeros(nq * nq), np.zeros(nq * nq), np.zeros(3)
+    s.mass(ptr(q), ptr(d), ptr(p), ptr(M))
+    s.force(ptr(q), ptr(qd), ptr(d), ptr(p), ptr(f))
+    s.residual_jac(ptr(q), ptr(qd), ptr(qdd), ptr(d), ptr(p), ptr(Jq), ptr(Jv))
+    s.energy(ptr(q), ptr(qd), ptr(d), ptr(p), ptr(en))
+    for name, got, ref_ in zip(("mass", "force", "dr_dq", "dr_dqd", "energy"), (M, f, Jq, Jv, en), want):
+        assert np.abs(got - ref_).max() <= 1e-10 * np.abs(ref_).max(), name
+
 def _ad_path(system, beam: str, n: int):
     """The whole-system AD path's derivation (derive_spatial(ef_free_ad=True)) and a casadi
     function (q, q', q'', d, p) -> [M, f, dr/dq, dr/dq', (T, V, h)] of it, with the rod
@@ -94,7 +109,7 @@ def test_s6_ef_c_path_against_the_whole_system_ad_path(s6ef):
     nq, npar = len(der.q), len(der.params)
     ref = lambda q_, qd_, qdd_, p_: ad(q_, qd_, qdd_, np.zeros(0), p_)  # noqa: E731
 
-    System, P = _system_struct()
+    System, _ = _system_struct()
     lib = ctypes.CDLL(str(s6ef.library))
     acc = getattr(lib, model_accessor("spherical_pendulum"))
     acc.restype = ctypes.POINTER(System)
@@ -103,21 +118,13 @@ def test_s6_ef_c_path_against_the_whole_system_ad_path(s6ef):
     pv = np.array([v for _, _, v in der.params], dtype=float)
     names = [name for name, _, _ in der.params]
     pv[names.index("bending_inertia")] = 0.37  # the run-time factor of the bending rotary inertia
-    ptr = lambda a: a.ctypes.data_as(P)
     rnd = np.random.default_rng(7)
     for _ in range(3):
         qv, qdv, qddv = rnd.uniform(-0.2, 0.2, nq), rnd.uniform(-2, 2, nq), rnd.uniform(-5, 5, nq)
         qv[:4] = rnd.normal(size=4)  # the Euler parameters (any: the equations hold off |e| = 1)
         qv[4::6] += np.arange(1, N + 1) * L / N  # the nodes near their places
         want = [np.array(x).reshape(-1) for x in ref(qv, qdv, qddv, pv)]
-        dv = np.zeros(1)
-        Mc, fc, Jqc, Jvc, enc = np.zeros(nq * nq), np.zeros(nq), np.zeros(nq * nq), np.zeros(nq * nq), np.zeros(3)
-        s.mass(ptr(qv), ptr(dv), ptr(pv), ptr(Mc))
-        s.force(ptr(qv), ptr(qdv), ptr(dv), ptr(pv), ptr(fc))
-        s.residual_jac(ptr(qv), ptr(qdv), ptr(qddv), ptr(dv), ptr(pv), ptr(Jqc), ptr(Jvc))
-        s.energy(ptr(qv), ptr(qdv), ptr(dv), ptr(pv), ptr(enc))
-        for name, got, ref_ in zip(("mass", "force", "dr_dq", "dr_dqd", "energy"), (Mc, fc, Jqc, Jvc, enc), want):
-            assert np.abs(got - ref_).max() <= 1e-10 * np.abs(ref_).max(), name
+        _c_kernels_agree(s, want, qv, qdv, qddv, np.zeros(1), pv)
 
 
 def test_s6_ef_conserves_energy_with_genalpha3_ali3p_and_rk4p(s6ef):
@@ -200,22 +207,15 @@ def test_s7_ef_c_path_against_the_whole_system_ad_path():
     der, ref = _ad_path(system, "rod", n)
     nq, nd = len(der.q), len(der.drive_symbols)
     lib = ctypes.CDLL(str(built(data).library))
-    System, P = _system_struct()
+    System, _ = _system_struct()
     acc = getattr(lib, model_accessor(system.name))
     acc.restype = ctypes.POINTER(System)
     s = acc().contents
     pv = np.array([v for _, _, v in der.params], dtype=float)
     pv[[name for name, _, _ in der.params].index("bending_inertia")] = 0.37
-    ptr = lambda a: a.ctypes.data_as(P)
     rnd = np.random.default_rng(3)
     for _ in range(3):
         qv, qdv, qddv = rnd.uniform(-0.2, 0.2, nq), rnd.uniform(-2, 2, nq), rnd.uniform(-5, 5, nq)
         dv = rnd.uniform(-3, 3, nd)
         want = [np.array(x).reshape(-1) for x in ref(qv, qdv, qddv, dv, pv)]
-        Mc, fc, Jqc, Jvc, enc = np.zeros(nq * nq), np.zeros(nq), np.zeros(nq * nq), np.zeros(nq * nq), np.zeros(3)
-        s.mass(ptr(qv), ptr(dv), ptr(pv), ptr(Mc))
-        s.force(ptr(qv), ptr(qdv), ptr(dv), ptr(pv), ptr(fc))
-        s.residual_jac(ptr(qv), ptr(qdv), ptr(qddv), ptr(dv), ptr(pv), ptr(Jqc), ptr(Jvc))
-        s.energy(ptr(qv), ptr(qdv), ptr(dv), ptr(pv), ptr(enc))
-        for name, got, ref_ in zip(("mass", "force", "dr_dq", "dr_dqd", "energy"), (Mc, fc, Jqc, Jvc, enc), want):
-            assert np.abs(got - ref_).max() <= 1e-10 * np.abs(ref_).max(), name
+        _c_kernels_agree(s, want, qv, qdv, qddv, dv, pv)

@@ -240,19 +240,24 @@ class SystemDerivation:
         return self.T, self.V, jacobi_integral(self.T, self.M, self.qd, self.V)
 
 
-def _held_beyond_root(system: System, beam: str) -> str:
-    """The first joint, force or spring acting on the beam anywhere but at its root ('' if none)."""
-    def beyond(ref: str) -> bool:
-        return ref.partition(".")[0] == beam and ref.partition(".")[2] != "root"
+def _beyond_root(ref, beam: str) -> bool:
+    return isinstance(ref, str) and ref.partition(".")[0] == beam and ref.partition(".")[2] != "root"
 
-    for j in system.joints:
-        if beyond(j.parent) or beyond(j.child):
-            return f"joint '{j.name}'"
+
+def _loaded_beyond_root(system: System, beam: str) -> str:
+    """The first force or spring acting on the beam anywhere but at its root ('' if none)."""
     for load in system.loads:
-        refs = [getattr(load, k, "") for k in ("marker", "a", "b")]
-        if any(isinstance(r, str) and beyond(r) for r in refs):
+        if any(_beyond_root(getattr(load, k, ""), beam) for k in ("marker", "a", "b")):
             return f"load '{load.name or type(load).__name__}'"
     return ""
+
+
+def _held_beyond_root(system: System, beam: str) -> str:
+    """The first joint, force or spring acting on the beam anywhere but at its root ('' if none)."""
+    for j in system.joints:
+        if _beyond_root(j.parent, beam) or _beyond_root(j.child, beam):
+            return f"joint '{j.name}'"
+    return _loaded_beyond_root(system, beam)
 
 
 def _check_exact(system: System, tree, b: FlexibleBeam) -> None:
@@ -268,7 +273,7 @@ def _check_exact(system: System, tree, b: FlexibleBeam) -> None:
         raise SpecError(f"{where} is derived for a uniform beam (not from finite-element data)")
     if b.damped:
         raise SpecError(f"{where}: structural damping is not derived for it yet")
-    loaded = _held_beyond_root(replace(system, joints=()), b.name)
+    loaded = _loaded_beyond_root(system, b.name)
     for j in system.joints:
         if j.parent.partition(".")[0] == b.name and j.name not in tree.cut:
             raise SpecError(f"{where}: joint '{j.name}' hangs a body from it (a loop may close "
