@@ -19,7 +19,9 @@ GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "mode
                      "model.variant", "physics.lagrange", "physics.modal", "codegen.derive",
                      "emit.kernels", "emit.cemit", "codegen.generate", "physics.fe", "model.fedata",
                      "physics.exact", "physics.exact_kinematics", "physics.exact_body", "model.beam_element", "physics.spatial", "physics.spatial_ef",
-                     "physics.rod3d", "scenes.assembly", "model.exact_numbers")  # assembly: a ball joint's start (shortest_turn)
+                     "physics.rod3d", "scenes.assembly", "model.exact_numbers",  # assembly: a ball joint's start (shortest_turn)
+                     *(f"model.joint_kinds.{f.stem}" for f in sorted(  # one module per joint kind
+                         module_file("model.joint_kinds.__init__").parent.glob("*.py"))))
 
 
 def tool_versions() -> dict[str, str]:

@@ -21,23 +21,21 @@ from dataclasses import dataclass, field, fields, replace
 from typing import NamedTuple
 
 from flexsym.core.errors import SpecError
+from flexsym.model.joint_kinds import KINDS
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
 from flexsym.model.modes import ModeRef
 from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
-JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
+JOINT_KINDS = tuple(KINDS)  # one module each: flexsym/model/joint_kinds/
 DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
-SPATIAL_JOINT_KINDS = ("revolute", "prismatic", "clamp", "spherical", "universal", "cylindrical")
 # Joints closing a loop in 3D, by kind: their constraint rows (physics/spatial._cut_rows, the
 # assembly's scenes/assembly.cut_axes), as data: the gap rows ("point": the two points coincide,
 # three rows; "across": only across the axis, two rows along directions fixed in the parent) and
 # the rotation rows ("": none; "cross": a universal joint's one; "axis": the child's axis stays
 # parallel to the parent's, two; "lock": the relative rotation stays what it is at t = 0, three)
-SPATIAL_CUT_ROWS = {"spherical": ("point", ""), "universal": ("point", "cross"),
-                    "revolute": ("point", "axis"), "cylindrical": ("across", "axis"),
-                    "prismatic": ("across", "lock"), "clamp": ("point", "lock")}
-SPATIAL_CUT_KINDS = tuple(SPATIAL_CUT_ROWS)
+SPATIAL_CUT_ROWS = {k: kind.cut_rows for k, kind in KINDS.items() if 3 in kind.dimensions}
+SPATIAL_JOINT_KINDS = tuple(SPATIAL_CUT_ROWS)
 TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
 SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
 STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
@@ -69,8 +67,7 @@ REACTION_COMPONENTS = {2: ("x", "y", "moment"), 3: ("x", "y", "z", "mx", "my", "
 # the Joint fields of its value and rate at t = 0, which are also its initial table's keys and
 # its outputs' functions; the value's field names it: J_slide, J_angle2 (the result column;
 # with J_slide_rate, J_angle2_rate the names expressions use)
-SECOND = {"cylindrical": ("slide", "slide", "slide", "slide_rate"),
-          "universal": ("turn", "second angle", "angle2", "rate2")}
+SECOND = {k: kind.second for k, kind in KINDS.items() if kind.second}
 _OUTPUT_RE = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:\((.*)\))?\s*\Z")
 
 
@@ -420,17 +417,15 @@ class Joint:
         frame, the child's (J_angle2: angle2(J), rate2(J); initial angle2, rate2). A universal
         joint closing a loop, a spherical joint (Euler parameters, physics/spatial.py) and a
         clamp have none."""
-        axis = self.axis or (0.0, 0.0, 1.0)  # a revolute's default (_check_joint: the others need one)
-        if self.kind in ("revolute", "prismatic"):
-            return (JointCoordinate(self.name, "turn" if self.kind == "revolute" else "slide",
-                                    self.initial, self.rate, axis),)
-        if self.kind == "cylindrical" or (self.kind == "universal" and self.parent_axis is not None):
-            motion, _, value, rate = SECOND[self.kind]
-            first = self.parent_axis if self.kind == "universal" else axis
-            return (JointCoordinate(self.name, "turn", self.initial, self.rate, first),
-                    JointCoordinate(f"{self.name}_{value}", motion, getattr(self, value),
-                                    getattr(self, rate), axis))
-        return ()
+        kind = KINDS.get(self.kind)
+        if kind is None:
+            return ()  # _check_joint refuses it
+        starts = [(self.name, self.initial, self.rate)]
+        if kind.second:
+            value, rate = kind.second[2:]
+            starts.append((f"{self.name}_{value}", getattr(self, value), getattr(self, rate)))
+        return tuple(JointCoordinate(name, motion, value, rate, axis) for (name, value, rate), motion, axis
+                     in zip(starts, kind.motions_of(self), kind.axes(self)))
 
     def fields_of(self, coordinate: str) -> tuple[str, str]:
         """The Joint fields of a coordinate's value and rate at t = 0 (Joint.coordinates)."""
@@ -581,7 +576,7 @@ class System:
         taken |= {c.name: f"the {SECOND[j.kind][1]} of joint '{j.name}'" for j in self.joints
                   if isinstance(j, Joint) for c in j.coordinates if c.name != j.name}
         taken |= {f"{j.name}_e{k}": f"an Euler parameter of joint '{j.name}'" for j in self.joints
-                  if isinstance(j, Joint) and j.kind == "spherical" for k in range(4)}
+                  if isinstance(j, Joint) and getattr(KINDS.get(j.kind), "euler", False) for k in range(4)}
         for b in self.bodies:
             if getattr(b, "flexible", False):
                 names = (getattr(b.model, "coordinates", ()) if self.dimension == 2 or
@@ -602,7 +597,7 @@ class System:
         tree, guided = self.tree(), {self.driven(d) for d in self.drivers if d.kind == "guided"}
         while body != GROUND:
             j = self.joint(tree.joint_of(body))
-            if j.kind != "clamp" and not (j.coordinates and all(c.name in guided for c in j.coordinates)):
+            if not KINDS[j.kind].welds and not (j.coordinates and all(c.name in guided for c in j.coordinates)):
                 return False
             body = j.parent.partition(".")[0] if j.parent != GROUND else GROUND
             if body != GROUND and self.body(body).flexible:
@@ -654,10 +649,6 @@ class System:
         tree = spanning_tree(self)
         for name in tree.cut if n == 3 else ():
             j = self.joint(name)
-            if j.kind not in SPATIAL_CUT_KINDS:
-                raise SpecError(f"{where}: joint '{name}' closes a loop: a {j.kind} "
-                                f"joint closing a spatial loop is not derived yet (closing: "
-                                f"{', '.join(SPATIAL_CUT_KINDS)})")
             given = [k for k, v in (("initial", j.initial), ("slide", j.slide), ("angle2", j.angle2))
                      if v != 0] + [k for k, v in (("rate", j.rate), ("slide_rate", j.slide_rate),
                                                   ("rate2", j.rate2)) if v is not None]
@@ -667,7 +658,7 @@ class System:
                 raise SpecError(f"{where}: joint '{name}' closes a loop at '{ef}': the orientation of a "
                                 f"spatial ef beam's section is not derived yet, so a {j.kind} joint "
                                 "cannot close a loop there (a spherical or universal joint can)")
-            if j.kind != "spherical" and (given or j.fixed):
+            if not KINDS[j.kind].euler and (given or j.fixed):
                 raise SpecError(f"{where}: joint '{name}' closes a loop: {', '.join(given or ['fixed'])} "
                                 "applies to joints in the tree (a joint closing a loop has no "
                                 "coordinate: its rows hold the child's relative motion)")
@@ -826,7 +817,8 @@ class System:
         if bodies[0] == bodies[1]:
             raise SpecError(f"{where}: joins body '{bodies[0]}' to itself")
         n = self.dimension
-        if n == 2 and j.kind in ("universal", "cylindrical"):  # a planar cylindrical: a revolute or a prismatic
+        jkind = KINDS[j.kind]
+        if n not in jkind.dimensions:  # a planar cylindrical: a revolute or a prismatic
             raise SpecError(f"{where}: a {j.kind} joint applies to spatial systems (dimension = 3) only")
         if j.direction is not None:
             d = j.direction
@@ -836,10 +828,8 @@ class System:
                     or math.hypot(*d) < MIN_AXIS):
                 raise SpecError(f"{where}: direction {d!r} must be three finite numbers, not all 0 "
                                 "(the child's x axis at t = 0, in the parent's frame)")
-        if j.kind in ("prismatic", "cylindrical") or (n == 3 and j.kind in ("revolute", "universal")
-                                                       and j.axis is not None):
-            ax, count = j.axis, ("two", "three")[n - 2]
-            frame = "child's" if j.kind == "universal" else "parent's"  # e1 turns with the child
+        if n in jkind.axis_needed or (n in jkind.axis_dims and j.axis is not None):
+            ax, count, frame = j.axis, ("two", "three")[n - 2], jkind.axis_frame
             if ax is None or len(ax) != n or not all(_finite(a) for a in ax) or not any(ax):
                 raise SpecError(f"{where}: a {j.kind} joint needs an axis ({count} finite numbers, "
                                 f"not all 0) in the {frame} frame")
@@ -847,12 +837,10 @@ class System:
                 raise SpecError(f"{where}: axis {list(ax)} is shorter than {MIN_AXIS:g} (it is a "
                                 f"direction, normalised: write e.g. {[1] + [0] * (n - 1)})")
         elif j.axis is not None:
-            raise SpecError(f"{where}: axis applies to prismatic joints only" if n == 2 else
-                            f"{where}: axis applies to revolute, prismatic, cylindrical and universal "
-                            "joints only")
-        if n == 3 and j.kind == "universal" and j.axis is None:
-            raise SpecError(f"{where}: a universal joint needs its child's axis (three numbers, in the "
-                            "child's frame)")
+            takes = [k for k, other in KINDS.items() if n in other.axis_dims]
+            raise SpecError(f"{where}: axis applies to {', '.join(takes[:-1]) + ' and ' if takes[1:] else ''}"
+                            f"{takes[-1]} joints only")
+        jkind.check(j, n, where)
         if j.parent_axis is not None:
             self._check_parent_axis(j, where)
         if n == 3 and j.offset != 0:
@@ -868,30 +856,10 @@ class System:
                                 + (" in the tree (with parent_axis)" if kind == "universal" else ""))
             if getattr(j, rate) is not None and not _finite(getattr(j, rate)):
                 raise SpecError(f"{where}: {rate} {getattr(j, rate)!r} must be a finite number")
-        if j.kind == "spherical":
-            if n == 2:
-                raise SpecError(f"{where}: a spherical joint applies to spatial systems "
-                                "(dimension = 3) only")
-            if j.rate is not None and (not isinstance(j.rate, (tuple, list)) or len(j.rate) != 3
-                                       or not all(_finite(w) for w in j.rate)):
-                raise SpecError(f"{where}: rate {j.rate!r} must be three finite numbers (the "
-                                "child's angular velocity relative to the parent at t = 0, rad/s, "
-                                "in the parent's frame)")
-            if j.initial != 0 or j.fixed:
-                raise SpecError(f"{where}: a spherical joint starts with the child's frame parallel "
-                                "to the parent's (no initial, no fixed); give its rate only")
-        elif j.rate is not None and not _finite(j.rate):
-            raise SpecError(f"{where}: rate {j.rate!r} must be a finite number")
         if not isinstance(j.fixed, bool):
             raise SpecError(f"{where}: fixed {j.fixed!r} must be true or false")
-        if j.kind == "universal" and not j.has_coordinate and (j.initial or j.fixed or j.rate is not None):
-            raise SpecError(f"{where}: initial, rate and fixed apply to a universal joint in the tree "
-                            "(with parent_axis); one closing a loop has no coordinate")
-        if (j.fixed or j.rate is not None) and not j.has_coordinate and j.kind != "spherical":
+        if (j.fixed or j.rate is not None) and not j.has_coordinate and not jkind.euler:
             raise SpecError(f"{where}: a {j.kind} joint has no coordinate to fix or give a rate")
-        if j.kind == "clamp" and j.initial != 0:
-            raise SpecError(f"{where}: initial applies to revolute and prismatic joints only (a "
-                            "clamp has no coordinate; use offset for its angle)")
         if (j.parent == GROUND or any(j.point)) and (len(j.point) != n or not all(_finite(c) for c in j.point)):
             raise SpecError(f"{where}: point {j.point!r} must be {('two', 'three')[n - 2]} finite numbers")
 
@@ -1197,8 +1165,8 @@ def output_unit(system: System, quantity: str) -> str:
         c = system.joint(args[0]).coordinates[fn in second]
         return ("m" if c.motion == "slide" else "rad") + ("/s" if second.get(fn, fn == "rate") else "")
     if fn == "torque":
-        joint = system.joint(next(d.joint for d in system.drivers if d.name == args[0]))
-        return "N" if joint.kind == "prismatic" else "N m"
+        d = next(d for d in system.drivers if d.name == args[0])
+        return "N" if KINDS[system.joint(d.joint).kind].law(bool(d.coordinate)) == "force" else "N m"
     if fn == "reaction":
         return "N" if args[1] in ("x", "y", "z") else "N m"
     if fn in ("Hx", "Hy", "Hz"):

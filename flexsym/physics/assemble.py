@@ -55,6 +55,7 @@ from flexsym.physics.exact_body import EXACT_VG, body_quadrature, inertial_secti
 from flexsym.core.errors import SpecError
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import equations_of_motion, generalized_force, jacobi_integral
+from flexsym.model.joint_kinds import KINDS, planar_cut_rows, planar_frame
 from flexsym.model.maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from flexsym.model.modes import s
 from flexsym.physics.outputs import field_at, output_expression
@@ -68,6 +69,13 @@ SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of 
 
 def _rot(phi) -> sp.Matrix:
     return sp.Matrix([[sp.cos(phi), -sp.sin(phi)], [sp.sin(phi), sp.cos(phi)]])
+
+
+def _axis_direction(joint, angle, across: bool = False) -> sp.Matrix:
+    """A planar joint's unit axis (or its normal, turned +90 degrees), in ground, its parent
+    turned by angle."""
+    ax = sp.Matrix([exact(a) for a in joint.axis])
+    return _rot(angle) * (sp.Matrix([-ax[1], ax[0]]) if across else ax) / sp.sqrt(ax.dot(ax))
 
 
 def _cross(a, b) -> sp.Expr:
@@ -446,13 +454,7 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
         b = system.body(body)
         mc = system.marker(j.child)[1]
         mloc = sp.Matrix([exact(mc.x), exact(mc.y)])
-        if j.kind == "revolute":
-            phi = phiP + off + c
-        else:
-            phi = phiP + off
-        if j.kind == "prismatic":
-            ax = sp.Matrix([exact(a) for a in j.axis])
-            P = P + _rot(phiP) * ax / sp.sqrt(ax.dot(ax)) * c
+        P, phi = planar_frame(KINDS[j.kind], P, phiP, off, [c], lambda a: _axis_direction(j, a))
         R = P - (_rot(phi) * mloc if not b.flexible else sp.zeros(2, 1))
         der.poses[body] = Pose(phi, R)
 
@@ -592,17 +594,9 @@ def cut_joint_rows(der: SystemDerivation, joint) -> list[tuple[str, sp.Expr]]:
     """Phi = 0 of a cut joint: revolute (pin: the two points coincide), clamp (and the angles
     differ by the offset), prismatic (the child point on the parent's axis line, angles differ
     by the offset). On a beam, a point's angle is its tangent's."""
-    (pp, ap), (pc, ac) = _side(der, joint, "parent"), _side(der, joint, "child")
-    off = exact(joint.offset)
-    n = joint.name
-    if joint.kind == "prismatic":
-        ax = sp.Matrix([exact(a) for a in joint.axis])
-        normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
-        return [(f"{n}.normal", (pc - pp).dot(normal)), (f"{n}.angle", ac - ap - off)]
-    rows = [(f"{n}.x", pc[0] - pp[0]), (f"{n}.y", pc[1] - pp[1])]
-    if joint.kind == "clamp":
-        rows.append((f"{n}.angle", ac - ap - off))
-    return rows
+    rows = planar_cut_rows(KINDS[joint.kind], _side(der, joint, "parent"), _side(der, joint, "child"),
+                           exact(joint.offset), lambda a: _axis_direction(joint, a, across=True))
+    return [(f"{joint.name}.{suffix}", e) for suffix, e, _ in rows]
 
 
 def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
@@ -844,10 +838,8 @@ def _cut_loads(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Mat
     (pp, ap), (pc, _) = _side(der, joint, "parent"), _side(der, joint, "child")
     n = joint.name
     tau = -lam.get(f"{n}.angle", sp.Integer(0))
-    if joint.kind == "prismatic":
-        ax = sp.Matrix([exact(a) for a in joint.axis])
-        normal = _rot(ap) * sp.Matrix([-ax[1], ax[0]]) / sp.sqrt(ax.dot(ax))
-        return -lam[f"{n}.normal"] * normal, tau, pc, pc
+    if f"{n}.normal" in lam:  # the gap across a prismatic joint's axis (planar_cut_rows)
+        return -lam[f"{n}.normal"] * _axis_direction(joint, ap, across=True), tau, pc, pc
     return -sp.Matrix([lam[f"{n}.x"], lam[f"{n}.y"]]), tau, pc, pp
 
 

@@ -77,6 +77,7 @@ import sympy as sp
 from flexsym.core.errors import SpecError
 from flexsym.model.exact_numbers import exact
 from flexsym.model.modes import mode, s
+from flexsym.model.joint_kinds import KINDS
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import (GROUND, SECOND, FlexibleBeam, Gravity, PointForce, SpringDamper,
@@ -283,7 +284,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
         if j.has_coordinate:  # a cylindrical joint's two, ..., but a guided one's
             coords += [Coordinate(c.name, "joint", body, j.name) for c in j.coordinates
                        if c.name not in guided_by_joint]
-        elif j.kind == "spherical":  # Euler parameters: e(0) turns x to direction, e' = G^T omega/2
+        elif KINDS[j.kind].euler:  # Euler parameters: e(0) turns x to direction, e' = G^T omega/2
             e0, ed0 = initial_euler(j.direction, j.rate)
             coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
                        for k in range(4)]
@@ -575,11 +576,12 @@ def _cut_rows(der) -> None:
         j = system.joint(name)
         first = len(der.constraints)
         loads = []
-        if j.kind in ("spherical", "universal"):  # written first: their rows as they were
+        turn_rows = KINDS[j.kind].cut_rows[1]
+        if turn_rows in ("", "cross"):  # a ball's and a universal joint's, written first: their rows as they were
             gap = _cut_point(der, j.parent, j.point) - _marker_point(der, j.child)
             der.constraints += [(f"{name}.{c}", gap[k]) for k, c in enumerate("xyz")]
             loads += [("gap", None, False)] * 3
-        if j.kind == "universal":
+        if turn_rows == "cross":
             start = start or _start_values(der)
             e1 = der.spatial["frames"][system.marker(j.child)[0]].A * _vec(j.axis)
             e1 = e1 / sp.sqrt(_vec(j.axis).dot(_vec(j.axis)))
@@ -592,7 +594,7 @@ def _cut_rows(der) -> None:
             e2 = Rp * e2_local
             der.constraints.append((f"{name}.cross", scale * e1.dot(e2)))
             loads.append(("turn", e1, e2))
-        elif j.kind != "spherical":
+        elif turn_rows:
             start = start or _start_values(der)
             Ap, Ac = _cut_axes_of(der, j.parent), _cut_axes_of(der, j.child)
             p, c = _cut_point(der, j.parent, j.point), _marker_point(der, j.child)

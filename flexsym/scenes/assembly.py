@@ -36,6 +36,7 @@ import numpy as np
 import sympy as sp
 
 from flexsym.core.errors import SpecError
+from flexsym.model.joint_kinds import KINDS, planar_cut_rows, planar_frame
 from flexsym.model.maneuver import maneuver_of, parse_theta, t
 from flexsym.model.system import GROUND, System
 
@@ -101,14 +102,9 @@ def poses(system: System, q: dict) -> dict:
     tree = system.tree()
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
-        p = _world(system, out, j.parent, j.point)
         phi_p = out[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0
-        c = q.get(j.name, 0)
-        phi = phi_p + j.offset + (c if j.kind == "revolute" else 0)
-        if j.kind == "prismatic":
-            n = math.hypot(*j.axis)
-            ax = _rot(phi_p, (j.axis[0] / n, j.axis[1] / n))
-            p = (p[0] + c * ax[0], p[1] + c * ax[1])
+        p, phi = planar_frame(KINDS[j.kind], sp.Matrix(_world(system, out, j.parent, j.point)), phi_p,
+                              j.offset, [q.get(j.name, 0)], lambda a: sp.Matrix(_axis(j, a)))
         m = _rot(phi, _local(system, j.child))
         out[body] = (p[0] - m[0], p[1] - m[1], phi)
     return out
@@ -233,12 +229,10 @@ def cut_axes(j, A_p0: np.ndarray, A_c0: np.ndarray) -> tuple[list | None, list]:
     gradient at t = 0 a unit turn: well conditioned). All rows vanish at t = 0 by construction
     but the gap's, which the assembly closes. A universal joint's cross row is
     physics/spatial._cut_rows' own (as it was first written)."""
-    from flexsym.model.system import SPATIAL_CUT_ROWS
-
-    gap_kind, turn = SPATIAL_CUT_ROWS[j.kind]
+    gap_kind, turn = KINDS[j.kind].cut_rows
     if gap_kind == "point" and turn in ("", "cross"):
         return None, []
-    if j.kind == "clamp":
+    if KINDS[j.kind].welds:  # its section's axes
         f = list(np.eye(3))
     else:
         f = list(across(j.axis))
@@ -269,7 +263,7 @@ def cut_rows3(system: System, frames: dict) -> list[tuple[str, object, bool]]:
     for name in system.tree().cut:
         j = system.joint(name)
         (A_p, p), (_, c) = _end3(system, frames, j, "parent"), _end3(system, frames, j, "child")
-        if j.kind in ("prismatic", "cylindrical"):
+        if KINDS[j.kind].cut_rows[0] == "across":
             rows += [(name, (p - c).dot(A_p * sp.Matrix(n)), True) for n in across(j.axis)[1:]]
         else:
             rows += [(name, p[k] - c[k], True) for k in range(3)]
@@ -293,6 +287,12 @@ def _turn(axis, angle) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
 
 
+def _axis(j, angle, across: bool = False):
+    """A planar joint's unit axis (or its normal) in ground, its parent turned by angle."""
+    n = math.hypot(*j.axis)
+    return _rot(angle, (-j.axis[1] / n, j.axis[0] / n) if across else (j.axis[0] / n, j.axis[1] / n))
+
+
 def _local(system, ref):
     m = system.marker(ref)[1]
     return (m.x, m.y)
@@ -313,16 +313,10 @@ def cut_rows(system: System, frames: dict) -> list[tuple[str, object, bool]]:
     rows = []
     for name in system.tree().cut:
         j = system.joint(name)
-        a, b = _world(system, frames, j.parent, j.point), _world(system, frames, j.child)
-        phi_a = frames[j.parent.partition(".")[0]][2] if j.parent != GROUND else 0
-        dphi = frames[j.child.partition(".")[0]][2] - phi_a - j.offset
-        if j.kind == "prismatic":
-            n = _rot(phi_a, (-j.axis[1] / math.hypot(*j.axis), j.axis[0] / math.hypot(*j.axis)))
-            rows += [(name, (b[0] - a[0]) * n[0] + (b[1] - a[1]) * n[1], True), (name, dphi, False)]
-        else:
-            rows += [(name, b[0] - a[0], True), (name, b[1] - a[1], True)]
-            if j.kind == "clamp":
-                rows.append((name, dphi, False))
+        sides = [(_world(system, frames, ref, point), frames[ref.partition(".")[0]][2] if ref != GROUND else 0)
+                 for ref, point in ((j.parent, j.point), (j.child, (0.0, 0.0)))]
+        rows += [(name, e, length) for _, e, length in
+                 planar_cut_rows(KINDS[j.kind], *sides, j.offset, lambda a: _axis(j, a, across=True))]
     return rows
 
 

@@ -69,6 +69,7 @@ from flexsym.scenes.assembly import Assembly, assemble, poses, rotations3, theta
 from flexsym.model.maneuver import check_theta, check_time_function, maneuver_of, parse_expression, t
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
+from flexsym.model.joint_kinds import KINDS
 from flexsym.model.system import (GROUND, SECOND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
                      parse_output)
@@ -214,8 +215,9 @@ def system_from_data(data: dict, prefix: str = "", name: str = "system", model: 
     drivers = tuple(_driver(r, k, tab) for k, tab in enumerate(_entries(r, data, "driver")))
     kinds = {j.name: j.kind for j in joints}
     for k, (d, tab) in enumerate(zip(drivers, _entries(r, data, "driver"))):
-        law = {"revolute": "torque", "prismatic": "force", "universal": "torque",
-               "cylindrical": "force" if d.coordinate == "slide" else "torque"}.get(kinds.get(d.joint))
+        kind = KINDS.get(kinds.get(d.joint))  # a coordinate it lacks: System.validate says so
+        known = kind is not None and d.coordinate in ("", *(kind.second or ())[2:3])
+        law = kind.law(bool(d.coordinate)) if known else None
         if d.kind == "motor" and law is not None and law not in tab:
             what = f"{d.coordinate} of the" if d.coordinate else "the"
             r.fail(f"{_label('driver', k, tab)}", f"a motor on {what} {kinds[d.joint]} joint "
@@ -425,7 +427,7 @@ def _joint(r: _Items, k: int, tab: dict, dim: int = 2) -> Joint:
         r.fail(f"{where} initial", "applies to revolute and prismatic joints only (a clamp has no "
                "coordinate; use offset for its angle)")
     second = {}  # a second coordinate's start (SECOND: a cylindrical joint's slide, ...)
-    if kind == "spherical":  # its one start datum: the angular velocity, a vector
+    if kind in KINDS and KINDS[kind].euler:  # its one start datum: the angular velocity, a vector
         given = tab.get("initial", {})
         if not isinstance(given, dict):  # an angle: it has three, and starts at its direction
             r.fail(f"{where} initial", "a spherical joint starts with the child's frame parallel to "
@@ -724,11 +726,10 @@ def summary(system: System) -> str:
         parent = f"ground at ({j.point[0]:g}, {j.point[1]:g})" if j.parent == GROUND else j.parent
         axis = f", axis ({j.axis[0]:g}, {j.axis[1]:g})" if j.axis else ""
         lines.append(f"  {j.name}: {j.kind} {parent} -> {j.child}{axis} [{role}]")
-    eqs = {"revolute": "2 (position)", "prismatic": "2 (across the axis, angle)", "clamp": "3 (position, angle)"}
-    lines.append("constraint equations: " + (", ".join(f"{n}: {eqs[system.joint(n).kind]}" for n in tree.cut)
-                                            or "none (a tree)"))
-    coords = [(j.name, j.kind) for j in system.joints if j.has_coordinate and j.name not in tree.cut]
-    free = [f"{n} ({'angle' if k == 'revolute' else 'displacement'})" for n, k in coords if n not in guided]
+    lines.append("constraint equations: " + (", ".join(f"{n}: {_planar_equations(system.joint(n))}"
+                                                       for n in tree.cut) or "none (a tree)"))
+    free = [f"{c.name} ({'angle' if c.motion == 'turn' else 'displacement'})" for j in system.joints
+            if j.name not in tree.cut for c in j.coordinates if c.name not in guided]
     lines += ["", "joint coordinates: " + (", ".join(free) or "none")
               + (f"; guided (known functions of t): {', '.join(sorted(guided))}" if guided else ""),
               "elastic coordinates: " + ", ".join(
@@ -761,6 +762,13 @@ def _damping_text(b) -> str:
     d = b.damping
     zeta = ", ".join(f"{z:g}" for z in d.zeta) if isinstance(d.zeta, (tuple, list)) else f"{d.zeta:g}"
     return f"; damping zeta {zeta}, alpha {d.alpha:g} 1/s, beta {d.beta:g} s"
+
+
+def _planar_equations(j: Joint) -> str:
+    """A planar cut joint's constraint equations, e.g. "2 (across the axis, angle)"."""
+    what = {"x": "position", "normal": "across the axis", "angle": "angle"}
+    rows = [s for s, _ in KINDS[j.kind].planar_rows()]
+    return f"{len(rows)} ({', '.join(what[s] for s in rows if s != 'y')})"
 
 
 def _axes_text(j: Joint) -> str:
