@@ -59,7 +59,6 @@ SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "R", "Hx", "Hy", "Hz")
 PLANAR_ONLY = ("M", "torque", "momentum")  # not in 3D yet
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
-PERPENDICULAR = 1e-9  # |cos| of a universal joint's two axes above this: not across each other
 # reaction(joint, c) per dimension: the force's ground components, then the moment about the
 # joint's child point (the plane's one, or its ground components)
 REACTION_COMPONENTS = {2: ("x", "y", "moment"), 3: ("x", "y", "z", "mx", "my", "mz")}
@@ -669,8 +668,8 @@ class System:
                                 "is not derived yet (from a modal beam's it is; an ef beam's marker "
                                 "may close a loop: a spherical or universal joint listed after the "
                                 "tree's)")
-        for j in self.joints if n == 3 else ():
-            self._check_universal(j, tree)
+        for j in self.joints:
+            KINDS[j.kind].check_in_tree(j, j.name in tree.cut, f"{where}: joint '{j.name}'")
         guided = set()
         for d in self.drivers:
             self._check_driver(d, tree, guided)
@@ -759,23 +758,6 @@ class System:
             if b.model.axial_force == "equilibrium" or b.model.moment == "equilibrium":
                 pass  # N and the moments from equilibrium are derived in 3D
 
-    def _check_universal(self, j: Joint, tree: Tree) -> None:
-        """A universal joint in the tree turns about its parent_axis and its axis (two
-        coordinates, Joint.coordinates); one closing a loop takes its cross axis from the
-        assembled start (physics/spatial._cut_rows), so a parent_axis there is refused rather
-        than silently replaced."""
-        if j.kind != "universal":
-            return
-        where = f"system '{self.name}': joint '{j.name}'"
-        if j.name not in tree.cut and j.parent_axis is None:
-            raise SpecError(f"{where}: a universal joint in the tree needs parent_axis (three numbers, "
-                            "the first turn's axis in the parent's frame, across axis; to close a "
-                            "loop, list it after the joints of the tree)")
-        if j.name in tree.cut and j.parent_axis is not None:
-            raise SpecError(f"{where}: closes a loop: parent_axis applies to a universal joint in the "
-                            "tree (closing a loop, its cross axis is taken across axis and the "
-                            "parent's x at t = 0)")
-
     def _check_magnitudes(self) -> None:
         """Every number of the system: a real number (not bool, complex, str, None), finite and
         |x| <= MAX_MAGNITUDE (flexsym/model/limits.py), before anything else uses it."""
@@ -841,8 +823,6 @@ class System:
             raise SpecError(f"{where}: axis applies to {', '.join(takes[:-1]) + ' and ' if takes[1:] else ''}"
                             f"{takes[-1]} joints only")
         jkind.check(j, n, where)
-        if j.parent_axis is not None:
-            self._check_parent_axis(j, where)
         if n == 3 and j.offset != 0:
             raise SpecError(f"{where}: offset (a planar angle) does not apply to spatial joints: "
                             "the child's frame starts parallel to the parent's")
@@ -862,24 +842,6 @@ class System:
             raise SpecError(f"{where}: a {j.kind} joint has no coordinate to fix or give a rate")
         if (j.parent == GROUND or any(j.point)) and (len(j.point) != n or not all(_finite(c) for c in j.point)):
             raise SpecError(f"{where}: point {j.point!r} must be {('two', 'three')[n - 2]} finite numbers")
-
-    def _check_parent_axis(self, j: Joint, where: str) -> None:
-        """A tree universal joint's parent_axis: a direction, across its axis (the cross: the
-        child starts parallel to its parent, so the two axes are given in one frame)."""
-        a1, a2 = j.parent_axis, j.axis
-        if j.kind != "universal" or self.dimension != 3:
-            raise SpecError(f"{where}: parent_axis applies to universal joints of spatial systems only "
-                            "(the first turn's axis of one in the tree)")
-        if (not isinstance(a1, (tuple, list)) or len(a1) != 3 or not all(_finite(a) for a in a1)
-                or math.hypot(*a1) < MIN_AXIS):
-            raise SpecError(f"{where}: parent_axis {a1!r} must be three finite numbers, not shorter "
-                            f"than {MIN_AXIS:g} (a direction in the parent's frame)")
-        cos = sum(x * y for x, y in zip(a1, a2)) / (math.hypot(*a1) * math.hypot(*a2))
-        if abs(cos) > PERPENDICULAR:
-            raise SpecError(f"{where}: parent_axis {list(a1)} and axis {list(a2)} are "
-                            f"{math.degrees(math.acos(max(-1.0, min(1.0, cos)))):.6g} degrees apart: a "
-                            "universal joint's two axes cross at right angles (the child starts "
-                            "parallel to its parent, so both are given in one frame)")
 
     def _check_driver(self, d: Driver, tree: Tree, guided: set) -> None:
         where = f"system '{self.name}': driver '{d.name}'"

@@ -43,6 +43,7 @@ class JointKind:
     axis_needed: tuple = ()  # ... and in which the axis must be given
     axis_frame: str = "parent's"  # the frame its axis is given in
     euler: ClassVar[bool] = False  # its coordinates are Euler parameters (a ball joint)
+    takes_parent_axis: ClassVar[bool] = False  # a first axis in the parent's frame (universal)
 
     def __post_init__(self):
         assert self.cut_rows[0] in GAPS and self.cut_rows[1] in ROTATIONS, self
@@ -75,10 +76,17 @@ class JointKind:
 
     def check(self, joint, dimension: int, where: str) -> None:
         """Kind-specific validation of the start values (System._check_joint runs the common
-        part first): a rate is a finite number."""
+        part first): no parent_axis, and a rate is a finite number."""
+        if joint.parent_axis is not None and not (self.takes_parent_axis and dimension == 3):
+            raise SpecError(f"{where}: parent_axis applies to universal joints of spatial systems only "
+                            "(the first turn's axis of one in the tree)")
         rate = joint.rate
         if rate is not None and not finite(rate):
             raise SpecError(f"{where}: rate {rate!r} must be a finite number")
+
+
+    def check_in_tree(self, joint, closing: bool, where: str) -> None:
+        """What it needs in the tree, or closing a loop (System.validate, once the tree is known)."""
 
 
 def planar_frame(kind: JointKind, point, angle, offset, values, direction):
