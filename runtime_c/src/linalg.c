@@ -98,6 +98,35 @@ void fsr_band_lu_solve(const double* A, int n, int kl, int ku, const int* piv, d
     }
 }
 
+void fsr_lu_solve_columns(const double* A, int n, const int* piv, double* B, int m)
+{
+    for (int k = 0; k < n; ++k) {
+        double* bk = B + k * m;
+        if (piv[k] != k) {
+            double* bp = B + piv[k] * m;
+            for (int c = 0; c < m; ++c) { double t = bk[c]; bk[c] = bp[c]; bp[c] = t; }
+        }
+        for (int i = k + 1; i < n; ++i) {
+            double l = A[i * n + k], *bi = B + i * m;
+            for (int c = 0; c < m; ++c) bi[c] -= l * bk[c];
+        }
+    }
+    for (int i = n - 1; i >= 0; --i) {  /* two columns at a time, their sums in registers */
+        const double* Ai = A + i * n;
+        double* bi = B + i * m;
+        for (int c = 0; c < m; c += 2) {
+            int two = c + 1 < m;
+            double s0 = bi[c], s1 = two ? bi[c + 1] : 0.0;
+            for (int j = i + 1; j < n; ++j) {
+                s0 -= Ai[j] * B[j * m + c];
+                if (two) s1 -= Ai[j] * B[j * m + c + 1];
+            }
+            bi[c] = s0 * Ai[i];
+            if (two) bi[c + 1] = s1 * Ai[i];
+        }
+    }
+}
+
 static void unit_column(int n, int j, double* e)
 {
     for (int i = 0; i < n; ++i) e[i] = i == j ? 1.0 : 0.0;
