@@ -16,8 +16,10 @@
  * (power iteration on M^-1 K restricted to Phi_q x = 0, K = dr/dq of r = M q'' - f at the
  * consistent start: velocity-dependent terms and the change of the frequencies with the
  * configuration are not in it). A step above it is refused; stiff modes (an axial one) make
- * the method useless, as for rk4. No Newton iteration in the step: per step three evaluations
- * of M (factored), f, Phi, Phi_q and gamma with a constraint-block solve, plus the projection.
+ * the method useless, as for rk4. No Newton iteration in the step: per step four evaluations
+ * of M (factored), f, Phi_q and gamma with a constraint-block solve (stages 2-4 and the
+ * projected state's), plus the projection (Phi and Phi_q per Newton iteration, Phi_t, a
+ * block solve each).
  */
 #include <math.h>
 #include <string.h>
@@ -39,8 +41,8 @@ static fsr_status accel(csim* s, double t, const double* q, const double* v, dou
         return cs_fail(s, FSR_SINGULAR, "rk4p: mass matrix singular at t = %.6g s", t);
     m->force(q, v, s->d, s->o->p, a);
     s->r->force_evaluations++;
-    if (s->nc) {
-        cs_constraints(s, q);
+    if (s->nc) {  /* Phi_q and gamma: Phi itself is not read here */
+        m->constraint_jac(q, s->d, s->o->p, s->Pq);
         m->constraint_acc(q, v, s->d, s->o->p, s->gam);
     }
     cs_kkt(s, s->S, a, s->gam, lam);
