@@ -57,9 +57,16 @@ double cs_max_abs(const double* x, int n)
     return m;
 }
 
+/* B = A^-1 B (n x m) by the factor in A, Cholesky or LU (s->chol) */
+static void solve_columns(csim* s, const double* A, double* B, int m)
+{
+    if (s->chol) fsr_chol_solve_columns(A, s->n, B, m);
+    else fsr_lu_solve_columns(A, s->n, s->piv, B, m);
+}
+
 void cs_solve(csim* s, const double* A, double* x)
 {
-    if (A) fsr_lu_solve(A, s->n, s->piv, x);
+    if (A) solve_columns(s, A, x, 1);
 }
 
 /* x = G^+ b for G (m x m, overwritten) by Gaussian elimination with complete pivoting; the
@@ -117,7 +124,7 @@ int cs_kkt(csim* s, const double* A, double* b, const double* c, double* lam)
         Z[i * m] = b[i];
         for (int j = 0; j < nc; ++j) Z[i * m + 1 + j] = s->Pq[j * n + i];
     }
-    if (A) fsr_lu_solve_columns(A, n, s->piv, Z, m);
+    if (A) solve_columns(s, A, Z, m);
     for (int i = 0; i < nc; ++i) {  /* G = Phi_q A^-1 Phi_q^T, e1 = Phi_q y - c */
         double r = -c[i];
         for (int l = 0; l < n; ++l) r += s->Pq[i * n + l] * Z[l * m];

@@ -33,6 +33,47 @@ void fsr_chol_solve(const double* A, int n, double* b)
     }
 }
 
+void fsr_chol_solve_columns(const double* A, int n, double* B, int m)
+{
+    for (int i = 0; i < n; ++i) {  /* L y = b; two columns at a time, their sums in registers */
+        for (int c = 0; c < m; c += 2) {
+            int two = c + 1 < m;
+            double s0 = B[i * m + c], s1 = two ? B[i * m + c + 1] : 0.0;
+            for (int k = 0; k < i; ++k) {
+                s0 -= A[i * n + k] * B[k * m + c];
+                if (two) s1 -= A[i * n + k] * B[k * m + c + 1];
+            }
+            B[i * m + c] = s0 * A[i * n + i];
+            if (two) B[i * m + c + 1] = s1 * A[i * n + i];
+        }
+    }
+    for (int i = n - 1; i >= 0; --i) {  /* L^T x = y */
+        for (int c = 0; c < m; c += 2) {
+            int two = c + 1 < m;
+            double s0 = B[i * m + c], s1 = two ? B[i * m + c + 1] : 0.0;
+            for (int k = i + 1; k < n; ++k) {
+                s0 -= A[k * n + i] * B[k * m + c];
+                if (two) s1 -= A[k * n + i] * B[k * m + c + 1];
+            }
+            B[i * m + c] = s0 * A[i * n + i];
+            if (two) B[i * m + c + 1] = s1 * A[i * n + i];
+        }
+    }
+}
+
+int fsr_symmetric(const double* A, int n)
+{
+    double big = 0.0, off = 0.0;  /* comparisons, not fmax (a libm call: a fifth of rk4p's time) */
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j <= i; ++j) {
+            double a = fabs(A[i * n + j]), b = fabs(A[j * n + i]), d = fabs(A[i * n + j] - A[j * n + i]);
+            if (a > big) big = a;
+            if (b > big) big = b;
+            if (d > off) off = d;
+        }
+    return off <= 1e-13 * big;
+}
+
 int fsr_lu_factor(double* A, int n, int* piv)
 {
     return fsr_band_lu_factor(A, n, n - 1, n - 1, piv);

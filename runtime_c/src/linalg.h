@@ -8,6 +8,11 @@
  * k-th pivot is not positive. */
 int fsr_chol_factor(double* A, int n);
 void fsr_chol_solve(const double* A, int n, double* b);
+/* fsr_chol_solve on the m columns of B (n x m, row-major) at once, as fsr_lu_solve_columns. */
+void fsr_chol_solve_columns(const double* A, int n, double* B, int m);
+/* Is A (n x n) symmetric to rounding? Every model's M is by construction, but for a body's
+ * prestress that reads its free frame's acceleration (its q'' moved into M). */
+int fsr_symmetric(const double* A, int n);
 /* LU with partial pivoting (diagonal: 1 / U_kk); returns 0, or k+1 if column k has no usable pivot. */
 int fsr_lu_factor(double* A, int n, int* piv);
 void fsr_lu_solve(const double* A, int n, const int* piv, double* b);

@@ -30,14 +30,15 @@
 #define RK4P_STABILITY 2.785  /* rk4.c */
 #define RK4P_POWER_ITER 2000
 
-/* a, lam = the index-1 accelerations and multipliers at (q, v, t); M(q) LU-factored in S */
+/* a, lam = the index-1 accelerations and multipliers at (q, v, t); M(q) factored in S */
 static fsr_status accel(csim* s, double t, const double* q, const double* v, double* a, double* lam)
 {
     const fsm_system* m = s->m;
     const int n = s->n;
     cs_drive(s, t);
     m->mass(q, s->d, s->o->p, s->S);
-    if (fsr_lu_factor(s->S, n, s->piv))
+    s->chol = fsr_symmetric(s->S, n);  /* Cholesky: half LU's work (as ode.c's M) */
+    if (s->chol ? fsr_chol_factor(s->S, n) : fsr_lu_factor(s->S, n, s->piv))
         return cs_fail(s, FSR_SINGULAR, "rk4p: mass matrix singular at t = %.6g s", t);
     m->force(q, v, s->d, s->o->p, a);
     s->r->force_evaluations++;
