@@ -142,8 +142,12 @@ def build_system_kernels(der: SystemDerivation) -> list:
         phi = matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
         phi_q = ca.jacobian(phi, q)
         phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
-        phi_dot = ca.mtimes(phi_q, qd) + phi_t
-        gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
+        if hasattr(der, "spatial"):  # forward AD twice along the motion (q, d): S7's gamma
+            z, zd = ca.vertcat(q, d), ca.vertcat(qd, ddot)  # 5827 -> 4720 operations
+            gamma = -ca.jtimes(ca.jtimes(phi, z, zd), z, zd)
+        else:  # planar systems: the Jacobians' form, their golden kernels kept bit for bit
+            phi_dot = ca.mtimes(phi_q, qd) + phi_t
+            gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
         constraint_kernels = [
             ("constraints", "Phi of the cut joints", [("q", q), ("d", d), ("p", p)], [("phi", phi)]),
             ("constraint_jac", "Phi_q", [("q", q), ("d", d), ("p", p)], [("phi_q", phi_q)]),
