@@ -33,32 +33,32 @@ void fsr_chol_solve(const double* A, int n, double* b)
     }
 }
 
+/* A triangular solve in dot form on the m columns of B (n x m): row by row, down (up when
+ * upward), B_i = (B_i - sum_k T(i, k) B_k) T(i, i) over the rows k done before i, with
+ * T(i, k) = A[i * ri + k * ki]; two columns at a time, their sums in registers. */
+static void tri_solve_columns(const double* A, int n, int ri, int ki, int upward, double* B, int m)
+{
+    for (int t = 0; t < n; ++t) {
+        int i = upward ? n - 1 - t : t, k0 = upward ? i + 1 : 0, k1 = upward ? n : i;
+        double d = A[i * (ri + ki)];
+        for (int c = 0; c < m; c += 2) {
+            int two = c + 1 < m;
+            double s0 = B[i * m + c], s1 = two ? B[i * m + c + 1] : 0.0;
+            for (int k = k0; k < k1; ++k) {
+                double a = A[i * ri + k * ki];
+                s0 -= a * B[k * m + c];
+                if (two) s1 -= a * B[k * m + c + 1];
+            }
+            B[i * m + c] = s0 * d;
+            if (two) B[i * m + c + 1] = s1 * d;
+        }
+    }
+}
+
 void fsr_chol_solve_columns(const double* A, int n, double* B, int m)
 {
-    for (int i = 0; i < n; ++i) {  /* L y = b; two columns at a time, their sums in registers */
-        for (int c = 0; c < m; c += 2) {
-            int two = c + 1 < m;
-            double s0 = B[i * m + c], s1 = two ? B[i * m + c + 1] : 0.0;
-            for (int k = 0; k < i; ++k) {
-                s0 -= A[i * n + k] * B[k * m + c];
-                if (two) s1 -= A[i * n + k] * B[k * m + c + 1];
-            }
-            B[i * m + c] = s0 * A[i * n + i];
-            if (two) B[i * m + c + 1] = s1 * A[i * n + i];
-        }
-    }
-    for (int i = n - 1; i >= 0; --i) {  /* L^T x = y */
-        for (int c = 0; c < m; c += 2) {
-            int two = c + 1 < m;
-            double s0 = B[i * m + c], s1 = two ? B[i * m + c + 1] : 0.0;
-            for (int k = i + 1; k < n; ++k) {
-                s0 -= A[k * n + i] * B[k * m + c];
-                if (two) s1 -= A[k * n + i] * B[k * m + c + 1];
-            }
-            B[i * m + c] = s0 * A[i * n + i];
-            if (two) B[i * m + c + 1] = s1 * A[i * n + i];
-        }
-    }
+    tri_solve_columns(A, n, n, 1, 0, B, m);  /* L y = b */
+    tri_solve_columns(A, n, 1, n, 1, B, m);  /* L^T x = y */
 }
 
 int fsr_symmetric(const double* A, int n)
@@ -152,20 +152,7 @@ void fsr_lu_solve_columns(const double* A, int n, const int* piv, double* B, int
             for (int c = 0; c < m; ++c) bi[c] -= l * bk[c];
         }
     }
-    for (int i = n - 1; i >= 0; --i) {  /* two columns at a time, their sums in registers */
-        const double* Ai = A + i * n;
-        double* bi = B + i * m;
-        for (int c = 0; c < m; c += 2) {
-            int two = c + 1 < m;
-            double s0 = bi[c], s1 = two ? bi[c + 1] : 0.0;
-            for (int j = i + 1; j < n; ++j) {
-                s0 -= Ai[j] * B[j * m + c];
-                if (two) s1 -= Ai[j] * B[j * m + c + 1];
-            }
-            bi[c] = s0 * Ai[i];
-            if (two) bi[c + 1] = s1 * Ai[i];
-        }
-    }
+    tri_solve_columns(A, n, n, 1, 1, B, m);  /* U x = y (as fsr_lu_solve's dot products) */
 }
 
 static void unit_column(int n, int j, double* e)
