@@ -101,7 +101,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
         # the exact beams by AD (lagrange.equations_of_motion_sx): written in their frame's
         # motion, substituted here; the exact beams' gravity V_g too (exact_body.py)
         T_ef = (ef_kinetic_energy(der, tr, x) if der.ef_kinetic else ca.SX(0.0)) \
-            + frame_kinetic_energy(tr, frame_T) + sum((c(tr, x) for c in casadi_T), ca.SX(0.0))
+            + frame_kinetic_energy(tr, frame_T, der.qd, psyms) + sum((c(tr, x) for c in casadi_T), ca.SX(0.0))
         guided = [(d[1 + 3 * k], d[2 + 3 * k], d[3 + 3 * k]) for k in range(len(der.guided))]
         M_ef, f_ef = equations_of_motion_sx(T_ef, 0, q, qd, guided)
         V_x = ca.SX(0.0)
@@ -142,8 +142,12 @@ def build_system_kernels(der: SystemDerivation) -> list:
         phi = matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
         phi_q = ca.jacobian(phi, q)
         phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
-        phi_dot = ca.mtimes(phi_q, qd) + phi_t
-        gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
+        if hasattr(der, "spatial"):  # forward AD twice along the motion (q, d): S7's gamma
+            z, zd = ca.vertcat(q, d), ca.vertcat(qd, ddot)  # 5827 -> 4720 operations
+            gamma = -ca.jtimes(ca.jtimes(phi, z, zd), z, zd)
+        else:  # planar systems: the Jacobians' form, their golden kernels kept bit for bit
+            phi_dot = ca.mtimes(phi_q, qd) + phi_t
+            gamma = -(ca.mtimes(ca.jacobian(phi_dot, q), qd) + ca.mtimes(ca.jacobian(phi_dot, d), ddot))
         constraint_kernels = [
             ("constraints", "Phi of the cut joints", [("q", q), ("d", d), ("p", p)], [("phi", phi)]),
             ("constraint_jac", "Phi_q", [("q", q), ("d", d), ("p", p)], [("phi_q", phi_q)]),
@@ -368,15 +372,21 @@ def _ef_damping_kernel(der: SystemDerivation) -> list:
              [("e", e), ("ed", ed), ("pe", pe), ("c", c)], [("g", g)])]
 
 
-def frame_kinetic_energy(tr: SympyToCasadi, frame_T) -> ca.SX:
+def frame_kinetic_energy(tr: SympyToCasadi, frame_T, rates, params) -> ca.SX:
     """Sum of the bodies' T written in placeholders of their frame's motion (omega, V), each
     placeholder given its actual value (a sympy expression of q, q', d) in casadi: the sympy
-    side never expands a product of the frame's motion and the body's fields."""
+    side never expands a product of the frame's motion and the body's fields. T is quadratic in
+    the placeholders and the rates: summed by their monomials, each coefficient (a polynomial of
+    the coordinates) evaluated once, it takes 40 % fewer operations than term by term (S6:
+    2271 -> 1357), and M and f, its derivatives by AD, 13-16 % fewer."""
     total = ca.SX(0.0)
     for T_b, actual in frame_T:
         for ph, value in actual.items():
             tr.symbols[ph], tr.priority[ph] = tr(value), 2
-        total += tr(T_b)
+        gens = list(actual) + [s for s in rates if T_b.has(s)]
+        for powers, c in sp.Poly(T_b, *gens).terms():
+            c = tr(group_by_parameters(c, params))
+            total += c if not any(powers) else tr(sp.Mul(*[g**k for g, k in zip(gens, powers)])) * c
     return total
 
 

@@ -57,9 +57,16 @@ double cs_max_abs(const double* x, int n)
     return m;
 }
 
+/* B = A^-1 B (n x m) by the factor in A, Cholesky or LU (s->chol) */
+static void solve_columns(csim* s, const double* A, double* B, int m)
+{
+    if (s->chol) fsr_chol_solve_columns(A, s->n, B, m);
+    else fsr_lu_solve_columns(A, s->n, s->piv, B, m);
+}
+
 void cs_solve(csim* s, const double* A, double* x)
 {
-    if (A) fsr_lu_solve(A, s->n, s->piv, x);
+    if (A) solve_columns(s, A, x, 1);
 }
 
 /* x = G^+ b for G (m x m, overwritten) by Gaussian elimination with complete pivoting; the
@@ -107,29 +114,32 @@ static int rank_solve(csim* s, int m, double* b, double* x)
 
 int cs_kkt(csim* s, const double* A, double* b, const double* c, double* lam)
 {
-    const int n = s->n, nc = s->nc;
-    cs_solve(s, A, b);  /* y = A^-1 b */
-    if (nc == 0) return 0;
-    for (int j = 0; j < nc; ++j) {  /* Z = A^-1 Phi_q^T, column by column */
-        for (int i = 0; i < n; ++i) s->w2[i] = s->Pq[j * n + i];
-        cs_solve(s, A, s->w2);
-        for (int i = 0; i < n; ++i) s->Z[i * nc + j] = s->w2[i];
+    const int n = s->n, nc = s->nc, m = nc + 1;
+    double* Z = s->Z;
+    if (nc == 0) {
+        cs_solve(s, A, b);
+        return 0;
     }
-    for (int i = 0; i < nc; ++i) {  /* G = Phi_q Z, e1 = Phi_q y - c */
+    for (int i = 0; i < n; ++i) {  /* Z = A^-1 [b, Phi_q^T] = [y, A^-1 Phi_q^T], in one solve */
+        Z[i * m] = b[i];
+        for (int j = 0; j < nc; ++j) Z[i * m + 1 + j] = s->Pq[j * n + i];
+    }
+    if (A) solve_columns(s, A, Z, m);
+    for (int i = 0; i < nc; ++i) {  /* G = Phi_q A^-1 Phi_q^T, e1 = Phi_q y - c */
         double r = -c[i];
-        for (int l = 0; l < n; ++l) r += s->Pq[i * n + l] * b[l];
+        for (int l = 0; l < n; ++l) r += s->Pq[i * n + l] * Z[l * m];
         s->e1[i] = r;
         for (int j = 0; j < nc; ++j) {
             double g = 0.0;
-            for (int l = 0; l < n; ++l) g += s->Pq[i * n + l] * s->Z[l * nc + j];
+            for (int l = 0; l < n; ++l) g += s->Pq[i * n + l] * Z[l * m + 1 + j];
             s->G[i * nc + j] = g;
         }
     }
     int rank = rank_solve(s, nc, s->e1, lam);
-    for (int i = 0; i < n; ++i) {  /* x = y - Z lam */
+    for (int i = 0; i < n; ++i) {  /* x = y - A^-1 Phi_q^T lam */
         double t = 0.0;
-        for (int j = 0; j < nc; ++j) t += s->Z[i * nc + j] * lam[j];
-        b[i] -= t;
+        for (int j = 0; j < nc; ++j) t += Z[i * m + 1 + j] * lam[j];
+        b[i] = Z[i * m] - t;
     }
     return rank;
 }
@@ -279,7 +289,7 @@ fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const
     s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
     size_t nz = n > nc ? n : nc;
     size_t work = it->work_size(s->n);
-    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + 2 * nc * n + nc * nc
+    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + (2 * nc + 1) * n + nc * nc
                      + 2 * nc + nz + 1 + work;
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
     double* x = calloc(doubles, sizeof(double));
@@ -319,7 +329,7 @@ fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const
     s->d = x; x += m->nd;
     s->y = x; x += m->ny;
     s->Pq = x; x += nc * n;
-    s->Z = x; x += nc * n;
+    s->Z = x; x += (nc + 1) * n;
     s->G = x; x += nc * nc;
     s->work = x; x += work;
     s->zero = x;

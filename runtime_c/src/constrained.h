@@ -31,9 +31,10 @@ typedef struct csim {
     double* P;       /* ali3p: M + (h/2) C + (h^2/4) K, W without the penalty term */
     double* work;    /* the integrator's workspace (its work_size; zeros at the start) */
     int* piv;
+    int chol;        /* S holds a Cholesky factor (rk4p: M symmetric), not an LU one */
     double *Pq, *phi, *phit, *gam;  /* Phi_q (nc x n), Phi, Phi_t, gamma */
     double* H;                      /* d(Phi_q^T e)/dq (n x n) */
-    double *Z, *G;   /* n x nc: S^-1 Phi_q^T; nc x nc: Phi_q Z */
+    double *Z, *G;   /* n x (nc + 1): S^-1 [b, Phi_q^T] (cs_kkt); nc x nc: Phi_q S^-1 Phi_q^T */
     int* cp;         /* column order of the complete pivoting of G */
     double *res, *f, *w1, *w2;  /* n */
     double *e1, *e2; /* nc */

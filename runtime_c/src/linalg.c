@@ -33,6 +33,47 @@ void fsr_chol_solve(const double* A, int n, double* b)
     }
 }
 
+/* A triangular solve in dot form on the m columns of B (n x m): row by row, down (up when
+ * upward), B_i = (B_i - sum_k T(i, k) B_k) T(i, i) over the rows k done before i, with
+ * T(i, k) = A[i * ri + k * ki]; two columns at a time, their sums in registers. */
+static void tri_solve_columns(const double* A, int n, int ri, int ki, int upward, double* B, int m)
+{
+    for (int t = 0; t < n; ++t) {
+        int i = upward ? n - 1 - t : t, k0 = upward ? i + 1 : 0, k1 = upward ? n : i;
+        double d = A[i * (ri + ki)];
+        for (int c = 0; c < m; c += 2) {
+            int two = c + 1 < m;
+            double s0 = B[i * m + c], s1 = two ? B[i * m + c + 1] : 0.0;
+            for (int k = k0; k < k1; ++k) {
+                double a = A[i * ri + k * ki];
+                s0 -= a * B[k * m + c];
+                if (two) s1 -= a * B[k * m + c + 1];
+            }
+            B[i * m + c] = s0 * d;
+            if (two) B[i * m + c + 1] = s1 * d;
+        }
+    }
+}
+
+void fsr_chol_solve_columns(const double* A, int n, double* B, int m)
+{
+    tri_solve_columns(A, n, n, 1, 0, B, m);  /* L y = b */
+    tri_solve_columns(A, n, 1, n, 1, B, m);  /* L^T x = y */
+}
+
+int fsr_symmetric(const double* A, int n)
+{
+    double big = 0.0, off = 0.0;  /* comparisons, not fmax (a libm call: a fifth of rk4p's time) */
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j <= i; ++j) {
+            double a = fabs(A[i * n + j]), b = fabs(A[j * n + i]), d = fabs(A[i * n + j] - A[j * n + i]);
+            if (a > big) big = a;
+            if (b > big) big = b;
+            if (d > off) off = d;
+        }
+    return off <= 1e-13 * big;
+}
+
 int fsr_lu_factor(double* A, int n, int* piv)
 {
     return fsr_band_lu_factor(A, n, n - 1, n - 1, piv);
@@ -96,6 +137,22 @@ void fsr_band_lu_solve(const double* A, int n, int kl, int ku, const int* piv, d
         for (int j = i + 1; j <= jend; ++j) s -= A[i * n + j] * b[j];
         b[i] = s * A[i * n + i];
     }
+}
+
+void fsr_lu_solve_columns(const double* A, int n, const int* piv, double* B, int m)
+{
+    for (int k = 0; k < n; ++k) {
+        double* bk = B + k * m;
+        if (piv[k] != k) {
+            double* bp = B + piv[k] * m;
+            for (int c = 0; c < m; ++c) { double t = bk[c]; bk[c] = bp[c]; bp[c] = t; }
+        }
+        for (int i = k + 1; i < n; ++i) {
+            double l = A[i * n + k], *bi = B + i * m;
+            for (int c = 0; c < m; ++c) bi[c] -= l * bk[c];
+        }
+    }
+    tri_solve_columns(A, n, n, 1, 1, B, m);  /* U x = y (as fsr_lu_solve's dot products) */
 }
 
 static void unit_column(int n, int j, double* e)

@@ -43,19 +43,6 @@ void sim_drive(sim* s, double t, double* d)
     for (int j = 0; j < nd; ++j) d[j] = s->drive_v[k][j];
 }
 
-/* Is A (n x n) symmetric to rounding? Every model's M is by construction, but for a body's
- * prestress that reads its free frame's acceleration (its q'' moved into M). */
-static int symmetric(const double* A, int n)
-{
-    double big = 0.0, off = 0.0;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-            big = fmax(big, fabs(A[i * n + j]));
-            off = fmax(off, fabs(A[i * n + j] - A[j * n + i]));
-        }
-    return off <= 1e-13 * big;
-}
-
 /* M^-1 b in place with the factor in Mfac. */
 static void mass_solve(const sim* s, double* b)
 {
@@ -75,7 +62,7 @@ fsr_status sim_mass(sim* s, double t, const double* q, const double* d, int fact
     }
     if (!factor || (constant && s->mass_factored)) return FSR_OK;
     memcpy(s->Mfac, s->Mraw, sizeof(double) * (size_t)n * (size_t)n);
-    s->mass_lu = !symmetric(s->Mraw, n);
+    s->mass_lu = !fsr_symmetric(s->Mraw, n);
     int k = s->mass_lu ? fsr_lu_factor(s->Mfac, n, s->mpiv) : fsr_chol_factor(s->Mfac, n);
     if (k) return sim_fail(s, FSR_SINGULAR, "mass matrix %s at t = %.6g s (pivot %d, %s)",
                            s->mass_lu ? "singular" : "not positive definite", t, k,

@@ -16,8 +16,10 @@
  * (power iteration on M^-1 K restricted to Phi_q x = 0, K = dr/dq of r = M q'' - f at the
  * consistent start: velocity-dependent terms and the change of the frequencies with the
  * configuration are not in it). A step above it is refused; stiff modes (an axial one) make
- * the method useless, as for rk4. No Newton iteration in the step: per step three evaluations
- * of M (factored), f, Phi, Phi_q and gamma with a constraint-block solve, plus the projection.
+ * the method useless, as for rk4. No Newton iteration in the step: per step four evaluations
+ * of M (factored), f, Phi_q and gamma with a constraint-block solve (stages 2-4 and the
+ * projected state's), plus the projection (Phi and Phi_q per Newton iteration, Phi_t, a
+ * block solve each).
  */
 #include <math.h>
 #include <string.h>
@@ -28,19 +30,20 @@
 #define RK4P_STABILITY 2.785  /* rk4.c */
 #define RK4P_POWER_ITER 2000
 
-/* a, lam = the index-1 accelerations and multipliers at (q, v, t); M(q) LU-factored in S */
+/* a, lam = the index-1 accelerations and multipliers at (q, v, t); M(q) factored in S */
 static fsr_status accel(csim* s, double t, const double* q, const double* v, double* a, double* lam)
 {
     const fsm_system* m = s->m;
     const int n = s->n;
     cs_drive(s, t);
     m->mass(q, s->d, s->o->p, s->S);
-    if (fsr_lu_factor(s->S, n, s->piv))
+    s->chol = fsr_symmetric(s->S, n);  /* Cholesky: half LU's work (as ode.c's M) */
+    if (s->chol ? fsr_chol_factor(s->S, n) : fsr_lu_factor(s->S, n, s->piv))
         return cs_fail(s, FSR_SINGULAR, "rk4p: mass matrix singular at t = %.6g s", t);
     m->force(q, v, s->d, s->o->p, a);
     s->r->force_evaluations++;
-    if (s->nc) {
-        cs_constraints(s, q);
+    if (s->nc) {  /* Phi_q and gamma: Phi itself is not read here */
+        m->constraint_jac(q, s->d, s->o->p, s->Pq);
         m->constraint_acc(q, v, s->d, s->o->p, s->gam);
     }
     cs_kkt(s, s->S, a, s->gam, lam);
