@@ -49,7 +49,7 @@ _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.ro
         "physics.exact_kinematics", "physics.exact_body", "model.system", "codegen.sysgen")
 
 
-LARGE_KERNELS = 100_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)
+LARGE_KERNELS = 40_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)
 
 
 def fingerprint(system: System) -> str:
