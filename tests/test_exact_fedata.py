@@ -84,3 +84,18 @@ def test_the_point_mass_is_at_the_integrated_tip():
     tip, point = np.array(ca.evalf(k["tip"])).ravel(), np.array(ca.evalf(k["r"][-1, :])).ravel()
     assert k["r"].shape[0] == part.quad.size + 1
     assert np.abs(tip - point).max() <= 1e-13 * 10.0 and tip[1] > 1.0  # it deflects, a lot
+
+
+def test_at_rest_the_mass_matrix_is_the_modes_mass_normalisation():
+    """Undeformed and at rest, the exact body's mass matrix d2T/dq'2 is rho A L of the root
+    section times the modes' Gram matrix in the finite-element data's consistent mass, which
+    holds the sections and the tip mass (fedata: mass-normalised modes, so the identity): an
+    independent route to the same numbers. A segment per element (10 per piece) integrates the
+    piecewise polynomials exactly, so they agree to round-off."""
+    body = BeamBody.from_segments([(5.0, INNER), (5.0, OUTER)], 20, (PointMass(10.0, 0.5),))
+    part = Part(body, Quadrature(10, 6, (0.0, 0.5, 1.0)))
+    qd = ca.SX.sym("qd", 3)
+    part.frame = (0.0,) * 7
+    T, _ = exact_energies([part], lambda e: ca.DM(float(e)), {"q": ca.DM.zeros(3), "qd": qd})
+    M = np.array(ca.evalf(ca.hessian(T, qd)[0]))
+    assert np.abs(M / (3000.0 * 4e-4 * 10.0) - np.eye(3)).max() < 1e-11
