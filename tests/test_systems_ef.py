@@ -1,5 +1,7 @@
 """`ef` bodies in systems: the element-wise elastic assembly, and the modal variants against
 `ef` on the benchmark systems (short runs on coarse meshes; the converged study is README's)."""
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -278,6 +280,10 @@ def slider_crank_runs():
     path = SCENES_DIR / "slider_crank.toml"
     runs = {"ef": run_system(ef_system(load_scene(path).system, 4), **opts)}
     runs |= {m: run_system(load_scene(path, model=m).system, **opts) for m in ("m3", "m2")}
+    exact = customize(builtin("exact"), axial="ff1", bending="cf1,cf2")
+    system = load_scene(path).system
+    runs["exact"] = run_system(replace(system, bodies=tuple(replace(b, model=exact) if b.flexible else b
+                                                            for b in system.bodies)), **opts)
     assert all(r.ok for r in runs.values())
     return {k: _columns(r) for k, r in runs.items()}
 
@@ -295,6 +301,18 @@ def test_slider_crank_m3_against_ef(slider_crank_runs):
     assert _rel(m3, ef, "x_s")[0] <= 6e-5
     assert abs(_rel(m3, ef, "w_mid")[1]) <= 1e-2
     assert abs(_rel(m3, ef, "N_mid")[1]) <= 3e-3
+
+
+def test_slider_crank_exact_against_ef(slider_crank_runs):
+    """exact (ff1, cf1, cf2) against ef-4 on S2 (ef-4's own errors as for m3; against ef
+    extrapolated from 16 and 32 elements, docs/theory/exact-kinematics.md, 1.4e-6, +9.5e-5,
+    +7.9e-4). Measured exact - ef-4: x_s 4.1e-5 (with five modes against the extrapolated
+    ef: 4.7e-6), w_mid's peak -3.5e-3 (two modes; five: -1.5e-3), N_mid's peak -1.6e-5.
+    Tolerances 1e-4, 1e-2, 3e-3."""
+    ef, ex = slider_crank_runs["ef"], slider_crank_runs["exact"]
+    assert _rel(ex, ef, "x_s")[0] <= 1e-4
+    assert abs(_rel(ex, ef, "w_mid")[1]) <= 1e-2
+    assert abs(_rel(ex, ef, "N_mid")[1]) <= 3e-3
 
 
 def test_slider_crank_m2_against_ef(slider_crank_runs):
