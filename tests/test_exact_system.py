@@ -57,11 +57,20 @@ PENDULUM = {"system": {"name": "exact_pendulum"},
             "output": {"interval": 0.001, "columns": {"T": "T", "V": "V", "x_tip": "x(blade.tip)"}}}
 
 
-def test_newton_jacobians_are_the_derivatives_of_lagrange_equations():
-    """A free pendulum under gravity (frame moved by its pin, exact bending and an axial mode):
-    the residual Jacobian kernel, built from d'Alembert's residual on the quadrature points,
-    against central differences of Lagrange's M(q) q'' - f(q, q') at random states."""
-    der = derive_system(system_from_dict(PENDULUM, name="exact_pendulum"))
+# S4's blade as a pendulum: two sections (modes from 10 elements), a tip mass, gravity
+STEPPED = {**PENDULUM, "body": [{"name": "blade", "kind": "beam", "elements": 10, "segments": [
+    {"length": 0.5, "density": 2700.0, "youngs_modulus": 7.0e10, "area": 1.0e-4, "inertia": 2.0833e-10},
+    {"length": 0.5, "density": 2700.0, "youngs_modulus": 7.0e10, "area": 0.5e-4, "inertia": 0.5e-10}],
+    "point_masses": [{"x": 1.0, "mass": 0.05}], "markers": {"mid": 0.5}, "model": {**EXACT, "axial": ["ff1"]}}]}
+
+
+@pytest.mark.parametrize("system", [PENDULUM, STEPPED], ids=["uniform", "stepped_tip_mass"])
+def test_newton_jacobians_are_the_derivatives_of_lagrange_equations(system):
+    """A free pendulum under gravity (frame moved by its pin, exact bending and an axial mode;
+    uniform, or S4's stepped section with a tip mass from finite-element data): the residual
+    Jacobian kernel, built from d'Alembert's residual on the quadrature points (and the point
+    mass), against central differences of Lagrange's M(q) q'' - f(q, q') at random states."""
+    der = derive_system(system_from_dict(system, name="exact_pendulum"))
     k = {kk.name: kk.function for kk in build_system_kernels(der)}
     n = len(der.q)
     p = np.array([v for _, _, v in der.params])
@@ -146,3 +155,15 @@ ELSEWHERE = '\n[[joint]]\nname = "hang"\nkind = "revolute"\nparent = "ground"\np
 def test_what_is_not_derived_is_refused_in_one_line(tmp_path, capsys, model, damping, joint, output, says):
     scene_text_refused(tmp_path, capsys, SCENE.format(model=model, damping=damping, joint=joint, output=output),
                        says)
+
+
+def test_a_point_mass_with_rotary_inertia_is_refused(tmp_path, capsys):
+    """A body from finite-element data runs with exact kinematics, but not a point mass's
+    rotary inertia (its section's rotation rate is not in T yet)."""
+    text = SCENE.format(model=OK_MODEL, damping="", joint=ELSEWHERE, output="v(arm, tip)")
+    text = text.replace("length = 1.0\ndensity = 2700.0\nyoungs_modulus = 7.0e10\narea = 1.0e-4\n"
+                        "inertia = 2.0833e-10\n",
+                        "elements = 4\nsegments = [{ length = 1.0, density = 2700.0, youngs_modulus = 7.0e10, "
+                        "area = 1.0e-4, inertia = 2.0833e-10 }]\n"
+                        "point_masses = [{ x = 1.0, mass = 0.01, rotary = 1e-6 }]\n")
+    scene_text_refused(tmp_path, capsys, text, "nor with a point mass's rotary inertia")

@@ -1,5 +1,7 @@
 """`ef` bodies in systems: the element-wise elastic assembly, and the modal variants against
 `ef` on the benchmark systems (short runs on coarse meshes; the converged study is README's)."""
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -57,10 +59,12 @@ def test_element_assembly_equals_dense_body():
 @pytest.fixture(scope="module")
 def pendulum_runs():
     """S3 for 0.5 s (the first swing down to about 55 degrees, with the strip's bending ringing)
-    with ef on 4 elements and the modal m1, m3; rows every 1 ms, generalized-alpha at 25 us."""
+    with ef on 4 elements, the modal m1, m3 and exact (cf1, cf2); rows every 1 ms,
+    generalized-alpha at 25 us."""
     opts = dict(t_end=0.5, dt=2.5e-5, interval=1e-3)
     runs = {"ef": run_system(_ef_pendulum(4), **opts)}
     runs |= {m: run_system(pendulum_system(builtin(m)), **opts) for m in ("m1", "m3")}
+    runs["exact"] = run_system(pendulum_system(customize(builtin("exact"), bending="cf1,cf2")), **opts)
     assert all(r.ok for r in runs.values())
     return runs
 
@@ -83,6 +87,19 @@ def test_pendulum_modal_against_ef(pendulum_runs):
     for c in ("x_tip", "y_tip"):
         assert _rel(m3, ef, c)[0] <= 2e-4
     assert abs(_rel(m3, ef, "w_mid")[1]) <= 1e-2
+
+
+def test_pendulum_exact_against_ef(pendulum_runs):
+    """exact with two modes against ef-4 on S3 (0.5 s). Measured against ef extrapolated from
+    16 and 32 elements at 6.25 and 12.5 us (docs/theory/exact-kinematics.md), over 0.5 s: ef-4
+    is off by 4.3e-5 / 2.8e-5 of L in the tip position, exact (cf1, cf2) by 7.7e-5 / 6.5e-5
+    (five modes: 5e-6); exact against ef-4 here: 5.3e-5 / 6.4e-5, w_mid's peak +1.8e-4 (ef-4's
+    own error there: 4e-4). Tolerances: 2e-4 of L in the tip, 1.5e-3 in w_mid's peak, which m3
+    (+3.5e-3) does not meet."""
+    ef, ex = pendulum_runs["ef"], pendulum_runs["exact"]
+    for c in ("x_tip", "y_tip"):
+        assert _rel(ex, ef, c)[0] <= 2e-4
+    assert abs(_rel(ex, ef, "w_mid")[1]) <= 1.5e-3 < abs(_rel(pendulum_runs["m3"], ef, "w_mid")[1])
 
 
 def test_pendulum_m3_closer_to_ef_than_m1(pendulum_runs):
@@ -263,6 +280,10 @@ def slider_crank_runs():
     path = SCENES_DIR / "slider_crank.toml"
     runs = {"ef": run_system(ef_system(load_scene(path).system, 4), **opts)}
     runs |= {m: run_system(load_scene(path, model=m).system, **opts) for m in ("m3", "m2")}
+    exact = customize(builtin("exact"), axial="ff1", bending="cf1,cf2")
+    system = load_scene(path).system
+    runs["exact"] = run_system(replace(system, bodies=tuple(replace(b, model=exact) if b.flexible else b
+                                                            for b in system.bodies)), **opts)
     assert all(r.ok for r in runs.values())
     return {k: _columns(r) for k, r in runs.items()}
 
@@ -280,6 +301,18 @@ def test_slider_crank_m3_against_ef(slider_crank_runs):
     assert _rel(m3, ef, "x_s")[0] <= 6e-5
     assert abs(_rel(m3, ef, "w_mid")[1]) <= 1e-2
     assert abs(_rel(m3, ef, "N_mid")[1]) <= 3e-3
+
+
+def test_slider_crank_exact_against_ef(slider_crank_runs):
+    """exact (ff1, cf1, cf2) against ef-4 on S2 (ef-4's own errors as for m3; against ef
+    extrapolated from 16 and 32 elements, docs/theory/exact-kinematics.md, 1.4e-6, +9.5e-5,
+    +7.9e-4). Measured exact - ef-4: x_s 4.1e-5 (with five modes against the extrapolated
+    ef: 4.7e-6), w_mid's peak -3.5e-3 (two modes; five: -1.5e-3), N_mid's peak -1.6e-5.
+    Tolerances 1e-4, 1e-2, 3e-3."""
+    ef, ex = slider_crank_runs["ef"], slider_crank_runs["exact"]
+    assert _rel(ex, ef, "x_s")[0] <= 1e-4
+    assert abs(_rel(ex, ef, "w_mid")[1]) <= 1e-2
+    assert abs(_rel(ex, ef, "N_mid")[1]) <= 3e-3
 
 
 def test_slider_crank_m2_against_ef(slider_crank_runs):

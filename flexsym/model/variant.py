@@ -101,9 +101,6 @@ class VariantSpec:
                 seen.add(r)
         if not self.bending:
             raise SpecError(f"variant '{self.name}': at least one bending mode is required")
-        if model.kinematics == "exact" and self.body is not None:
-            raise SpecError(f"variant '{self.name}': the exact kinematics integrates a uniform beam; "
-                            "a [body] from finite-element data needs another strain model")
         if model.needs_axial and not self.axial:
             raise SpecError(f"variant '{self.name}': strain model '{self.strain}' needs at least "
                             "one axial mode (its stiffening term is linear in the axial amplitudes)")

@@ -145,6 +145,10 @@ class ExactPart(FlexPart, ExactKinematics):
     frame: tuple = ()  # (omega, V_x, V_y, g_x, g_y, R_x, R_y) in frame components, sympy
     index: list = field(default_factory=list)  # its coordinates' places in q, in mode order
 
+    @property
+    def fe_body(self):
+        return self.beam.model.body
+
 
 @dataclass
 class EfKinetic:
@@ -269,16 +273,19 @@ def _held_beyond_root(system: System, beam: str) -> str:
 
 
 def _check_exact(system: System, tree, b: FlexibleBeam) -> None:
-    """What the exact kinematics in a system (physics/exact_body.py) is derived for: a uniform,
-    undamped planar beam from which nothing hangs and on which no load acts beyond its root
-    (their equations would differentiate its quadrature positions in sympy), N and M its own
+    """What the exact kinematics in a system (physics/exact_body.py) is derived for: an
+    undamped planar beam (uniform, or sections and point masses from finite-element data)
+    from which nothing hangs and on which no load acts beyond its root (their equations
+    would differentiate its quadrature positions in sympy), N and M its own
     (EA eps, EI dphi/dx), and no output that needs its momentum (momentum, the reaction of a
     tree joint it lies beyond, N or M from equilibrium of a beam it hangs from)."""
     where = f"system '{system.name}': body '{b.name}': the exact kinematics (strain model 'exact')"
     if system.dimension != 2:
         raise SpecError(f"{where} is derived for planar systems only")
-    if b.model.body is not None:
-        raise SpecError(f"{where} is derived for a uniform beam (not from finite-element data)")
+    body = b.model.body
+    if body is not None and (body.matrices is not None or any(m.rotary for m in body.masses)):
+        raise SpecError(f"{where} is derived for a beam from its sections and point masses "
+                        "(not from imported matrices, nor with a point mass's rotary inertia)")
     if b.damped:
         raise SpecError(f"{where}: structural damping is not derived for it yet")
     loaded = _loaded_beyond_root(system, b.name)

@@ -189,6 +189,8 @@ class ExactDerivation(ExactKinematics, Derivation):
 def _prepare(spec) -> "ExactDerivation":
     """Modes, fields and the energy terms (sympy, quadratic: the linear model's strain energy)
     with their generalised forces Q. `spec` is validated (derive.derive)."""
+    if spec.body is not None:  # scene._spec refuses it; its sections would be taken as uniform
+        raise FlexsymError("the exact kinematics on the guided hub integrates a uniform beam")
     strain = STRAIN_MODELS[spec.strain]
     maneuver = maneuver_of(spec.maneuver)
     modes = {r.coordinate: spec.mode(r) for r in spec.modes}

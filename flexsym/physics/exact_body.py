@@ -8,6 +8,10 @@ kinematics changes lives in casadi, over the beam's composite Gauss rule (exact.
     T    = 1/2 rho A L int_0^1 |r' + omega z x r + V|^2 ds              (omega, V: the frame's)
     V_g  = -rho A L int_0^1 g . (R + r) ds                              (R: the frame's origin)
 
+A beam from finite-element data (ExactKinematics.fe_body) has rho A (s) in place of rho A
+(constant on each piece of its rule) and adds sum_k m_k (1/2 |v(s_k)|^2 - g . (R + r(s_k)))
+for its point masses, which then take their share of the d'Alembert loads and section loads.
+
 T and V_g join the system's automatic-differentiation path (sysgen.build_system_kernels), and
 a position r(x) on the beam (a marker, an output, a cut joint's row) is a placeholder symbol in
 sympy whose casadi value sysgen substitutes. Sympy never differentiates a placeholder:
@@ -39,19 +43,19 @@ def body_quadrature(part) -> Quadrature:
 
     def evaluate(quad):
         k = part.beam_kinematics(quad, qs, qds, L)
-        W = ca.DM(quad.weights)
-        v = k["rd"] + 6.0 * ca.horzcat(-k["r"][:, 1], k["r"][:, 0]) + ca.repmat(ca.DM([[0.7, -0.4]]), quad.size, 1)
+        W = ca.DM(part.mass_weights(quad))
+        v = k["rd"] + 6.0 * ca.horzcat(-k["r"][:, 1], k["r"][:, 0]) + ca.repmat(ca.DM([[0.7, -0.4]]), W.shape[0], 1)
         T = 0.5 * ca.dot(W, ca.sum2(v * v))
         out = ca.vertcat(ca.mtimes(W.T, k["r"]).T, T, ca.vec(ca.hessian(T, qds)[0]))
         fn = ca.Function("check", [qs, qds], [out])
         return np.array(fn(q, qd).full()).ravel()
 
-    n_seg = 2
-    prev = evaluate(Quadrature(n_seg, M_POINTS))
+    n_seg, edges = 2, part.edges()
+    prev = evaluate(Quadrature(n_seg, M_POINTS, edges))
     while n_seg < MAX_SEGMENTS:
-        cur = evaluate(Quadrature(2 * n_seg, M_POINTS))
+        cur = evaluate(Quadrature(2 * n_seg, M_POINTS, edges))
         if np.max(np.abs(prev - cur)) / np.max(np.abs(cur)) < QUAD_RTOL:
-            return Quadrature(n_seg, M_POINTS)
+            return Quadrature(n_seg, M_POINTS, edges)
         n_seg, prev = 2 * n_seg, cur
     raise FlexsymError(f"body '{part.beam.name}': exact kinematics: the quadrature did not reach "
                        f"{QUAD_RTOL:g} with {MAX_SEGMENTS} segments (too many or too high modes)")
@@ -72,11 +76,15 @@ def exact_energies(bodies, tr, x) -> tuple:
         q, qd, L, rhoA = _body_vectors(part, tr, x)
         k = part.beam_kinematics(part.quad, q, qd, L)
         om, Vx, Vy, gx, gy, Rx, Ry = (tr(e) for e in part.frame)
-        W = ca.DM(part.quad.weights)
+        w = part.mass_weights(part.quad)
+        W = ca.DM(w)
         r = k["r"]
         v = k["rd"] + ca.horzcat(-om * r[:, 1] + Vx, om * r[:, 0] + Vy)
         T += 0.5 * rhoA * L * ca.dot(W, ca.sum2(v * v))
-        Vg -= rhoA * L * (ca.dot(W, gx * r[:, 0] + gy * r[:, 1]) + gx * Rx + gy * Ry)
+        gR = gx * Rx + gy * Ry
+        if part.fe_body is not None:  # its mass is not rho A L of the root section
+            gR = float(np.sum(w)) * gR
+        Vg -= rhoA * L * (ca.dot(W, gx * r[:, 0] + gy * r[:, 1]) + gR)
     return T, Vg
 
 
@@ -120,10 +128,11 @@ def _loads(part, tr, x, ddot):
     phidd, epsdd = part._fields(quad, qbdd, L)
     gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
     rdd_a, _ = part._cumulative(quad, gdd, k["scale"])
+    rdd_a = part._with_points(quad, rdd_a, gdd, L)
     r, rd = k["r"], k["rd"]
     zx = lambda v: ca.horzcat(-v[:, 1], v[:, 0])  # noqa: E731
     acc = (k["rdd_v"] + rdd_a + 2 * om * zx(rd) + alpha * zx(r) - om * om * r
-           + ca.repmat(ca.horzcat(aO[0] - gx, aO[1] - gy), quad.size, 1))
+           + ca.repmat(ca.horzcat(aO[0] - gx, aO[1] - gy), r.shape[0], 1))
     return k, rhoA * L * acc, om, V, L
 
 
@@ -137,9 +146,9 @@ def exact_residual(bodies, tr, x, ddot):
     q, qd = x["q"], x["qd"]
     r_all = ca.SX.zeros(q.shape[0])
     for part in bodies:
-        k, mA, om, V, _ = _loads(part, tr, x, ddot)
-        F = mA * ca.repmat(ca.DM(part.quad.weights), 1, 2)  # N x 2
-        Ft = part._cumulative_transpose(part.quad, F, k["scale"])
+        k, mA, om, V, L = _loads(part, tr, x, ddot)
+        F = mA * ca.repmat(ca.DM(part.mass_weights(part.quad)), 1, 2)  # N x 2 (and the point masses)
+        Ft = part._transpose_with_points(part.quad, F, k["scale"], L)
         elastic = ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]])
         r = k["r"]
         moment = ca.sum1(r[:, 0] * F[:, 1] - r[:, 1] * F[:, 0])
@@ -159,7 +168,7 @@ def inertial_section_load(part, outputs: dict, x: float, fn: str) -> sp.Symbol:
     sym = sp.Symbol(f"{fn}_inertial_{part.beam.name}_{at!r}_", real=True)
     if sym in outputs:
         return sym
-    wb, w0 = ca.DM(part.quad.weights_between(at, 1.0)), ca.DM(part.quad.weights_between(0.0, at))
+    wb, w0 = ca.DM(part.mass_weights(part.quad, at, 1.0)), ca.DM(part.quad.weights_between(0.0, at))
 
     def value(tr, xx):
         k, mA, _, _, L = _loads(part, tr, xx, xx["ddot"])
@@ -170,7 +179,7 @@ def inertial_section_load(part, outputs: dict, x: float, fn: str) -> sp.Symbol:
             phi, _ = part._fields(part.quad, qb, L, at=[at])
             force = ca.mtimes(wb.T, mA)
             return -(force[0] * ca.cos(phi[0]) + force[1] * ca.sin(phi[0]))
-        arm = k["r"] - ca.repmat(r_x, part.quad.size, 1)
+        arm = k["r"] - ca.repmat(r_x, k["r"].shape[0], 1)
         return -ca.dot(wb, arm[:, 0] * mA[:, 1] - arm[:, 1] * mA[:, 0])
     outputs[sym] = value
     return sym

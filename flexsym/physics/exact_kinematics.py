@@ -12,6 +12,7 @@ import numpy as np
 import sympy as sp
 
 from flexsym.physics.integrals import gauss_legendre
+from flexsym.model.fedata import BodyMode, evaluate, locate
 from flexsym.model.modes import s
 
 M_POINTS = 6  # Gauss points per segment (cumulative integrals cost m^2 per segment)
@@ -22,41 +23,59 @@ TEST_TIP_SLOPE = 1.5  # rad: the test state's largest section rotation (a tip th
 
 @dataclass(frozen=True)
 class Quadrature:
-    """Composite Gauss-Legendre rule on [0, 1]: n_seg segments of m points."""
+    """Composite Gauss-Legendre rule on [0, 1]: each piece between consecutive `edges` cut into
+    n_seg equal segments of m points. A uniform beam has one piece; a beam of several sections
+    one per section (and point mass), so that no segment straddles a jump of rho A or EI."""
 
     n_seg: int
     m: int
+    edges: tuple = (0.0, 1.0)
+
+    @property
+    def pieces(self) -> list[tuple[float, float]]:
+        return list(zip(self.edges, self.edges[1:]))
 
     @property
     def size(self) -> int:
-        return self.n_seg * self.m
+        return self.n_seg * self.m * len(self.pieces)
 
     @property
     def local(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return _local_rule(self.m)
 
+    def width(self, segment: int) -> float:
+        """The width of the piece that holds a segment (its segments' width times n_seg)."""
+        a, b = self.pieces[segment // self.n_seg]
+        return b - a
+
     @property
     def nodes(self) -> np.ndarray:
         tau = self.local[0]
-        return np.concatenate([(k + tau) / self.n_seg for k in range(self.n_seg)])
+        return np.concatenate([a + (b - a) * ((k + tau) / self.n_seg)
+                               for a, b in self.pieces for k in range(self.n_seg)])
 
     @property
     def weights(self) -> np.ndarray:
-        return np.tile(self.local[1], self.n_seg) / self.n_seg
+        return np.concatenate([np.tile(self.local[1], self.n_seg) / self.n_seg * (b - a)
+                               for a, b in self.pieces])
 
     def weights_between(self, a: float, b: float) -> np.ndarray:
         """Weights over all nodes of int_a^b g ds for g interpolated per segment (degree m - 1)."""
         out = np.zeros(self.size)
         tau, _, _ = self.local
-        for k in range(self.n_seg):
-            lo, hi = max(a * self.n_seg - k, 0.0), min(b * self.n_seg - k, 1.0)
-            if hi > lo:
-                out[k * self.m:(k + 1) * self.m] = (_lagrange_integrals(tau, hi)
-                                                    - _lagrange_integrals(tau, lo)) / self.n_seg
+        for p, (e0, e1) in enumerate(self.pieces):
+            h = e1 - e0
+            for k in range(self.n_seg):
+                lo = max((a - e0) / h * self.n_seg - k, 0.0)
+                hi = min((b - e0) / h * self.n_seg - k, 1.0)
+                if hi > lo:
+                    j = p * self.n_seg + k
+                    out[j * self.m:(j + 1) * self.m] = (_lagrange_integrals(tau, hi)
+                                                        - _lagrange_integrals(tau, lo)) / self.n_seg * h
         return out
 
     def describe(self) -> dict:
-        return {"segments": self.n_seg, "points_per_segment": self.m, "points": self.size,
+        return {"segments": self.n_seg * len(self.pieces), "points_per_segment": self.m, "points": self.size,
                 "rule": "composite Gauss-Legendre with a spectral integration matrix per segment",
                 "check": f"M, f and [T, V, h] change by < {QUAD_RTOL:g} relative when the number "
                          f"of segments is doubled, at a test state with section rotation up to "
@@ -89,7 +108,22 @@ def _lagrange_integrals(tau: np.ndarray, t: float) -> np.ndarray:
     return np.array(out)
 
 
+@lru_cache(maxsize=None)
+def _point_matrix(quad: Quadrature, points: tuple) -> np.ndarray:
+    """Row k: the weights of int_0^s_k over the nodes (a point mass's position from g)."""
+    return np.array([quad.weights_between(0.0, sk) for sk in points])
+
+
+def _segment_scale(quad: Quadrature, k: int, scale):
+    """Segment k's length: `scale` (L / n_seg) times its piece's width; one piece of width 1
+    (a uniform beam) keeps `scale` itself, so that its kernels stay as they were."""
+    w = quad.width(k)
+    return scale if w == 1.0 else scale * w
+
+
 def _shape_derivative(mode, order: int, at: np.ndarray) -> np.ndarray:
+    if isinstance(mode, BodyMode):  # from finite-element data: the element's own interpolation
+        return evaluate(mode.body, mode.shape, order, np.asarray(at, dtype=float))
     fn = sp.lambdify(s, sp.diff(mode.expr, s, order), "mpmath")
     with mpmath.workdps(30):
         return np.array([float(fn(mpmath.mpf(float(x)))) for x in at])
@@ -98,7 +132,56 @@ def _shape_derivative(mode, order: int, at: np.ndarray) -> np.ndarray:
 class ExactKinematics:
     """The exact kinematics of one beam in casadi, from its coordinate names (`coords`, in the
     order of its coordinate vector), their mode shapes (`modes`) and groups (`groups`: axial or
-    bending): the one-beam derivation's and a system body's (physics/assemble.ExactPart)."""
+    bending): the one-beam derivation's and a system body's (physics/assemble.ExactPart).
+    A beam from finite-element data (`fe_body`) has sections that change along it and point
+    masses: its rule is broken at both (edges), its mass per point scaled by rho A (mass_weights),
+    and its fields carry rows for the point masses after the quadrature nodes."""
+
+    fe_body = None  # fedata.BeamBody (a system body from finite-element data) or None: uniform
+
+    def edges(self) -> tuple:
+        """The quadrature's piece edges in s: the runs of equal section, cut at point masses."""
+        body = self.fe_body
+        if body is None:
+            return (0.0, 1.0)
+        x = np.cumsum([l for l, _ in body.segments()])[:-1] / body.length
+        return (0.0,) + tuple(float(v) for v in x) + (1.0,)
+
+    def point_masses(self) -> list[tuple[float, float]]:
+        """(s, m / (rho A L) of the root section) of each point mass."""
+        body = self.fe_body
+        if body is None:
+            return []
+        r = body.reference
+        return [(pm.x / body.length, pm.mass / (r.rho * r.A * body.length)) for pm in body.masses]
+
+    def mass_weights(self, quad: Quadrature, a: float = 0.0, b: float = 1.0) -> np.ndarray:
+        """Mass per rho A L of the root section of the nodes, then of the point masses, between
+        a and b (a point mass at a or b included): the rule's weights times the section's rho A
+        relative to the root's (constant on each piece), and m / (rho A L)."""
+        w = quad.weights if (a, b) == (0.0, 1.0) else quad.weights_between(a, b)
+        body = self.fe_body
+        if body is None:
+            return w
+        mu = body.ratios()["mu"][locate(body, quad.nodes)]
+        return np.concatenate([w * mu, [c if a <= sk <= b else 0.0 for sk, c in self.point_masses()]])
+
+    def _with_points(self, quad: Quadrature, cum, g, L):
+        """A cumulative field at the nodes (N x c), the integral of g (N x c) at the point
+        masses appended."""
+        points = tuple(sk for sk, _ in self.point_masses())
+        if not points:
+            return cum
+        return ca.vertcat(cum, L * ca.mtimes(ca.DM(_point_matrix(quad, points)), g))
+
+    def _transpose_with_points(self, quad: Quadrature, F, scale, L):
+        """The transpose of _cumulative with _with_points: the load at and beyond node j from
+        F (one row per node, then per point mass)."""
+        points = tuple(sk for sk, _ in self.point_masses())
+        if not points:
+            return self._cumulative_transpose(quad, F, scale)
+        return (self._cumulative_transpose(quad, F[:quad.size, :], scale)
+                + L * ca.mtimes(ca.DM(_point_matrix(quad, points)).T, F[quad.size:, :]))
 
     def _fields(self, quad: Quadrature, vec, L, at=None):
         """(phi-like, eps-like) fields of the coordinate vector `vec` (q, q' or q'') at the
@@ -118,10 +201,11 @@ class ExactKinematics:
         """int_0^s g at every node (N x c) and over the whole beam (1 x c)."""
         _, wts, S = quad.local
         start, rows = ca.SX.zeros(1, g.shape[1]), []
-        for k in range(quad.n_seg):
+        for k in range(quad.size // quad.m):
             gk = g[k * quad.m:(k + 1) * quad.m, :]
-            rows.append(ca.repmat(start, quad.m, 1) + scale * ca.mtimes(ca.DM(S), gk))
-            start = start + scale * ca.mtimes(ca.DM(wts).T, gk)
+            sc = _segment_scale(quad, k, scale)
+            rows.append(ca.repmat(start, quad.m, 1) + sc * ca.mtimes(ca.DM(S), gk))
+            start = start + sc * ca.mtimes(ca.DM(wts).T, gk)
         return ca.vertcat(*rows), start
 
     @staticmethod
@@ -129,15 +213,17 @@ class ExactKinematics:
         """The transpose of _cumulative: sum_i C_ij F_i, the load at and beyond node j."""
         _, wts, S = quad.local
         beyond, rows = ca.SX.zeros(1, F.shape[1]), []
-        for k in reversed(range(quad.n_seg)):
+        for k in reversed(range(quad.size // quad.m)):
             Fk = F[k * quad.m:(k + 1) * quad.m, :]
-            rows.insert(0, scale * (ca.mtimes(ca.DM(S).T, Fk) + ca.mtimes(ca.DM(wts), beyond)))
+            rows.insert(0, _segment_scale(quad, k, scale) * (ca.mtimes(ca.DM(S).T, Fk)
+                                                             + ca.mtimes(ca.DM(wts), beyond)))
             beyond = beyond + ca.sum1(Fk)
         return ca.vertcat(*rows)
 
     def beam_kinematics(self, quad: Quadrature, q, qd, L) -> dict:
         """Positions, velocities and the velocity part of the accelerations at the nodes
-        (N x 2, moving frame), and the Jacobian columns dg/dq of the integrand g = (1+eps) t;
+        (N x 2, moving frame; then a row per point mass), and the Jacobian columns dg/dq of
+        the integrand g = (1+eps) t at the nodes;
         q, qd: the beam's coordinates and rates (SX), L its length."""
         phi, eps = self._fields(quad, q, L)
         phid, epsd = self._fields(quad, qd, L)
@@ -150,11 +236,13 @@ class ExactKinematics:
             shape = ca.DM(_shape_derivative(self.modes[name], 1, quad.nodes)) / L
             base = n * ca.repmat(a, 1, 2) if self.groups[name] == "bending" else t
             cols.append(base * ca.repmat(shape, 1, 2))
-        r, tip = self._cumulative(quad, t * ca.repmat(a, 1, 2), scale)
+        g = t * ca.repmat(a, 1, 2)
+        r, tip = self._cumulative(quad, g, scale)
         gd = t * ca.repmat(epsd, 1, 2) + n * ca.repmat(a * phid, 1, 2)
         rd, _ = self._cumulative(quad, gd, scale)
         gamma = n * ca.repmat(2 * epsd * phid, 1, 2) - t * ca.repmat(a * phid * phid, 1, 2)
         rdd_v, _ = self._cumulative(quad, gamma, scale)
+        r, rd, rdd_v = (self._with_points(quad, c, h, L) for c, h in ((r, g), (rd, gd), (rdd_v, gamma)))
         return {"r": r, "tip": tip, "rd": rd, "rdd_v": rdd_v, "cols": cols, "scale": scale,
                 "t": t, "n": n, "a": a}
 

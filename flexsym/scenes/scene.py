@@ -31,6 +31,7 @@ from flexsym.core.files import read_limited
 from flexsym.model.limits import MAX_FILE_BYTES, MAX_MAGNITUDE, MIN_POSITIVE
 from flexsym.model.maneuver import EXPRESSION_PREFIX, parse_theta
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
+from flexsym.model.strain_models import STRAIN_MODELS
 
 # Keys of each table; run options (solver, output, manoeuvre values) come from the option table.
 _RUN_KEYS = {o.scene: o.name for o in OPTIONS if o.scene}
@@ -321,6 +322,10 @@ def _spec(r: _Reader, maneuver: str, outputs, points, body=None):
                 n = elements if elements is not None else r.data["body"].get("ef_elements", 32)
                 base, elements = replace(base, body=body.remeshed(n), elements=None), None
                 base = replace(base, elements=base.body.elements)
+            elif getattr(STRAIN_MODELS.get(base.strain), "kinematics", "") == "exact":  # in a system only
+                raise SpecError("the exact kinematics on the guided hub integrates a uniform beam; "
+                                "a [body] from finite-element data needs another strain model here "
+                                "(in a system it runs: scenes/stepped_hub.toml)")
             else:
                 base = replace(base, body=body)
         spec = customize(base, name=name, outputs=list(outputs), maneuver=maneuver, stress=stress,
