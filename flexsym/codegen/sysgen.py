@@ -142,7 +142,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
         phi = matrix_sx(tr, sp.Matrix([e for _, e in der.constraints]), psyms)
         phi_q = ca.jacobian(phi, q)
         phi_t = ca.mtimes(ca.jacobian(phi, d), ddot)
-        if hasattr(der, "spatial"):  # forward AD twice along the motion (q, d): S7's gamma
+        if der.system.dimension == 3:  # forward AD twice along the motion (q, d): S7's gamma
             z, zd = ca.vertcat(q, d), ca.vertcat(qd, ddot)  # 5827 -> 4720 operations
             gamma = -ca.jtimes(ca.jtimes(phi, z, zd), z, zd)
         else:  # planar systems: the Jacobians' form, their golden kernels kept bit for bit

@@ -84,7 +84,6 @@ class JointKind:
         if rate is not None and not finite(rate):
             raise SpecError(f"{where}: rate {rate!r} must be a finite number")
 
-
     def check_in_tree(self, joint, closing: bool, where: str) -> None:
         """What it needs in the tree, or closing a loop (System.validate, once the tree is known)."""
 
