@@ -69,7 +69,8 @@ def test_newton_jacobians_are_the_derivatives_of_lagrange_equations(system):
     """A free pendulum under gravity (frame moved by its pin, exact bending and an axial mode;
     uniform, or S4's stepped section with a tip mass from finite-element data): the residual
     Jacobian kernel, built from d'Alembert's residual on the quadrature points (and the point
-    mass), against central differences of Lagrange's M(q) q'' - f(q, q') at random states."""
+    mass), against central differences of Lagrange's M(q) q'' - f(q, q') at random states; the
+    one-pass residual kernel against that M q'' - f itself."""
     der = derive_system(system_from_dict(system, name="exact_pendulum"))
     k = {kk.name: kk.function for kk in build_system_kernels(der)}
     n = len(der.q)
@@ -83,6 +84,8 @@ def test_newton_jacobians_are_the_derivatives_of_lagrange_equations(system):
             M = np.array(k["mass"](q_, [0.0], p))
             return M @ qdd - np.array(k["force"](q_, qd_, [0.0], p)).ravel()
         dq, dqd = (np.array(v) for v in k["residual_jac"](q, qd, qdd, [0.0], p))
+        one_pass = np.array(k["residual"](q, qd, qdd, [0.0], p)).ravel()  # what genalpha iterates on
+        assert np.abs(one_pass - r(q, qd)).max() <= 1e-10 * np.abs(r(q, qd)).max()
         h = 1e-5  # the axial stiffness (EA/L ~ 7e6) puts f's rounding at 1e-16 |f| / h
         fd_q = np.column_stack([(r(q + h * e, qd) - r(q - h * e, qd)) / (2 * h) for e in np.eye(n)])
         fd_qd = np.column_stack([(r(q, qd + h * e) - r(q, qd - h * e)) / (2 * h) for e in np.eye(n)])

@@ -102,6 +102,7 @@ def _common_context(spec, fp: str, maneuver, emitted: list[EmittedKernel]) -> di
                              "c_default": c_double(p.default)} for p in maneuver.params],
         "length_param": [p.name for p in BEAM_PARAMS].index("L"),
         "kernels": emitted,
+        "has_residual": any(k.kernel.name == "residual" for k in emitted),
         "element_kernels": [],
         "bandwidth": -1,
     }

@@ -159,7 +159,12 @@ def build_system_kernels(der: SystemDerivation) -> list:
              [("q", q), ("e", x["lam"]), ("d", d), ("p", p)],
              [("h", ca.jacobian(ca.mtimes(phi_q.T, x["lam"]), q))]),
         ]
-    return make_kernels(constraint_kernels + _ef_element_kernel(der) + _rod_element_kernel(der)
+    # exact beams: r in one pass (d'Alembert), which the implicit integrators iterate on instead
+    # of forming M (system.h); not with ef or rod elements, which system.c adds to f per element
+    one_pass = [("residual", "r = M q'' - f in one pass (the exact beams' part by d'Alembert)",
+                 [("q", q), ("qd", qd), ("qdd", qdd), ("d", d), ("p", p)], [("r", r)])] \
+        if r_exact is not None and not ef_elements(der) and not rod_elements(der) else []
+    return make_kernels(constraint_kernels + one_pass + _ef_element_kernel(der) + _rod_element_kernel(der)
                         + _rod_kinetic_kernels(der, tr, x, ddot) + _rod_free_kernels(der, tr, x, ddot)
                         + _ef_damping_kernel(der) + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
@@ -547,6 +552,7 @@ def generate_system_files(system: System, log=None, ef_free_ad: bool = False) ->
         "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
         "kernel_ops": sum(k.total_ops for k in emitted),
+        "has_residual": any(k.kernel.name == "residual" for k in emitted),
     }
     ctx["large_kernels"] = ctx["kernel_ops"] > LARGE_KERNELS
     if ctx["static_start"]:

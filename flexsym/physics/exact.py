@@ -313,6 +313,9 @@ def build_exact_kernels(der: ExactDerivation) -> list:
         ("residual_jac", "Jacobians of r = M(q) q'' - f", [("q", q), ("qd", qd), ("qdd", qdd),
                                                           ("drive", drive), ("p", p)],
          [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
+        ("residual", "r = M(q) q'' - f in one pass, without forming M (the implicit "
+         "integrators' iterations)", [("q", q), ("qd", qd), ("qdd", qdd), ("drive", drive), ("p", p)],
+         [("r", r)]),
         ("outputs", "output quantities " + ", ".join(der.spec.outputs),
          [("q", q), ("qd", qd), ("qdd", qdd), ("drive", drive), ("p", p)], [("y", ca.vertcat(*ys))]),
         ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",

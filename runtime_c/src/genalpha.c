@@ -79,12 +79,9 @@ fsr_status alpha_step(sim* s)
     double dq = 0.0, dq_prev = -1.0;
     for (int it = 0;; ++it) {
         if (it == o->newton_max) return newton_failed(s, t1, dq, it);
-        if ((st = sim_mass(s, t1, q1, drive, 0))) return st;
-        s->m->force(q1, v1, drive, o->p, res);
-        s->r->force_evaluations++;
-        fsr_matvec(s->Mraw, n, s->bw, a1, ma);
-        for (int i = 0; i < n; ++i) res[i] -= ma[i];  /* -(M a1 - f) */
+        if ((st = sim_residual(s, t1, q1, v1, a1, drive, res, ma))) return st;  /* -(M a1 - f) */
         if (rebuild) {
+            if ((st = sim_newton_mass(s, t1, q1, drive))) return st;
             s->m->residual_jac(q1, v1, a1, drive, o->p, s->Jq, s->Jv);
             newton_rows(s, 0, &cb, &cg);
             if ((st = newton_factor(s, t1))) return st;

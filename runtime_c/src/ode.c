@@ -89,6 +89,24 @@ fsr_status sim_accel(sim* s, double t, const double* q, const double* v, double*
     return FSR_OK;
 }
 
+fsr_status sim_residual(sim* s, double t, const double* q, const double* v, const double* a,
+                        const double* d, double* res, double* ma)
+{
+    const int n = s->n;
+    s->r->force_evaluations++;
+    if (s->m->residual) {
+        s->m->residual(q, v, a, d, s->o->p, res);
+        for (int i = 0; i < n; ++i) res[i] = -res[i];
+        return FSR_OK;
+    }
+    fsr_status st = sim_mass(s, t, q, d, 0);
+    if (st) return st;
+    s->m->force(q, v, d, s->o->p, res);
+    fsr_matvec(s->Mraw, n, s->bw, a, ma);
+    for (int i = 0; i < n; ++i) res[i] -= ma[i];
+    return FSR_OK;
+}
+
 /* k = y' = [q', q''] at (t, y). */
 fsr_status sim_deriv(sim* s, double t, const double* y, double* k)
 {

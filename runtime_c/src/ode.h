@@ -87,6 +87,15 @@ static inline double sim_time(const sim* s, long k)
 void sim_drive(sim* s, double t, double* d);
 /* M(q, d) into Mraw and, with factor, its Cholesky factor into Mfac; once when M is constant. */
 fsr_status sim_mass(sim* s, double t, const double* q, const double* d, int factor);
+/* res = f - M a at (q, v, a, d): the negated residual of an implicit integrator's iteration, in
+ * one pass when the model has a residual kernel, else from mass and force (ma: n doubles). */
+fsr_status sim_residual(sim* s, double t, const double* q, const double* v, const double* a,
+                        const double* d, double* res, double* ma);
+/* M at (q, d) in Mraw for a Newton matrix: there already when sim_residual formed it there. */
+static inline fsr_status sim_newton_mass(sim* s, double t, const double* q, const double* d)
+{
+    return s->m->residual ? sim_mass(s, t, q, d, 0) : FSR_OK;
+}
 /* a = q'' = M^-1 f at (t, q, v) */
 fsr_status sim_accel(sim* s, double t, const double* q, const double* v, double* a);
 /* k = y' = [q', q''] at (t, y). */

@@ -215,12 +215,10 @@ static fsr_status radau_step(sim* s)
         if (it == o->newton_max) return newton_failed(s, t1, dq, it);
         for (int i = 0; i < RADAU_STAGES; ++i) {  /* res = -(M(Q_i) A_i - f_i), interleaved */
             const double *Qi = Q + i * n, *Vi = V + i * n, *Ai = A + i * n;
-            if ((st = sim_mass(s, t + T->c[i] * h, Qi, drive[i], 0))) return st;
-            s->m->force(Qi, Vi, drive[i], o->p, f);
-            s->r->force_evaluations++;
-            fsr_matvec(s->Mraw, n, s->bw, Ai, ma);
-            for (int r = 0; r < n; ++r) res[r * RADAU_STAGES + i] = f[r] - ma[r];
+            if ((st = sim_residual(s, t + T->c[i] * h, Qi, Vi, Ai, drive[i], f, ma))) return st;
+            for (int r = 0; r < n; ++r) res[r * RADAU_STAGES + i] = f[r];
             if (rebuild && (o->newton_full || i == last)) {
+                if ((st = sim_newton_mass(s, t + T->c[i] * h, Qi, drive[i]))) return st;
                 s->m->residual_jac(Qi, Vi, Ai, drive[i], o->p, s->Jq, s->Jv);
                 for (int b = o->newton_full ? i : 0; b <= i; ++b) newton_rows(s, b, cq[b], cv[b]);
             }

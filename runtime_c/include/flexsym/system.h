@@ -80,6 +80,12 @@ typedef struct fsm_system {
      * angle may turn without end; an ANCF slope has no unit); NULL: every coordinate is bounded
      * by blowup x the length scale */
     const unsigned char* coord_unbounded;
+    /* Last, so that a positional initializer that ends before it leaves it NULL.
+     * r = M(q) q'' - f(q, q', d, p) in one pass, or NULL (then from mass and force). A model whose
+     * M is costly to form (the exact kinematics: n^2 products over the quadrature points) gives
+     * it, and the implicit integrators' Newton iterations then never form M (sim_residual). */
+    void (*residual)(const double* q, const double* qd, const double* qdd, const double* d,
+                     const double* p, double* r);
 } fsm_system;
 
 #endif
