@@ -150,8 +150,6 @@ ELSEWHERE = '\n[[joint]]\nname = "hang"\nkind = "revolute"\nparent = "ground"\np
     (OK_MODEL, "", HANG, "x(bob.c)", "joint 'hang' hangs a body from it"),
     (OK_MODEL, "", ELSEWHERE, "momentum", "output 'momentum' needs its momentum"),
     (OK_MODEL, "", ELSEWHERE, "reaction(pin, x)", "output 'reaction(pin, x)' needs its momentum"),
-
-    (OK_MODEL, "damping = { beta = 1e-4 }", ELSEWHERE, "v(arm, tip)", "structural damping is not derived"),
     (OK_MODEL, "", ELSEWHERE + '\n[[load]]\nkind = "force"\nmarker = "arm.tip"\nfx = 1.0\nfy = 0.0\n',
      "v(arm, tip)", "acts on it beyond its root"),
 ])

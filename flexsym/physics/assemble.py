@@ -273,8 +273,8 @@ def _held_beyond_root(system: System, beam: str) -> str:
 
 
 def _check_exact(system: System, tree, b: FlexibleBeam) -> None:
-    """What the exact kinematics in a system (physics/exact_body.py) is derived for: an
-    undamped planar beam (uniform, or sections and point masses from finite-element data)
+    """What the exact kinematics in a system (physics/exact_body.py) is derived for: a
+    planar beam (damped as a modal beam: its strain measures are linear in its coordinates) (uniform, or sections and point masses from finite-element data)
     from which nothing hangs and on which no load acts beyond its root (their equations
     would differentiate its quadrature positions in sympy), N and M its own
     (EA eps, EI dphi/dx), and no output that needs its momentum (momentum, the reaction of a
@@ -286,8 +286,6 @@ def _check_exact(system: System, tree, b: FlexibleBeam) -> None:
     if body is not None and (body.matrices is not None or any(m.rotary for m in body.masses)):
         raise SpecError(f"{where} is derived for a beam from its sections and point masses "
                         "(not from imported matrices, nor with a point mass's rotary inertia)")
-    if b.damped:
-        raise SpecError(f"{where}: structural damping is not derived for it yet")
     loaded = _loaded_beyond_root(system, b.name)
     for j in system.joints:
         if j.parent.partition(".")[0] == b.name and j.name not in tree.cut:
