@@ -9,7 +9,8 @@ exactly one *tree joint* (its parent), found by a breadth-first search from grou
 joints in file order, always from a joint's declared parent to its child; every other joint is
 a *cut joint* and becomes constraint equations. A flexible beam's tree joint must hold its root
 marker (x = 0) as the joint's child: its floating frame is the root's tangent frame (the modes
-are clamped at the root), so joints elsewhere on a flexible body are never tree joints.
+are clamped at the root; modes with a free root slope, pp and pf, need a revolute joint there:
+_check_pinned_roots), so joints elsewhere on a flexible body are never tree joints.
 """
 from __future__ import annotations
 
