@@ -173,3 +173,18 @@ def test_one_beam_refusal_is_one_line(capsys):
     code = main(["run", "exact", "--bending", "pp1,pp2,pp3"])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "one-beam model clamps the beam" in err, err
+
+
+def test_a_fixed_pin_is_a_clamp_and_is_refused():
+    """The Python API's `fixed` (no scene key): a pin that does not turn holds the root section."""
+    from dataclasses import replace
+
+    from flexsym.model.library import pendulum_system
+    from flexsym.model.variant import VariantSpec, _refs
+
+    pp = VariantSpec("body", "exact", (), _refs("bending", ["pp1", "pp2"]), outputs=("M_B",),
+                     moment="equilibrium", axial_force="equilibrium")
+    system = pendulum_system(pp)  # a free pin: valid
+    pin = replace(system.joints[0], fixed=True)
+    with pytest.raises(SpecError, match="joint 'pin' is fixed, a clamp"):
+        replace(system, joints=(pin,)).validate()
