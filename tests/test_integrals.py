@@ -64,6 +64,37 @@ def test_gauss_path_agrees_with_exact_path():
     assert expr.free_symbols == set(table.symbols)
 
 
+def test_pinned_mode_integrals_match_quadrature():
+    """pp (closed form) and pf (Gauss, transcendental) modes beside cf and ff in one table: the
+    products the energies take, against scipy's quadrature; pp's closed forms against the
+    Gauss path to 25 digits."""
+    from flexsym.model.modes import mode
+
+    refs = [ModeRef("bending", "pinned_pinned", 2), ModeRef("bending", "pinned_pinned", 3),
+            ModeRef("bending", "pinned_free", 2), ModeRef("bending", "clamped_free", 1),
+            ModeRef("axial", "fixed_free", 1)]
+    table = IntegralTable({m.name: m for m in (mode(r) for r in refs)})
+    f = table.mode_value
+    table.integrate(f("v_pp2", 2) ** 2 + f("v_pp2", 2) * f("v_pp3", 2) + f("v_pf2", 2) * f("v_pp3", 2)
+                    + f("v_cf1", 1) * f("v_pp2", 1) + s * f("v_pf2") + s * f("v_pp3")
+                    + table.fs_value("v_pp2", "v_pf2") * f("u_ff1") + f("u_ff1", 1) * f("v_pp2", 1) ** 2)
+    methods = set()
+    for sym in table.symbols:
+        v = table.value(sym)
+        methods.add(v.method)
+        a, b, s_pow, factors = table.monomial(sym)
+        fns = [_numpy_factor(table, fa) for fa in factors]
+        integrand = lambda x: x**s_pow * np.prod([fn(x) for fn in fns])
+        ref = integrate.quad(integrand, float(a), float(b), epsabs=1e-14, epsrel=1e-13, limit=200)[0]
+        scale = integrate.quad(lambda x: abs(integrand(x)), float(a), float(b), epsabs=1e-14, limit=200)[0]
+        assert abs(float(v.value) - ref) <= 1e-11 * max(scale, 1e-300), (sym, float(v.value), ref)
+        if all(table.modes[fa.a].exact and (fa.kind == "mode" or table.modes[fa.b].exact) for fa in factors):
+            assert v.method == "exact", sym
+            gauss = table._gauss(a, b, s_pow, factors)
+            assert abs(gauss.value - v.value) <= mpmath.mpf("1e-25") * max(1, abs(v.value)), sym
+    assert methods == {"exact", "gauss"}
+
+
 def _hermite_modes():
     shapes = [1 - 3 * s**2 + 2 * s**3, s - 2 * s**2 + s**3, 3 * s**2 - 2 * s**3, -s**2 + s**3]
     return [Mode(ModeRef("bending", "hermite", i + 1), e, True, (), f"N_{i + 1}", f"Hermite shape {i + 1}")

@@ -5,7 +5,7 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.model.modes import (FAMILIES, ModeRef, clamped_free_beta, clamped_pinned_beta, mode,
-                           parse_mode_token, s)
+                           parse_mode_token, root_slope_free, s)
 
 ALL_MODES = [ModeRef(axis, fam, k) for (axis, fam), f in FAMILIES.items()
              for k in ([1] if f.single else [1, 2, 3, 6])]
@@ -57,11 +57,35 @@ def test_exactness_flags():
     assert not mode(ModeRef("bending", "clamped_pinned", 1)).exact
 
 
+def test_pinned_root_modes():
+    """pp: sin(k pi s) exactly (closed-form integrals). pf: the pinned-free beam's modes, beta
+    the roots of tan b = tanh b (as clamped-pinned), orthogonal to each other and to the turn
+    about the pin (s). Both leave the root slope free; no other family does."""
+    for k in (1, 2, 5):
+        m = mode(ModeRef("bending", "pinned_pinned", k))
+        assert m.exact and sp.simplify(m.expr - sp.sin(k * sp.pi * s)) == 0
+    pf = [mode(ModeRef("bending", "pinned_free", k)) for k in (1, 2, 3)]
+    assert [m.eigenvalue for m in pf] == [mode(ModeRef("bending", "clamped_pinned", k)).eigenvalue
+                                          for k in (1, 2, 3)]
+    assert not pf[0].exact
+    with mpmath.workdps(40):
+        fn = [sp.lambdify(s, m.expr, "mpmath") for m in pf]
+        for i, f in enumerate(fn):
+            norm = mpmath.quad(lambda x: f(x) ** 2, [0, 1])
+            assert abs(mpmath.quad(lambda x: x * f(x), [0, 1])) < 1e-30 * norm
+            for g in fn[:i]:
+                assert abs(mpmath.quad(lambda x: f(x) * g(x), [0, 1])) < 1e-30 * norm
+    free = {(a, f) for (a, f) in FAMILIES if root_slope_free(ModeRef(a, f, 1))}
+    assert free == {("bending", "pinned_pinned"), ("bending", "pinned_free")}
+
+
 @pytest.mark.parametrize("axis,token,expected", [
     ("axial", "static", ModeRef("axial", "static", 1)),
     ("axial", "sin2", ModeRef("axial", "sine", 2)),
     ("bending", "cp3", ModeRef("bending", "clamped_pinned", 3)),
     ("bending", "clamped_free1", ModeRef("bending", "clamped_free", 1)),
+    ("bending", "pp2", ModeRef("bending", "pinned_pinned", 2)),
+    ("bending", "pinned_free3", ModeRef("bending", "pinned_free", 3)),
 ])
 def test_parse_tokens(axis, token, expected):
     assert parse_mode_token(axis, token) == expected

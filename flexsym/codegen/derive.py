@@ -6,7 +6,7 @@ from __future__ import annotations
 from flexsym.physics.exact import build_exact_kernels, derive_exact
 from flexsym.emit.kernels import Kernel
 from flexsym.physics.modal import Derivation, build_modal_kernels, derive_modal
-from flexsym.model.variant import VariantSpec
+from flexsym.model.variant import VariantSpec, check_clamped_root
 from flexsym.model.strain_models import STRAIN_MODELS
 
 
@@ -16,6 +16,7 @@ def _exact(spec: VariantSpec) -> bool:
 
 def derive(spec: VariantSpec) -> Derivation:
     spec.validate()
+    check_clamped_root(spec)
     return derive_exact(spec) if _exact(spec) else derive_modal(spec)
 
 

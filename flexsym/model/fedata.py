@@ -246,7 +246,14 @@ class BeamBody:
 
     # ----- modes ----------------------------------------------------------------------
     def mode_shape(self, axis: str, family: str, index: int) -> "ShapeData":
+        if family not in FE_FAMILIES:  # pp: the root node is clamped here (its rotation held)
+            raise SpecError(f"{axis} mode family '{family}' is not derived for a body from "
+                            f"finite-element data (its root node is clamped; derived: "
+                            f"{', '.join(FE_FAMILIES)})")
         return _mode_cache(self, axis, family, index)
+
+
+FE_FAMILIES = ("static", "sine", "clamped_pinned", "fixed_free", "clamped_free")
 
 
 def element_matrices(sec: Section, l: float):

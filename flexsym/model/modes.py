@@ -142,6 +142,27 @@ def _bending_static(k: int) -> Mode:
                 "static bending mode: unit tip deflection, root clamped")
 
 
+def _pinned_pinned(k: int) -> Mode:
+    return Mode(ModeRef("bending", "pinned_pinned", k), sp.sin(k * sp.pi * s), True,
+                _bc((0, 0, 0), (2, 0, 0), (0, 1, 0), (2, 1, 0)), rf"\Pi_{{{k}}}",
+                f"pinned-pinned natural bending mode sin({k} pi s): the frame is the chord frame, "
+                "the root slope free")
+
+
+def _pinned_free(k: int) -> Mode:
+    # tan(b) = tanh(b), as clamped-pinned: the pinned-free beam's elastic modes, orthogonal to
+    # its rotation about the pin (s), so the frame is the one whose turn that rotation is
+    with mpmath.workdps(EIGEN_DPS + 10):
+        b = clamped_pinned_beta(k)
+        c = mpmath.sin(b) / mpmath.sinh(b)
+    B, C = _to_float(b), _to_float(c)
+    expr = sp.sin(B * s) + C * sp.sinh(B * s)
+    return Mode(ModeRef("bending", "pinned_free", k), expr, False,
+                _bc((0, 0, 0), (2, 0, 0), (2, 1, 0), (3, 1, 0)), rf"\Omega_{{{k}}}",
+                f"pinned-free natural bending mode {k} (beta = {mpmath.nstr(b, 15)}): the root "
+                "slope free", B)
+
+
 def _clamped_pinned(k: int) -> Mode:
     with mpmath.workdps(EIGEN_DPS + 10):
         b = clamped_pinned_beta(k)
@@ -177,7 +198,17 @@ FAMILIES: dict[tuple[str, str], Family] = {
                                           _clamped_pinned, "clamped-pinned natural modes"),
     ("bending", "clamped_free"): Family("bending", "clamped_free", "cf", False,
                                         _clamped_free, "clamped-free natural modes"),
+    ("bending", "pinned_pinned"): Family("bending", "pinned_pinned", "pp", False, _pinned_pinned,
+                                         "sin(k pi s): pinned-pinned natural modes (root slope free)"),
+    ("bending", "pinned_free"): Family("bending", "pinned_free", "pf", False, _pinned_free,
+                                       "pinned-free natural modes (root slope free)"),
 }
+
+
+def root_slope_free(ref: ModeRef) -> bool:
+    """A bending mode without w'(0) = 0 among its boundary conditions (pp): the floating frame
+    is then not the root section's (pp: the chord's), so the root must be free to turn (a pin)."""
+    return ref.axis == "bending" and (1, 0, 0) not in {(b.order, b.at, b.value) for b in mode(ref).bcs}
 
 MAX_INDEX = 12  # beyond this the hyperbolic terms overflow double-precision evaluation
 

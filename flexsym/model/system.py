@@ -9,7 +9,8 @@ exactly one *tree joint* (its parent), found by a breadth-first search from grou
 joints in file order, always from a joint's declared parent to its child; every other joint is
 a *cut joint* and becomes constraint equations. A flexible beam's tree joint must hold its root
 marker (x = 0) as the joint's child: its floating frame is the root's tangent frame (the modes
-are clamped at the root), so joints elsewhere on a flexible body are never tree joints.
+are clamped at the root; modes with a free root slope, pp and pf, need a revolute joint there:
+_check_pinned_roots), so joints elsewhere on a flexible body are never tree joints.
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from typing import NamedTuple
 from flexsym.core.errors import SpecError
 from flexsym.model.joint_kinds import KINDS
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
-from flexsym.model.modes import ModeRef
+from flexsym.model.modes import ModeRef, root_slope_free
 from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
@@ -670,6 +671,7 @@ class System:
                                 "tree's)")
         for j in self.joints:
             KINDS[j.kind].check_in_tree(j, j.name in tree.cut, f"{where}: joint '{j.name}'")
+        self._check_pinned_roots(tree)
         guided = set()
         for d in self.drivers:
             self._check_driver(d, tree, guided)
@@ -724,6 +726,35 @@ class System:
                 raise SpecError(f"{where}: start = \"static\" puts the flexible bodies in equilibrium, "
                                 "and there is none")
         return self
+
+    def _check_pinned_roots(self, tree: Tree) -> None:
+        """A beam with bending modes whose root slope is free (pp: its frame is the chord's, not
+        the root section's) is a beam pinned at its root: its tree joint must be a planar
+        revolute whose angle nothing prescribes or loads (no driver, not fixed), and no torque
+        acts on its frame. A clamp or prismatic joint there holds the root section, which those
+        modes cannot (use clamped modes, cf, on a clamped root)."""
+        for b in self.bodies:
+            if not b.flexible or getattr(b.model, "kind", None) != "modal":
+                continue
+            free = [m.token for m in b.model.bending if root_slope_free(m)]
+            if not free:
+                continue
+            head = (f"system '{self.name}': body '{b.name}': bending mode {free[0]} leaves the root "
+                    "slope free (the frame is the chord's), so the root must be pinned")
+            if self.dimension == 3:
+                raise SpecError(f"{head}: not derived for spatial systems (use cf modes)")
+            j = self.joint(tree.joint_of(b.name))
+            if j.kind != "revolute":
+                raise SpecError(f"{head}, not held by a {j.kind} joint ('{j.name}': use cf modes)")
+            if j.fixed:
+                raise SpecError(f"{head}: joint '{j.name}' is fixed, a clamp (use cf modes)")
+            d = next((d for d in self.drivers if d.joint == j.name), None)
+            if d is not None:
+                raise SpecError(f"{head}: driver '{d.name}' on joint '{j.name}' would turn the chord, "
+                                "not the root section (use cf modes)")
+            if any(isinstance(load, Torque) and load.body == b.name for load in self.loads):
+                raise SpecError(f"{head}: a torque on '{b.name}' would act on the chord frame, not "
+                                "on a section (use cf modes)")
 
     def _check_spatial(self) -> None:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line

@@ -16,7 +16,7 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.model.maneuver import maneuver_of
-from flexsym.model.modes import ModeRef, mode, parse_mode_token
+from flexsym.model.modes import ModeRef, mode, parse_mode_token, root_slope_free
 from flexsym.model.output_names import (STRESS_OUTPUTS, canonical_output, check_output_names, default_outputs,
                            stress_method)
 from flexsym.model.strain_models import STRAIN_MODELS
@@ -275,10 +275,22 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
     return _named(spec, base, name)
 
 
+def check_clamped_root(spec) -> None:
+    """A one-beam model clamps the beam to its hub: bending modes whose root slope is free
+    (pp, pf: made for a pinned root, their frame the chord's or the pin's) are refused there."""
+    free = [m.token for m in getattr(spec, "bending", ()) if root_slope_free(m)]
+    if free:
+        raise SpecError(f"variant '{spec.name}': bending mode {free[0]} leaves the root slope free "
+                        "(for a pinned root), but a one-beam model clamps the beam to its hub (use "
+                        "clamped modes, e.g. cf1, here; pinned modes on a beam pinned in a system)")
+
+
 def _named(spec, base, name):
     """Give a customised spec its name (a readable default with a content digest) and validate."""
     if name is None:
         digest = hashlib.sha256(json.dumps(replace(spec, name="x").to_dict(),
                                            sort_keys=True).encode()).hexdigest()[:8]
         name = f"{base.name}_custom_{digest}"
-    return replace(spec, name=name).validate()
+    spec = replace(spec, name=name)
+    check_clamped_root(spec)
+    return spec.validate()
