@@ -70,6 +70,7 @@ from flexsym.model.maneuver import check_theta, check_time_function, maneuver_of
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
 from flexsym.model.joint_kinds import KINDS
+from flexsym.model.end_modes import with_end_modes
 from flexsym.model.modes import mode
 from flexsym.model.system import (GROUND, SECOND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
@@ -536,10 +537,17 @@ def _load(r: _Items, k: int, tab: dict, dim: int = 2):
 
 
 # ----- checks beyond the structure: expressions, outputs' carriers, the initial assembly --------
+def _modes_text(spec) -> str:
+    """A modal model's strain and modes, as `inspect` shows them (the built-in exact's are the
+    beam's ends', end_modes.py)."""
+    axial = ", ".join(m.token for m in spec.axial) or "none"
+    return f"strain {spec.strain}, axial {axial}, bending {', '.join(m.token for m in spec.bending)}"
+
+
 def check_system(system: System, t_end: float = 20.0) -> System:
-    """System.validate, then the checks that need expressions and modes (checked_system adds
-    the assembly at t = 0)."""
-    system.validate()
+    """System.validate, the built-in `exact`'s modes from each beam's end joints (end_modes),
+    then the checks that need expressions and modes (checked_system adds the assembly at t = 0)."""
+    system = with_end_modes(system.validate()).validate()
     tree = system.tree()
     where = f"system '{system.name}'"
     joints = {j.name: j for j in system.joints if j.has_coordinate and j.name not in tree.cut}
@@ -720,7 +728,7 @@ def summary(system: System) -> str:
             what = (f"beam L = {b.length:g} m, rho {s.rho:g}, E {s.E:g}, A {s.A:g}, I {s.I:g}; "
                     f"model {b.model.name}")
             if b.model.kind == "modal":
-                what += f" (N {b.model.axial_force}, M {b.model.moment})"
+                what += f" ({_modes_text(b.model)}; N {b.model.axial_force}, M {b.model.moment})"
             what = _mesh_text(b, what) + _damping_text(b)
         else:
             what = f"rigid m = {b.mass:g} kg, J = {b.inertia:g} kg m^2, com ({b.com[0]:g}, {b.com[1]:g})"
@@ -800,7 +808,8 @@ def _summary3(system: System) -> str:
             s_ = b.section
             what = (f"beam L = {b.length:g} m, rho {s_.rho:g}, E {s_.E:g}, G {s_.G:g}, A {s_.A:g}, "
                     f"I_z {s_.I:g}, I_y {s_.Iy:g}, J {s_.J:g}; model {b.model.name} "
-                    f"(N {b.model.axial_force}, M {b.model.moment})")
+                    + (f"({_modes_text(b.model)}; N {b.model.axial_force}, M {b.model.moment})"
+                       if b.model.kind == "modal" else "(ef)"))
             what = _mesh_text(b, what) + _damping_text(b)
         else:
             what = (f"rigid m = {b.mass:g} kg, principal inertia ({', '.join(f'{v:g}' for v in b.inertia)}) "
