@@ -39,6 +39,27 @@ class BodyFrame:
     def of(cls, der, pose, g: sp.Matrix) -> "BodyFrame":
         return cls(pose, rot(pose.angle), der.ddt(pose.angle), der.ddt(pose.R), g)
 
+    def local(self) -> "LocalMotion":
+        """Its motion in its own components (what a beam's densities are written in)."""
+        ph = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
+        A_ = self.A
+        Vloc, Rloc, gloc = A_.T * self.Rdot, A_.T * self.pose.R, A_.T * self.g
+        actual = {ph[0]: self.omega, ph[1]: Vloc[0], ph[2]: Vloc[1], ph[3]: Rloc[0], ph[4]: Rloc[1],
+                  ph[5]: gloc[0], ph[6]: gloc[1]}
+        return LocalMotion(ph, Vloc, Rloc, gloc, actual)
+
+
+@dataclass
+class LocalMotion:
+    """A frame's motion in its own components: the placeholders ph (Om_ Vx_ Vy_ Rx_ Ry_ gx_
+    gy_) of omega, V = A^T R', R = A^T R and g = A^T g, those values, and actual: ph -> value."""
+
+    ph: tuple
+    V: sp.Matrix
+    R: sp.Matrix
+    g: sp.Matrix
+    actual: dict
+
 
 def record_body(der, name, mass, pose, A_, local_moment, H) -> None:
     """The body's mass, first moment m r_G (ground) and angular momentum about the origin
@@ -118,17 +139,6 @@ class BeamKind(BodyKind):
     def origin(self, point: sp.Matrix, angle: sp.Expr, marker) -> sp.Matrix:
         """Its frame is its root's tangent frame (System.validate: a beam hangs by its root)."""
         return point - sp.zeros(2, 1)
-
-    @staticmethod
-    def components(frame: BodyFrame):
-        """Its frame's motion in frame components, as placeholders (Om_ Vx_ Vy_ Rx_ Ry_ gx_
-        gy_: what the densities are written in) and their actual values."""
-        ph = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
-        A_ = frame.A
-        Vloc, Rloc, gloc = A_.T * frame.Rdot, A_.T * frame.pose.R, A_.T * frame.g
-        actual = {ph[0]: frame.omega, ph[1]: Vloc[0], ph[2]: Vloc[1], ph[3]: Rloc[0], ph[4]: Rloc[1],
-                  ph[5]: gloc[0], ph[6]: gloc[1]}
-        return ph, Vloc, Rloc, gloc, actual
 
     def marker_pose(self, der, body, m) -> tuple[sp.Matrix, sp.Expr]:
         """The deformed axis point and its tangent angle phi + v_x (linear in the slope as the

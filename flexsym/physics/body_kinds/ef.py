@@ -35,9 +35,10 @@ class Ef(BeamKind):
 
     def contribute(self, der, b, frame, integral_symbols: bool) -> None:
         part = der.flex[b.name]
-        ph, Vloc, _, _, actual = self.components(frame)
+        loc = frame.local()
+        ph, actual = loc.ph, loc.actual
         Vg_, H_ = part.energies()
-        der.ef_kinetic.append(EfKinetic(b.name, frame.omega, (Vloc[0], Vloc[1])))
+        der.ef_kinetic.append(EfKinetic(b.name, frame.omega, (loc.V[0], loc.V[1])))
         der.T += part.point_mass_kinetic().xreplace(actual)  # elements' T: sysgen, by AD
         der.V_grav += Vg_.xreplace(actual) - part.mass * frame.g.dot(frame.pose.R)
         der.momentum += H_.xreplace(actual)

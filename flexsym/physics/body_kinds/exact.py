@@ -72,18 +72,17 @@ class Exact(Modal):
             if fn == "momentum" or (fn == "reaction" and args[0] in beyond) or on_beam:
                 raise SpecError(f"{where}: output '{o.quantity}' needs its momentum, which is not "
                                 "derived yet")
-        super(Modal, self).check(system, tree, b)  # not the modal's prestress check: not its strain
+        super().check(system, tree, b)
 
     def part(self, b, psyms: dict, qnames: list[str]):
-        args = self.part_fields(b, psyms)
+        args = self.part_args(b, psyms)
         part = ExactPart(*args, index=[qnames.index(f"{b.name}_{n}") for n in args[5]])
         part.quad = body_quadrature(part)
         return part
 
-    def inertia(self, der, b, part, frame, components, body_expr, mass) -> None:
+    def inertia(self, der, b, part, frame, loc, body_expr, mass) -> None:
         """T and the deformation's gravity: exact_body, in casadi (sysgen)."""
-        _, Vloc, Rloc, gloc, _ = components
-        part.frame = (frame.omega, Vloc[0], Vloc[1], gloc[0], gloc[1], Rloc[0], Rloc[1])
+        part.frame = (frame.omega, loc.V[0], loc.V[1], loc.g[0], loc.g[1], loc.R[0], loc.R[1])
         der.exact_bodies.append(part)
 
     def fields_at(self, der, body: str, x: float):

@@ -97,8 +97,9 @@ class Modal(BeamKind):
         super().check(system, tree, b)
 
     @staticmethod
-    def part_fields(b, psyms: dict) -> tuple:
-        """FlexPart's fields: its table, its fields in this body's coordinate symbols, ..."""
+    def part_args(b, psyms: dict) -> tuple:
+        """FlexPart's arguments: the body, its table, its fields in its own coordinate symbols,
+        its modes, their groups and names, its parameters' symbols."""
         spec = b.model.validate()
         modes = {r.coordinate: spec.mode(r) for r in spec.modes}
         names = list(modes)
@@ -113,21 +114,23 @@ class Modal(BeamKind):
         return (b, table, fields, modes, {r.coordinate: r.axis for r in spec.modes}, names, psyms)
 
     def part(self, b, psyms: dict, qnames: list[str]):
-        return FlexPart(*self.part_fields(b, psyms))
+        return FlexPart(*self.part_args(b, psyms))
 
     def contribute(self, der, b, frame, integral_symbols: bool) -> None:
+        """Its inertia (`inertia`: what the exact kind replaces), then its strain terms, each
+        differentiated with respect to its `wrt` groups only, and its damping."""
         part = der.flex[b.name]
-        components = self.components(frame)
-        ph, actual = components[0], components[-1]
+        loc = frame.local()
+        ph, actual = loc.ph, loc.actual
         mass = BEAM_PARAMS[0].symbol * BEAM_PARAMS[2].symbol * BEAM_PARAMS[4].symbol
         tab, fl = part.table, part.fields
 
-        def body_expr(expr, tab=tab, part=part, actual=actual):
+        def body_expr(expr):  # the table's integrals (or their symbols), this body's symbols
             values = {} if integral_symbols else tab.substitutions()
             return expr.xreplace(values).xreplace(part.psyms).xreplace(actual)
 
         mass = mass * tab.integrate(fl.weights["mu"])  # 1 for a uniform beam; a body's own
-        self.inertia(der, b, part, frame, components, body_expr, mass)
+        self.inertia(der, b, part, frame, loc, body_expr, mass)
         strain = STRAIN_MODELS[b.model.strain]
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
@@ -139,9 +142,9 @@ class Modal(BeamKind):
         if b.damped:
             der.dissipation[b.name] = _modal_dissipation(b, part, body_expr)
 
-    def inertia(self, der, b, part, frame, components, body_expr, mass) -> None:
+    def inertia(self, der, b, part, frame, loc, body_expr, mass) -> None:
         """T, V_g and the momentum: the densities integrated by the table."""
-        ph = components[0]
+        ph = loc.ph
         tab, fl = part.table, part.fields
         motion = FrameMotion(ph[0], ph[1], ph[2])
         der.T += body_expr(tab.integrate(kinetic_density(fl, motion)))
