@@ -19,7 +19,7 @@ TOKENS = ("cf1", "cf2", "cf3")
 
 
 class Part(ExactKinematics):
-    """What exact_energies reads of a system's body (assemble.ExactPart), numbers for symbols."""
+    """What exact_energies reads of a system's body (body_kinds.exact.ExactPart), numbers for symbols."""
 
     def __init__(self, body: BeamBody, quad: Quadrature | None = None):
         self.fe_body = body

@@ -16,7 +16,7 @@ to mass, force, residual_jac, energy and the outputs that read T.
                                  (ef_dissipation). An undamped system's files are unchanged.
 Deterministic like a variant's folder (generate.py: same writer, manifest and file hashes).
 The fingerprint covers the system's spec, the variant generator's hash (the physics modules
-and templates) and this module, assemble.py, efbody.py, system.py and templates/system/.
+and templates) and this module, assemble.py, body_kinds/, efbody.py, system.py and templates/system/.
 """
 from __future__ import annotations
 
@@ -42,11 +42,11 @@ from flexsym.emit.kernels import SympyToCasadi, group_by_parameters, make_kernel
 from flexsym.model.maneuver import t as t_sym
 from flexsym.core.paths import module_file, templates_dir
 from flexsym.model.system import System, length_scale, system_to_dict
-from flexsym.core.versions import generator_hash, tool_versions
+from flexsym.core.versions import BODY_KIND_MODULES, generator_hash, tool_versions
 from flexsym.scenes.assembly import numeric_rank
 
 _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.rod3d", "physics.efbody",
-        "physics.exact_kinematics", "physics.exact_body", "model.system", "codegen.sysgen")
+        "physics.exact_kinematics", "physics.exact_body", *BODY_KIND_MODULES, "model.system", "codegen.sysgen")
 
 
 LARGE_KERNELS = 40_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)

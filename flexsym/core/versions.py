@@ -11,6 +11,10 @@ import sympy
 from flexsym import __version__
 from flexsym.core.paths import module_file, templates_dir
 
+# One module per planar body kind (physics/body_kinds): in the generator's hash, and in a
+# system's fingerprint (sysgen._OWN)
+BODY_KIND_MODULES = tuple(f"physics.body_kinds.{f.stem}" for f in sorted(
+    module_file("physics.body_kinds.__init__").parent.glob("*.py")))
 # Modules whose code decides what is generated: a change in any of them changes the
 # fingerprint of every variant, so checked-in generated code is detected as stale.
 GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "model.strain_models",
@@ -21,7 +25,8 @@ GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "mode
                      "physics.exact", "physics.exact_kinematics", "physics.exact_body", "model.beam_element", "physics.spatial", "physics.spatial_ef",
                      "physics.rod3d", "scenes.assembly", "model.exact_numbers",  # assembly: a ball joint's start (shortest_turn)
                      *(f"model.joint_kinds.{f.stem}" for f in sorted(  # one module per joint kind
-                         module_file("model.joint_kinds.__init__").parent.glob("*.py"))))
+                         module_file("model.joint_kinds.__init__").parent.glob("*.py"))),
+                     *BODY_KIND_MODULES)
 
 
 def tool_versions() -> dict[str, str]:

@@ -5,7 +5,10 @@ flexible body's elastic coordinates. A guided joint k contributes the drive entr
 d = [t, theta_k, theta_k', theta_k''] (known functions of time, not unknowns).
 
 Each body's frame pose (angle phi, origin R) is an expression of its parent's pose and its tree
-joint's coordinate; a flexible beam's frame is its root's tangent frame. Energies:
+joint's coordinate; a flexible beam's frame is its root's tangent frame. A body is reached only
+through its kind (physics/body_kinds/: rigid, modal, exact, ef), which adds its coordinates,
+its deformation part and its share of the energies and forces below, and gives the fields and
+marker poses on it. Energies:
   rigid body   T = 1/2 m |v_G|^2 + 1/2 J phi'^2,  V_g = -m g.r_G
   modal beam   T = int 1/2 rho A |V + r' + phi' k x r|^2 dx in frame components (energy.py's
                kinetic_density with the frame's actual motion), V_g = -m g.R - int rho A g.A r dx,
@@ -41,45 +44,33 @@ actual motion, gravity and the loads on its markers), the violation.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
-from types import SimpleNamespace
+from dataclasses import dataclass, field
 
 import sympy as sp
 
 from flexsym.model.exact_numbers import exact
-from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
-                     gravity_density, kinetic_density, momentum_density, w)
-from flexsym.physics.efbody import EfPart, ef_part
-from flexsym.physics.exact_kinematics import ExactKinematics, Quadrature
-from flexsym.physics.exact_body import EXACT_VG, body_quadrature, inertial_section_load, position_symbols
+from flexsym.physics.body_kinds import kind_of
+from flexsym.physics.body_kinds.base import BodyFrame, cross, rot, station
+from flexsym.physics.body_kinds.ef import EfKinetic
+from flexsym.physics.body_kinds.modal import FlexPart
+from flexsym.physics.energy import BEAM_PARAMS
+from flexsym.physics.exact_body import EXACT_VG
 from flexsym.core.errors import SpecError
-from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
-from flexsym.physics.lagrange import equations_of_motion, generalized_force, jacobi_integral
+from flexsym.physics.lagrange import equations_of_motion, jacobi_integral
 from flexsym.model.joint_kinds import KINDS, planar_cut_rows, planar_frame
 from flexsym.model.maneuver import Param, maneuver_of, parse_expression, parse_theta, t
-from flexsym.model.modes import s
-from flexsym.physics.outputs import field_at, output_expression
-from flexsym.model.strain_models import STRAIN_MODELS
-from flexsym.model.system import (GROUND, FlexibleBeam, Gravity, PointForce, SpringDamper, System, Torque,
+from flexsym.model.system import (GROUND, Gravity, PointForce, SpringDamper, System, Torque,
                      beam_station, length_scale, parse_output, section_at,
                      section_point)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
 
 
-def _rot(phi) -> sp.Matrix:
-    return sp.Matrix([[sp.cos(phi), -sp.sin(phi)], [sp.sin(phi), sp.cos(phi)]])
-
-
 def _axis_direction(joint, angle, across: bool = False) -> sp.Matrix:
     """A planar joint's unit axis (or its normal, turned +90 degrees), in ground, its parent
     turned by angle."""
     ax = sp.Matrix([exact(a) for a in joint.axis])
-    return _rot(angle) * (sp.Matrix([-ax[1], ax[0]]) if across else ax) / sp.sqrt(ax.dot(ax))
-
-
-def _cross(a, b) -> sp.Expr:
-    return a[0] * b[1] - a[1] * b[0]
+    return rot(angle) * (sp.Matrix([-ax[1], ax[0]]) if across else ax) / sp.sqrt(ax.dot(ax))
 
 
 @dataclass
@@ -116,48 +107,6 @@ class Guided:
 class Pose:
     angle: sp.Expr
     R: sp.Matrix
-
-
-@dataclass
-class FlexPart:
-    """A flexible body's deformation: its table, fields (in this body's symbols), modes."""
-
-    beam: FlexibleBeam
-    table: IntegralTable
-    fields: object
-    modes: dict
-    groups: dict  # mode name -> 'axial' | 'bending'
-    coords: list  # mode names in order
-    psyms: dict  # global beam parameter symbol -> this body's symbol
-
-    def view(self):
-        """What outputs.field_at / output_expression read (a derivation-like object)."""
-        return SimpleNamespace(spec=self.beam.model, table=self.table, modes=self.modes,
-                               fields=self.fields)
-
-
-@dataclass
-class ExactPart(FlexPart, ExactKinematics):
-    """A beam with exact kinematics (physics/exact_body.py): its V is the modal beam's (the
-    FlexPart's fields), its T, gravity and positions are casadi quadratures."""
-
-    quad: Quadrature = None
-    frame: tuple = ()  # (omega, V_x, V_y, g_x, g_y, R_x, R_y) in frame components, sympy
-    index: list = field(default_factory=list)  # its coordinates' places in q, in mode order
-
-    @property
-    def fe_body(self):
-        return self.beam.model.body
-
-
-@dataclass
-class EfKinetic:
-    """An ef body's frame motion in frame components (omega, V = A^T R'), which sysgen feeds
-    to the generic element's kinetic energy (efbody.generic_element) per element."""
-
-    body: str
-    omega: sp.Expr
-    V: tuple[sp.Expr, sp.Expr]
 
 
 # Placeholders in output expressions for what sysgen computes in casadi from the ef bodies'
@@ -252,83 +201,12 @@ class SystemDerivation:
         return self.T, self.V, jacobi_integral(self.T, self.M, self.qd, self.V)
 
 
-def _beyond_root(ref, beam: str) -> bool:
-    return isinstance(ref, str) and ref.partition(".")[0] == beam and ref.partition(".")[2] != "root"
-
-
-def _loaded_beyond_root(system: System, beam: str) -> str:
-    """The first force or spring acting on the beam anywhere but at its root ('' if none)."""
-    for load in system.loads:
-        if any(_beyond_root(getattr(load, k, ""), beam) for k in ("marker", "a", "b")):
-            return f"load '{load.name or type(load).__name__}'"
-    return ""
-
-
-def _held_beyond_root(system: System, beam: str) -> str:
-    """The first joint, force or spring acting on the beam anywhere but at its root ('' if none)."""
-    for j in system.joints:
-        if _beyond_root(j.parent, beam) or _beyond_root(j.child, beam):
-            return f"joint '{j.name}'"
-    return _loaded_beyond_root(system, beam)
-
-
-def _check_exact(system: System, tree, b: FlexibleBeam) -> None:
-    """What the exact kinematics in a system (physics/exact_body.py) is derived for: a
-    planar beam (damped as a modal beam: its strain measures are linear in its coordinates) (uniform, or sections and point masses from finite-element data)
-    from which nothing hangs and on which no load acts beyond its root (their equations
-    would differentiate its quadrature positions in sympy), N and M its own
-    (EA eps, EI dphi/dx), and no output that needs its momentum (momentum, the reaction of a
-    tree joint it lies beyond, N or M from equilibrium of a beam it hangs from)."""
-    where = f"system '{system.name}': body '{b.name}': the exact kinematics (strain model 'exact')"
-    if system.dimension != 2:
-        raise SpecError(f"{where} is derived for planar systems only")
-    body = b.model.body
-    if body is not None and (body.matrices is not None or any(m.rotary for m in body.masses)):
-        raise SpecError(f"{where} is derived for a beam from its sections and point masses "
-                        "(not from imported matrices, nor with a point mass's rotary inertia)")
-    loaded = _loaded_beyond_root(system, b.name)
-    for j in system.joints:
-        if j.parent.partition(".")[0] == b.name and j.name not in tree.cut:
-            raise SpecError(f"{where}: joint '{j.name}' hangs a body from it (a loop may close "
-                            "on it; a body hanging from it is not derived yet)")
-    if loaded:
-        raise SpecError(f"{where}: {loaded} acts on it beyond its root (not derived yet)")
-    beyond = {j.name for j in system.joints if j.name not in tree.cut
-              and b.name in tree.subtree(system, j.name)}
-    for o in system.outputs:
-        fn, args = parse_output(system, o.quantity)
-        keys = {"M": ("moment",), "N": ("axial_force",), "sigma": ("moment", "axial_force")}.get(fn, ())
-        on_beam = keys and args[0] != b.name and any(
-            getattr(system.body(args[0]).model, k, "") == "equilibrium" for k in keys) and any(
-            j.parent.partition(".")[0] == args[0] for j in system.joints if j.name in beyond)
-        if fn == "momentum" or (fn == "reaction" and args[0] in beyond) or on_beam:
-            raise SpecError(f"{where}: output '{o.quantity}' needs its momentum, which is not "
-                            "derived yet")
-
-
 def check_derivable(system: System, tree=None) -> None:
     """Refuse, before any work, what the derivation does not support (one line)."""
     tree = tree or system.tree()
     where = f"system '{system.name}'"
     for b in system.bodies:
-        if b.flexible and b.model.kind == "modal" and STRAIN_MODELS[b.model.strain].kinematics == "exact":
-            _check_exact(system, tree, b)
-        if b.flexible and b.model.kind == "modal" and b.model.strain == "prestress":
-            held = _held_beyond_root(system, b.name)
-            if held:
-                raise SpecError(f"{where}: body '{b.name}': the prestress model's axial force is the "
-                                f"beam's own centrifugal load, which holds for a beam free beyond its "
-                                f"root; {held} loads it axially: use m2 or m3 (N from equilibrium), "
-                                "or ef")
-        body = getattr(b.model, "body", None) if b.flexible else None
-        if body is not None:  # the body's data are the beam's: markers and p must agree
-            ref = body.reference
-            given = (b.length, b.section.rho, b.section.E, b.section.A, b.section.I)
-            data = (body.length, ref.rho, ref.E, ref.A, ref.I)
-            if any(abs(x - y) > 1e-12 * abs(y) for x, y in zip(given, data)):
-                raise SpecError(f"{where}: body '{b.name}': length and section (rho, E, A, I) "
-                                f"{given} differ from its finite-element data's length and root "
-                                f"section {data}")
+        kind_of(b).check(system, tree, b)
     for load in system.loads:
         if not isinstance(load, (Gravity, PointForce, Torque, SpringDamper)):
             raise SpecError(f"{where}: load {type(load).__name__} is not derived yet")
@@ -404,12 +282,7 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
         if j.has_coordinate and j.name not in guided_by_joint:
             coords.append(Coordinate(j.name, "joint", body, j.name))
     for b in system.bodies:
-        if b.flexible and b.model.kind == "fe":
-            coords += [Coordinate(f"{b.name}_{c}", "node", b.name) for c in b.model.coordinates]
-        elif b.flexible:
-            refs = b.model.modes
-            for r in refs:
-                coords.append(Coordinate(f"{b.name}_{r.coordinate}", r.axis, b.name))
+        coords += [Coordinate(name, group, b.name) for name, group in kind_of(b).coordinates(b)]
     q = sp.Matrix([sp.Symbol(c.name, real=True) for c in coords])
     qd = sp.Matrix([sp.Symbol(c.name + "_d", real=True) for c in coords])
     qdd = sp.Matrix([sp.Symbol(c.name + "_dd", real=True) for c in coords])
@@ -420,32 +293,12 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
         joint_sym[g.joint] = g.symbols[:2]
     der = SystemDerivation(system, tree, coords, guided, q, qd, qdd, params)
 
-    # deformation fields of each flexible body, in its own coordinate symbols
+    # deformation parts (a flexible body's fields, in its own coordinate symbols), built once
+    qnames = [c.name for c in coords]
     for b in system.bodies:
-        if not b.flexible:
-            continue
-        if b.model.kind == "fe":
-            der.flex[b.name] = ef_part(b, psyms[b.name])
-            continue
-        spec = b.model.validate()
-        modes = {r.coordinate: spec.mode(r) for r in spec.modes}
-        names = list(modes)
-        sym = {n: sp.Symbol(f"{b.name}_{n}", real=True) for n in names}
-        symd = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in names}
-        symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n in names}
-        table = IntegralTable(modes) if spec.body is None else BodyIntegralTable(spec.body, modes)
-        strain = STRAIN_MODELS[spec.strain]
-        fields = build_fields([modes[r.coordinate] for r in spec.axial],
-                              [modes[r.coordinate] for r in spec.bending], sym, symd, table,
-                              strain.foreshortening, symdd)
-        args = (b, table, fields, modes, {r.coordinate: r.axis for r in spec.modes}, names,
-                psyms[b.name])
-        if strain.kinematics == "exact":
-            part = ExactPart(*args, index=[[c.name for c in coords].index(f"{b.name}_{n}") for n in names])
-            part.quad = body_quadrature(part)
+        part = kind_of(b).part(b, psyms.get(b.name), qnames)
+        if part is not None:
             der.flex[b.name] = part
-        else:
-            der.flex[b.name] = FlexPart(*args)
 
     # kinematics: poses in tree order
     for body in tree.order:
@@ -456,85 +309,16 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
             P, phiP = marker_pose(der, j.parent)
         c = joint_sym.get(j.name, (sp.Integer(0),))[0]
         off = exact(j.offset)
-        b = system.body(body)
-        mc = system.marker(j.child)[1]
-        mloc = sp.Matrix([exact(mc.x), exact(mc.y)])
         P, phi = planar_frame(KINDS[j.kind], P, phiP, off, [c], lambda a: _axis_direction(j, a))
-        R = P - (_rot(phi) * mloc if not b.flexible else sp.zeros(2, 1))
-        der.poses[body] = Pose(phi, R)
+        der.poses[body] = Pose(phi, kind_of(system.body(body)).origin(P, phi, system.marker(j.child)[1]))
 
     # energies and forces
     g = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), None)
     gvec = sp.Matrix([exact(x) for x in g]) if g is not None else sp.zeros(2, 1)
-    V_grav = sp.Integer(0)
-    Q = sp.zeros(len(coords), 1)
+    der.V_grav, der.Q = sp.Integer(0), sp.zeros(len(coords), 1)  # summed by the bodies' kinds
     for b in system.bodies:
-        pose = der.poses[b.name]
-        A_ = _rot(pose.angle)
-        omega = der.ddt(pose.angle)
-        Rdot = der.ddt(pose.R)
-        if not b.flexible:
-            G = pose.R + A_ * sp.Matrix([exact(x) for x in b.com])
-            vG = der.ddt(G)
-            m, J = exact(b.mass), exact(b.inertia)
-            der.T += m * vG.dot(vG) / 2 + J * omega**2 / 2
-            V_grav += -m * gvec.dot(G)
-            der.momentum += m * _cross(G, vG) + J * omega
-            der.mass[b.name], der.first_moment[b.name] = m, m * G
-            der.body_momentum[b.name] = m * _cross(G, vG) + J * omega
-            continue
-        part = der.flex[b.name]
-        ph = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
-        Vloc, Rloc, gloc = A_.T * Rdot, A_.T * pose.R, A_.T * gvec
-        actual = {ph[0]: omega, ph[1]: Vloc[0], ph[2]: Vloc[1], ph[3]: Rloc[0], ph[4]: Rloc[1],
-                  ph[5]: gloc[0], ph[6]: gloc[1]}
-        mass = BEAM_PARAMS[0].symbol * BEAM_PARAMS[2].symbol * BEAM_PARAMS[4].symbol
-        if isinstance(part, EfPart):
-            Vg_, H_ = part.energies()
-            der.ef_kinetic.append(EfKinetic(b.name, omega, (Vloc[0], Vloc[1])))
-            der.T += part.point_mass_kinetic().xreplace(actual)  # elements' T: sysgen, by AD
-            V_grav += Vg_.xreplace(actual) - part.mass * gvec.dot(pose.R)
-            der.momentum += H_.xreplace(actual)
-            _record_body(der, b.name, part.mass, pose, A_,
-                         [-sp.diff(Vg_, gk).xreplace(actual) for gk in ph[5:]],
-                         H_.xreplace(actual))
-            der.elastic.append(part)
-            der.terms.append((b.name, "ancf_elastic", ("node",), None, None))
-            if b.damped:
-                alpha, beta = (_exact_number(getattr(b.damping, k)) for k in ("alpha", "beta"))
-                der.ef_damping[b.name] = (alpha, beta)
-                der.dissipation[b.name] = part.point_mass_dissipation(alpha)
-            continue
-        frame = FrameMotion(ph[0], ph[1], ph[2])
-        tab, fl = part.table, part.fields
-
-        def body_expr(expr, tab=tab, part=part, actual=actual):
-            values = {} if integral_symbols else tab.substitutions()
-            return expr.xreplace(values).xreplace(part.psyms).xreplace(actual)
-
-        mass = mass * tab.integrate(fl.weights["mu"])  # 1 for a uniform beam; a body's own
-        if isinstance(part, ExactPart):  # T and the deformation's gravity: exact_body (casadi)
-            part.frame = (omega, Vloc[0], Vloc[1], gloc[0], gloc[1], Rloc[0], Rloc[1])
-            der.exact_bodies.append(part)
-        else:
-            der.T += body_expr(tab.integrate(kinetic_density(fl, frame)))
-            V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
-                - body_expr(mass) * gvec.dot(pose.R)
-            H_ = body_expr(tab.integrate(momentum_density(fl, frame, ph[3], ph[4])))
-            der.momentum += H_
-            Ig = tab.integrate(gravity_density(fl, ph[5], ph[6]))  # linear in g: -g.(first moment)
-            _record_body(der, b.name, body_expr(mass), pose, A_,
-                         [body_expr(-sp.diff(Ig, gk)) for gk in ph[5:]], H_)
-        strain = STRAIN_MODELS[b.model.strain]
-        for term_name, wrt in strain.terms:
-            term = ENERGY_TERMS[term_name]
-            V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
-            Qk = generalized_force(V, q, [c.body == b.name and c.group in wrt for c in coords])
-            der.terms.append((b.name, term_name, wrt, V, Qk))
-            der.V += V
-            Q += Qk
-        if b.damped:
-            der.dissipation[b.name] = _modal_dissipation(b, part, body_expr)
+        kind_of(b).contribute(der, b, BodyFrame.of(der, der.poses[b.name], gvec), integral_symbols)
+    V_grav, Q = der.V_grav, der.Q
     for D in der.dissipation.values():
         Q -= sp.Matrix([sp.diff(D, xd) for xd in qd])
     der.V += V_grav
@@ -551,41 +335,6 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
     return der
-
-
-def _exact_number(x) -> sp.Rational:
-    """A damping value as the exact rational of its decimal representation."""
-    return sp.Rational(repr(float(x)))
-
-
-def _modal_dissipation(b: FlexibleBeam, part: FlexPart, body_expr) -> sp.Expr:
-    """D of a damped modal beam (module doc): the strain-rate and relative kinetic energies of
-    the undeformed beam's elastic rates (the fields linear in the rates: no foreshortening)."""
-    spec, tab = b.model, part.table
-    rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in part.coords}
-    rf = build_fields([part.modes[r.coordinate] for r in spec.axial],
-                      [part.modes[r.coordinate] for r in spec.bending], rate, rate, tab, False)
-    K2 = body_expr(tab.integrate(ENERGY_TERMS["axial"].density(rf) + ENERGY_TERMS["bending"].density(rf)))
-    M2 = body_expr(tab.integrate(kinetic_density(rf, FrameMotion(sp.Integer(0)))))
-    return damping_dissipation(b.damping, K2, M2, [rate[n] for n in part.coords])
-
-
-def damping_dissipation(d, K2: sp.Expr, M2: sp.Expr, rates: list) -> sp.Expr:
-    """D of a damped modal beam in both dimensions (module doc) from its strain-rate and
-    relative kinetic energies K2, M2 (the undeformed beam's, quadratic in its elastic rates):
-    beta K2 + alpha M2 + a dashpot 2 zeta_i omega_i m_i on each rate."""
-    D = _exact_number(d.beta) * K2 + _exact_number(d.alpha) * M2
-    for qd, z in zip(rates, d.zetas(len(rates))):
-        if z:
-            c = 2 * _exact_number(z) * sp.sqrt(sp.diff(K2, qd, 2) * sp.diff(M2, qd, 2))
-            D += c * qd**2 / 2
-    return sp.expand(D)
-
-
-def _record_body(der, name, mass, pose, A_, local_moment, H) -> None:
-    der.mass[name] = mass
-    der.first_moment[name] = mass * pose.R + A_ * sp.Matrix(local_moment)
-    der.body_momentum[name] = H
 
 
 def _side(der: SystemDerivation, joint, side: str) -> tuple[sp.Matrix, sp.Expr]:
@@ -628,7 +377,7 @@ def _applied_forces(der: SystemDerivation, wrt) -> sp.Matrix:
             r, _phi = marker_pose(der, load.marker)
             F = sp.Matrix([exact(load.fx), exact(load.fy)])
             if load.frame == "body":
-                F = _rot(der.poses[body].angle) * F
+                F = rot(der.poses[body].angle) * F
             Q += sp.Matrix([F.dot(r.diff(x)) for x in wrt])
         elif isinstance(load, Torque):
             tau = parse_expression(load.expression, env, f"torque on '{load.body}'")
@@ -695,35 +444,12 @@ def marker_pose(der: SystemDerivation, ref: str) -> tuple[sp.Matrix, sp.Expr]:
     """Ground position and angle of 'body.marker' (on a beam: the deformed axis point and its
     tangent angle phi + v_x, linear in the slope as the modal kinematics)."""
     body, m = der.system.marker(ref)
-    pose = der.poses[body]
-    b = der.system.body(body)
-    if not b.flexible:
-        return pose.R + _rot(pose.angle) * sp.Matrix([exact(m.x), exact(m.y)]), pose.angle
-    u, v, slope = beam_fields_at(der, body, m.x)
-    return pose.R + _rot(pose.angle) * sp.Matrix([_x(der, body, m.x) + u, v]), pose.angle + slope
-
-
-def _x(der, body, x):
-    part = der.flex[body]
-    return exact(x) / exact(part.beam.length) * part.psyms[BEAM_PARAMS[4].symbol]
+    return kind_of(der.system.body(body)).marker_pose(der, body, m)
 
 
 def beam_fields_at(der: SystemDerivation, body: str, x: float):
     """(u, v, v_x) at x on a flexible body, in its frame and coordinate symbols."""
-    part = der.flex[body]
-    if isinstance(part, EfPart):
-        rx, ry, slope = part.position(x)
-        return rx - _x(der, body, x), ry, slope
-    at = exact(x) / exact(part.beam.length)
-    view = part.view()
-    L_ = part.psyms[BEAM_PARAMS[4].symbol]
-
-    def fa(e):
-        return field_at(view, e, at).xreplace(part.table.substitutions()).xreplace(part.psyms)
-    if isinstance(part, ExactPart):  # the section angle is the slope field, exactly
-        rx, ry = position_symbols(part, der.casadi_outputs, x)
-        return rx - _x(der, body, x), ry, fa(part.fields.v_s) / L_
-    return fa(part.fields.u), fa(part.fields.v), fa(part.fields.v_s) / L_
+    return kind_of(der.system.body(body)).fields_at(der, body, x)
 
 
 def joint_coordinate(der: SystemDerivation, joint: str, rate: bool, where: str,
@@ -776,9 +502,9 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
             ut, vt, _ = beam_fields_at(der, beam.name, beam.length)
             u0, v0, _ = beam_fields_at(der, beam.name, 0.0)
             p0 = sp.Matrix([u0, v0])
-            d = sp.Matrix([_x(der, beam.name, beam.length) + ut, vt]) - p0
-            r = sp.Matrix([_x(der, beam.name, x) + u, v]) - p0
-            return _cross(d, r) / sp.sqrt(d.dot(d))
+            d = sp.Matrix([station(der, beam.name, beam.length) + ut, vt]) - p0
+            r = sp.Matrix([station(der, beam.name, x) + u, v]) - p0
+            return cross(d, r) / sp.sqrt(d.dot(d))
         return _stress(der, beam, x, fn, where)
     if fn == "sigma":  # sigma = N/A - M y/I (M = EI v'' > 0 shortens the fibres at y > 0)
         beam = system.body(args[0])
@@ -794,20 +520,12 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
 
 
 def _stress(der, beam, x, fn, where):
-    part = der.flex[beam.name]
-    if isinstance(part, EfPart):
-        return part.stress(fn, x)
-    frac = exact(x) / exact(beam.length)
-    spec = replace(beam.model, points=(("o", str(frac)),))
-    if (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium":
+    """N or M at station x: from the equilibrium of the part beyond it, or the kind's own
+    (its strain's: EA eps, EI kappa)."""
+    kind = kind_of(beam)
+    if kind.from_equilibrium(beam, fn):
         return _equilibrium_stress(der, beam, x, fn)
-    if fn == "N" and not spec.axial and spec.strain != "prestress":
-        raise SpecError(f"{where}: strain model '{spec.strain}' has no axial coordinate to carry "
-                        "an axial force")
-    view = SimpleNamespace(spec=spec, table=part.table, modes=part.modes, fields=part.fields)
-    expr = output_expression(view, f"{fn}_o")
-    omega = der.ddt(der.poses[beam.name].angle)
-    return expr.xreplace(part.table.substitutions()).xreplace(part.psyms).xreplace({w: omega})
+    return kind.own_stress(der, beam, x, fn, where)
 
 
 def length_param(der: SystemDerivation) -> int:
@@ -862,7 +580,7 @@ def _external_loads(der: SystemDerivation, bodies: set[str]) -> tuple[sp.Matrix,
     def add(force, at):
         nonlocal F, Mo
         F += force
-        Mo += _cross(at, force)
+        Mo += cross(at, force)
 
     def inside(ref):
         return ref != GROUND and system.marker(ref)[0] in bodies
@@ -872,13 +590,13 @@ def _external_loads(der: SystemDerivation, bodies: set[str]) -> tuple[sp.Matrix,
         gvec = sp.Matrix([exact(x) for x in g])
         for b in bodies:
             F += der.mass[b] * gvec
-            Mo += _cross(der.first_moment[b], gvec)
+            Mo += cross(der.first_moment[b], gvec)
     for load in system.loads:
         if isinstance(load, PointForce) and inside(load.marker):
             body, _ = system.marker(load.marker)
             force = sp.Matrix([exact(load.fx), exact(load.fy)])
             if load.frame == "body":
-                force = _rot(der.poses[body].angle) * force
+                force = rot(der.poses[body].angle) * force
             add(force, marker_pose(der, load.marker)[0])
         elif isinstance(load, Torque) and load.body in bodies:
             Mo += parse_expression(load.expression, tuple(env), f"torque on '{load.body}'")
@@ -924,7 +642,7 @@ def joint_reaction(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp
     S = sum((der.first_moment[b] for b in bodies), sp.zeros(2, 1))
     H = sp.Add(*[der.body_momentum[b] for b in bodies])
     F = der.ddt(S, 2) - Fe
-    M = der.ddt(H) - Me - _cross(P, F)
+    M = der.ddt(H) - Me - cross(P, F)
     return F, M, P
 
 
@@ -952,7 +670,7 @@ def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix
         if isinstance(load, PointForce) and beyond(load.marker):
             F = sp.Matrix([exact(load.fx), exact(load.fy)])
             if load.frame == "body":
-                F = _rot(der.poses[beam.name].angle) * F
+                F = rot(der.poses[beam.name].angle) * F
             out.append((F, sp.Integer(0), marker_pose(der, load.marker)[0]))
         elif isinstance(load, SpringDamper) and (beyond(load.a) or beyond(load.b)):
             Fa = spring_force_on_a(der, load, _spring_ends(der, load))
@@ -967,45 +685,11 @@ def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Ex
     frame's actual motion and gravity: the inertial loads -rho A (a - g) (a in frame
     components: A^T R'' + the relative, Coriolis, angular and centripetal terms, as
     outputs._equilibrium_* for a guided hub) and the loads on its markers beyond x (joint
-    reactions, point forces). N: their frame-x component (tension > 0), M: their moment about
-    the section point (point rotary inertias' couples included)."""
-    part = der.flex[beam.name]
-    if isinstance(part, ExactPart):  # the inertial loads over its quadrature (casadi)
-        pose = der.poses[beam.name]
-        Arot = _rot(pose.angle)
-        u, v, slope = beam_fields_at(der, beam.name, x)
-        tangent = sp.Matrix([sp.cos(slope), sp.sin(slope)])  # the section's axis, frame components
-        section = pose.R + Arot * sp.Matrix([_x(der, beam.name, x) + u, v])
-        out = inertial_section_load(part, der.casadi_outputs, x, fn)
-        for F, tau, P in _loads_beyond(der, beam, x):
-            out += (Arot.T * F).dot(tangent) if fn == "N" else _cross(P - section, F) + tau
-        return out
-    rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
-    f, tab = part.fields, part.table
-    om, al, a0x, a0y, gx, gy = sp.symbols("Om_ Al_ A0x_ A0y_ gx_ gy_", real=True)
-    at = exact(x) / exact(beam.length)
-    X = L_ * s + f.u
-    ax = a0x - gx + f.u_ddot - 2 * om * f.v_dot - al * f.v - om**2 * X
-    ay = a0y - gy + f.v_ddot + 2 * om * f.u_dot + al * X - om**2 * f.v
-    view = part.view()
-    if fn == "N":
-        out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * ax, at, 1)
-    else:
-        dx = X - L_ * at - field_at(view, f.u, at)
-        dy = f.v - field_at(view, f.v, at)
-        out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * (dx * ay - dy * ax), at, 1)
-        if f.weights["rot"] != 0:
-            out -= rho_ * A_ * L_**3 * tab.integrate(f.weights["rot"] * (al + f.v_ddot_s / L_), at, 1)
-    pose = der.poses[beam.name]
-    Arot = _rot(pose.angle)
-    omega = der.ddt(pose.angle)
-    a0 = Arot.T * der.ddt(pose.R, 2)
-    g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
-    gl = Arot.T * sp.Matrix([exact(c) for c in g])
-    actual = {om: omega, al: der.ddt(omega), a0x: a0[0], a0y: a0[1], gx: gl[0], gy: gl[1]}
-    out = out.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
-    u, v, _ = beam_fields_at(der, beam.name, x)
-    section = pose.R + Arot * sp.Matrix([_x(der, beam.name, x) + u, v])
+    reactions, point forces). N: their component along the section's axis (tension > 0), M:
+    their moment about the section point (point rotary inertias' couples included). The
+    inertial part is the kind's (inertial_stress)."""
+    out, section, axis = kind_of(beam).inertial_stress(der, beam, x, fn)
+    Arot = rot(der.poses[beam.name].angle)
     for F, tau, P in _loads_beyond(der, beam, x):
-        out += (Arot.T * F)[0] if fn == "N" else _cross(P - section, F) + tau
+        out += (Arot.T * F).dot(axis) if fn == "N" else cross(P - section, F) + tau
     return out

@@ -1,5 +1,5 @@
 """A beam with exact kinematics (strain model `exact`, physics/exact.py) as a body of a planar
-system, its floating frame moved by the system (physics/assemble.ExactPart).
+system, its floating frame moved by the system (physics/body_kinds/exact.ExactPart).
 
 Its strain energy is the modal beam's (quadratic: sympy, as every modal body's). What the exact
 kinematics changes lives in casadi, over the beam's composite Gauss rule (exact.Quadrature):

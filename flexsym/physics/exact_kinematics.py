@@ -132,7 +132,7 @@ def _shape_derivative(mode, order: int, at: np.ndarray) -> np.ndarray:
 class ExactKinematics:
     """The exact kinematics of one beam in casadi, from its coordinate names (`coords`, in the
     order of its coordinate vector), their mode shapes (`modes`) and groups (`groups`: axial or
-    bending): the one-beam derivation's and a system body's (physics/assemble.ExactPart).
+    bending): the one-beam derivation's and a system body's (physics/body_kinds/exact.ExactPart).
     A beam from finite-element data (`fe_body`) has sections that change along it and point
     masses: its rule is broken at both (edges), its mass per point scaled by rho A (mass_weights),
     and its fields carry rows for the point masses after the quadrature nodes."""

@@ -84,8 +84,8 @@ from flexsym.model.system import (GROUND, SECOND, FlexibleBeam, Gravity, PointFo
                                   System, Torque, beam_coordinates, beam_station, length_scale, parse_output,
                                   section_at, section_point)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
-                                      damping_dissipation, joint_coordinate, spring_force_on_a,
-                                      start_of, violation)
+                                      joint_coordinate, spring_force_on_a, start_of, violation)
+from flexsym.physics.body_kinds.modal import damping_dissipation
 from flexsym.model.fedata import (body_mode, load_case_forces, load_case_scale, load_case_stiffness, locate,
                                   round_sig)
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
@@ -408,7 +408,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
             der.terms.append((b.name, term_name, wrt, Vt, Qk))
             der.V += Vt
             Q_ += Qk
-        if b.damped:  # D in the elastic rates (assemble.damping_dissipation), Q -= dD/dq'
+        if b.damped:  # D in the elastic rates (body_kinds.modal.damping_dissipation), Q -= dD/dq'
             der.dissipation[b.name] = _dissipation(b, P, table, integral, der.spatial[b.name]["keys"])
             Q_ -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,

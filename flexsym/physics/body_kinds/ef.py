@@ -1,0 +1,62 @@
+"""An `ef` beam (planar ANCF cable elements, physics/efbody.py) as a body: its nodal
+coordinates; point masses' T, gravity and momentum in sympy, the elements' T and elastic
+energy (and damping) in casadi by sysgen (der.ef_kinetic, der.elastic, der.ef_damping)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from flexsym.physics.body_kinds.base import BeamKind, exact_number, record_body, station
+from flexsym.physics.efbody import ef_part
+
+
+@dataclass
+class EfKinetic:
+    """An ef body's frame motion in frame components (omega, V = A^T R'), which sysgen feeds
+    to the generic element's kinetic energy (efbody.generic_element) per element."""
+
+    body: str
+    omega: sp.Expr
+    V: tuple[sp.Expr, sp.Expr]
+
+
+class Ef(BeamKind):
+    name = "ef"
+
+    def applies(self, body) -> bool:
+        return body.flexible and body.model.kind == "fe"
+
+    def coordinates(self, b) -> list[tuple[str, str]]:
+        return [(f"{b.name}_{c}", "node") for c in b.model.coordinates]
+
+    def part(self, b, psyms: dict, qnames: list[str]):
+        return ef_part(b, psyms)
+
+    def contribute(self, der, b, frame, integral_symbols: bool) -> None:
+        part = der.flex[b.name]
+        loc = frame.local()
+        ph, actual = loc.ph, loc.actual
+        Vg_, H_ = part.energies()
+        der.ef_kinetic.append(EfKinetic(b.name, frame.omega, (loc.V[0], loc.V[1])))
+        der.T += part.point_mass_kinetic().xreplace(actual)  # elements' T: sysgen, by AD
+        der.V_grav += Vg_.xreplace(actual) - part.mass * frame.g.dot(frame.pose.R)
+        der.momentum += H_.xreplace(actual)
+        record_body(der, b.name, part.mass, frame.pose, frame.A,
+                    [-sp.diff(Vg_, gk).xreplace(actual) for gk in ph[5:]], H_.xreplace(actual))
+        der.elastic.append(part)
+        der.terms.append((b.name, "ancf_elastic", ("node",), None, None))
+        if b.damped:
+            alpha, beta = (exact_number(getattr(b.damping, k)) for k in ("alpha", "beta"))
+            der.ef_damping[b.name] = (alpha, beta)
+            der.dissipation[b.name] = part.point_mass_dissipation(alpha)
+
+    def fields_at(self, der, body: str, x: float):
+        rx, ry, slope = der.flex[body].position(x)
+        return rx - station(der, body, x), ry, slope
+
+    def own_stress(self, der, beam, x: float, fn: str, where: str) -> sp.Expr:
+        return der.flex[beam.name].stress(fn, x)
+
+
+KIND = Ef()

@@ -1,0 +1,239 @@
+"""A modal beam: its elastic coordinates are the amplitudes of its modes; T, gravity and
+momentum are densities (physics/energy.py) integrated over the beam by its integral table,
+in frame components with the frame's actual motion; its strain terms and their `wrt` groups
+are the strain model's. A uniform beam and a beam from finite-element data are one kind: the
+data only change the table (IntegralTable or BodyIntegralTable, with rho A (x) and point
+masses in its weights).
+
+Structural damping: D = beta/2 int (EA u_x'^2 + EI v_xx'^2) dx + alpha/2 q'^T M_ee q'
++ sum_i c_i q_i'^2/2, c_i = 2 zeta_i sqrt(K_ii M_ii) (physics/assemble.py's module doc).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+
+import sympy as sp
+
+from flexsym.core.errors import SpecError
+from flexsym.model.exact_numbers import exact
+from flexsym.model.strain_models import STRAIN_MODELS
+from flexsym.model.modes import s
+from flexsym.model.system import FlexibleBeam, Gravity
+from flexsym.physics.body_kinds.base import BeamKind, exact_number, record_body, rot, station
+from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
+                                    gravity_density, kinetic_density, momentum_density, w)
+from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
+from flexsym.physics.lagrange import generalized_force
+from flexsym.physics.outputs import field_at, output_expression
+
+
+@dataclass
+class FlexPart:
+    """A flexible body's deformation: its table, fields (in this body's symbols), modes."""
+
+    beam: FlexibleBeam
+    table: IntegralTable
+    fields: object
+    modes: dict
+    groups: dict  # mode name -> 'axial' | 'bending'
+    coords: list  # mode names in order
+    psyms: dict  # global beam parameter symbol -> this body's symbol
+
+    def view(self):
+        """What outputs.field_at / output_expression read (a derivation-like object)."""
+        return SimpleNamespace(spec=self.beam.model, table=self.table, modes=self.modes,
+                               fields=self.fields)
+
+
+def _beyond_root(ref, beam: str) -> bool:
+    return isinstance(ref, str) and ref.partition(".")[0] == beam and ref.partition(".")[2] != "root"
+
+
+def loaded_beyond_root(system, beam: str) -> str:
+    """The first force or spring acting on the beam anywhere but at its root ('' if none)."""
+    for load in system.loads:
+        if any(_beyond_root(getattr(load, k, ""), beam) for k in ("marker", "a", "b")):
+            return f"load '{load.name or type(load).__name__}'"
+    return ""
+
+
+def _held_beyond_root(system, beam: str) -> str:
+    """The first joint, force or spring acting on the beam anywhere but at its root ('' if none)."""
+    for j in system.joints:
+        if _beyond_root(j.parent, beam) or _beyond_root(j.child, beam):
+            return f"joint '{j.name}'"
+    return loaded_beyond_root(system, beam)
+
+
+def field_reader(part: FlexPart, x: float):
+    """e -> the field expression e at station x, in the body's coordinate and parameter symbols."""
+    at = exact(x) / exact(part.beam.length)
+    view = part.view()
+
+    def fa(e):
+        return field_at(view, e, at).xreplace(part.table.substitutions()).xreplace(part.psyms)
+    return fa
+
+
+class Modal(BeamKind):
+    name = "modal"
+
+    def applies(self, body) -> bool:
+        return (body.flexible and body.model.kind == "modal"
+                and STRAIN_MODELS[body.model.strain].kinematics != "exact")
+
+    def coordinates(self, b) -> list[tuple[str, str]]:
+        return [(f"{b.name}_{r.coordinate}", r.axis) for r in b.model.modes]
+
+    def check(self, system, tree, b) -> None:
+        if b.model.strain == "prestress":
+            held = _held_beyond_root(system, b.name)
+            if held:
+                raise SpecError(f"system '{system.name}': body '{b.name}': the prestress model's axial "
+                                f"force is the beam's own centrifugal load, which holds for a beam free "
+                                f"beyond its root; {held} loads it axially: use m2 or m3 (N from "
+                                "equilibrium), or ef")
+        super().check(system, tree, b)
+
+    @staticmethod
+    def part_args(b, psyms: dict) -> tuple:
+        """FlexPart's arguments: the body, its table, its fields in its own coordinate symbols,
+        its modes, their groups and names, its parameters' symbols."""
+        spec = b.model.validate()
+        modes = {r.coordinate: spec.mode(r) for r in spec.modes}
+        names = list(modes)
+        sym = {n: sp.Symbol(f"{b.name}_{n}", real=True) for n in names}
+        symd = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in names}
+        symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n in names}
+        table = IntegralTable(modes) if spec.body is None else BodyIntegralTable(spec.body, modes)
+        strain = STRAIN_MODELS[spec.strain]
+        fields = build_fields([modes[r.coordinate] for r in spec.axial],
+                              [modes[r.coordinate] for r in spec.bending], sym, symd, table,
+                              strain.foreshortening, symdd)
+        return (b, table, fields, modes, {r.coordinate: r.axis for r in spec.modes}, names, psyms)
+
+    def part(self, b, psyms: dict, qnames: list[str]):
+        return FlexPart(*self.part_args(b, psyms))
+
+    def contribute(self, der, b, frame, integral_symbols: bool) -> None:
+        """Its inertia (`inertia`: what the exact kind replaces), then its strain terms, each
+        differentiated with respect to its `wrt` groups only, and its damping."""
+        part = der.flex[b.name]
+        loc = frame.local()
+        ph, actual = loc.ph, loc.actual
+        mass = BEAM_PARAMS[0].symbol * BEAM_PARAMS[2].symbol * BEAM_PARAMS[4].symbol
+        tab, fl = part.table, part.fields
+
+        def body_expr(expr):  # the table's integrals (or their symbols), this body's symbols
+            values = {} if integral_symbols else tab.substitutions()
+            return expr.xreplace(values).xreplace(part.psyms).xreplace(actual)
+
+        mass = mass * tab.integrate(fl.weights["mu"])  # 1 for a uniform beam; a body's own
+        self.inertia(der, b, part, frame, loc, body_expr, mass)
+        strain = STRAIN_MODELS[b.model.strain]
+        for term_name, wrt in strain.terms:
+            term = ENERGY_TERMS[term_name]
+            V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
+            Qk = generalized_force(V, der.q, [c.body == b.name and c.group in wrt for c in der.coords])
+            der.terms.append((b.name, term_name, wrt, V, Qk))
+            der.V += V
+            der.Q += Qk
+        if b.damped:
+            der.dissipation[b.name] = _modal_dissipation(b, part, body_expr)
+
+    def inertia(self, der, b, part, frame, loc, body_expr, mass) -> None:
+        """T, V_g and the momentum: the densities integrated by the table."""
+        ph = loc.ph
+        tab, fl = part.table, part.fields
+        motion = FrameMotion(ph[0], ph[1], ph[2])
+        der.T += body_expr(tab.integrate(kinetic_density(fl, motion)))
+        der.V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
+            - body_expr(mass) * frame.g.dot(frame.pose.R)
+        H_ = body_expr(tab.integrate(momentum_density(fl, motion, ph[3], ph[4])))
+        der.momentum += H_
+        Ig = tab.integrate(gravity_density(fl, ph[5], ph[6]))  # linear in g: -g.(first moment)
+        record_body(der, b.name, body_expr(mass), frame.pose, frame.A,
+                    [body_expr(-sp.diff(Ig, gk)) for gk in ph[5:]], H_)
+
+    def fields_at(self, der, body: str, x: float):
+        part = der.flex[body]
+        fa = field_reader(part, x)
+        L_ = part.psyms[BEAM_PARAMS[4].symbol]
+        return fa(part.fields.u), fa(part.fields.v), fa(part.fields.v_s) / L_
+
+    def from_equilibrium(self, beam, fn: str) -> bool:
+        return (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium"
+
+    def own_stress(self, der, beam, x: float, fn: str, where: str) -> sp.Expr:
+        """N = EA eps (or the prestress model's), M = EI v'' (outputs.output_expression)."""
+        part = der.flex[beam.name]
+        frac = exact(x) / exact(beam.length)
+        spec = replace(beam.model, points=(("o", str(frac)),))
+        if fn == "N" and not spec.axial and spec.strain != "prestress":
+            raise SpecError(f"{where}: strain model '{spec.strain}' has no axial coordinate to carry "
+                            "an axial force")
+        view = SimpleNamespace(spec=spec, table=part.table, modes=part.modes, fields=part.fields)
+        expr = output_expression(view, f"{fn}_o")
+        omega = der.ddt(der.poses[beam.name].angle)
+        return expr.xreplace(part.table.substitutions()).xreplace(part.psyms).xreplace({w: omega})
+
+    def inertial_stress(self, der, beam, x: float, fn: str):
+        """The inertial loads -rho A (a - g) beyond x (a in frame components: A^T R'' + the
+        relative, Coriolis, angular and centripetal terms, as outputs._equilibrium_* for a
+        guided hub) integrated by the table; N along the frame's x axis."""
+        part = der.flex[beam.name]
+        rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
+        f, tab = part.fields, part.table
+        om, al, a0x, a0y, gx, gy = sp.symbols("Om_ Al_ A0x_ A0y_ gx_ gy_", real=True)
+        at = exact(x) / exact(beam.length)
+        X = L_ * s + f.u
+        ax = a0x - gx + f.u_ddot - 2 * om * f.v_dot - al * f.v - om**2 * X
+        ay = a0y - gy + f.v_ddot + 2 * om * f.u_dot + al * X - om**2 * f.v
+        view = part.view()
+        if fn == "N":
+            out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * ax, at, 1)
+        else:
+            dx = X - L_ * at - field_at(view, f.u, at)
+            dy = f.v - field_at(view, f.v, at)
+            out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * (dx * ay - dy * ax), at, 1)
+            if f.weights["rot"] != 0:
+                out -= rho_ * A_ * L_**3 * tab.integrate(f.weights["rot"] * (al + f.v_ddot_s / L_), at, 1)
+        pose = der.poses[beam.name]
+        Arot = rot(pose.angle)
+        omega = der.ddt(pose.angle)
+        a0 = Arot.T * der.ddt(pose.R, 2)
+        g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
+        gl = Arot.T * sp.Matrix([exact(c) for c in g])
+        actual = {om: omega, al: der.ddt(omega), a0x: a0[0], a0y: a0[1], gx: gl[0], gy: gl[1]}
+        out = out.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
+        u, v, _ = self.fields_at(der, beam.name, x)
+        section = pose.R + Arot * sp.Matrix([station(der, beam.name, x) + u, v])
+        return out, section, sp.Matrix([1, 0])
+
+
+def _modal_dissipation(b: FlexibleBeam, part: FlexPart, body_expr) -> sp.Expr:
+    """D of a damped modal beam (module doc): the strain-rate and relative kinetic energies of
+    the undeformed beam's elastic rates (the fields linear in the rates: no foreshortening)."""
+    spec, tab = b.model, part.table
+    rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in part.coords}
+    rf = build_fields([part.modes[r.coordinate] for r in spec.axial],
+                      [part.modes[r.coordinate] for r in spec.bending], rate, rate, tab, False)
+    K2 = body_expr(tab.integrate(ENERGY_TERMS["axial"].density(rf) + ENERGY_TERMS["bending"].density(rf)))
+    M2 = body_expr(tab.integrate(kinetic_density(rf, FrameMotion(sp.Integer(0)))))
+    return damping_dissipation(b.damping, K2, M2, [rate[n] for n in part.coords])
+
+
+def damping_dissipation(d, K2: sp.Expr, M2: sp.Expr, rates: list) -> sp.Expr:
+    """D of a damped modal beam in both dimensions (module doc) from its strain-rate and
+    relative kinetic energies K2, M2 (the undeformed beam's, quadratic in its elastic rates):
+    beta K2 + alpha M2 + a dashpot 2 zeta_i omega_i m_i on each rate."""
+    D = exact_number(d.beta) * K2 + exact_number(d.alpha) * M2
+    for qd, z in zip(rates, d.zetas(len(rates))):
+        if z:
+            c = 2 * exact_number(z) * sp.sqrt(sp.diff(K2, qd, 2) * sp.diff(M2, qd, 2))
+            D += c * qd**2 / 2
+    return sp.expand(D)
+
+
+KIND = Modal()
