@@ -24,6 +24,7 @@ def five(family: str) -> list:
     ("slider_crank", "rod", "pp"),          # pinned to the crank, and to the slider by a cut pin
     ("four_bar", "coupler", "pp"),
     ("offset_slider_crank", "rod", "pp"),
+    ("flex_rocker", "rocker", "pp"),        # pinned to ground, the loop closed at its tip
     ("pendulum", "beam", "pf"),             # pinned to ground, free tip
     ("hub", "beam", "cf"),                  # clamped to the hub
     ("stepped_hub", "blade", "cf"),         # clamped, and from finite-element data
