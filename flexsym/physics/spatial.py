@@ -3,16 +3,16 @@ spanning tree (sympy): the 3D sibling of assemble.py, producing the same SystemD
 that sysgen.py, the templates and the runtime take it unchanged.
 
 What is derived so far: rigid bodies, modal beams (uniform, or from finite-element data:
-fedata.BeamBody, below) and the geometrically exact `ef` (spatial_ef.py) joined in a tree by
-revolute, prismatic, cylindrical and universal joints (turns and slides in series about axes
-fixed in the frame they move; axis_motion), spherical joints (Euler parameters on |e| = 1, a
-constraint row) and clamps, with loops closed by spherical, universal, revolute, prismatic,
-cylindrical joints and clamps (_cut_rows: one mechanism, the kinds as data, SPATIAL_CUT_ROWS),
-guided or
-motor-driven, under gravity, point forces, torques and spring-dampers, modal beams with
-structural damping; a body may hang from a rigid body or from a modal beam's marker (the
-deformed section's frame, _section_frame). What is not (an ef beam's damping, ...) is refused
-up front by System.validate.
+fedata.BeamBody, below) and the geometrically exact `ef` (spatial_ef.py), each through its kind
+(physics/body_kinds/spatial/: the loop over the bodies asks the kind, never the body), joined
+in a tree by revolute, prismatic, cylindrical and universal joints (turns and slides in series
+about axes fixed in the frame they move; axis_motion), spherical joints (Euler parameters on
+|e| = 1, a constraint row) and clamps, with loops closed by spherical, universal, revolute,
+prismatic, cylindrical joints and clamps (_cut_rows: one mechanism, the kinds as data,
+SPATIAL_CUT_ROWS), guided or motor-driven, under gravity, point forces, torques and
+spring-dampers, modal beams with structural damping; a body may hang from a rigid body or from
+a modal beam's marker (the deformed section's frame, body_kinds/spatial/modal._section_frame).
+What is not (an ef beam's damping, ...) is refused up front by System.validate.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
@@ -46,9 +46,9 @@ out, as the spatial benchmarks define it):
     rotation about the axes across the beam).
 A beam from finite-element data: each term carries its section distribution (the table's
 weights: rho A with the point masses, EA, EI_z, EI_y, GJ, rho (I_y + I_z)), each plane and the
-torsion have their own modes from the mesh (_beam_modes), and prestress is the geometric
+torsion have their own modes from the mesh (modal._beam_modes), and prestress is the geometric
 stiffness of the twelve unit inertial load cases projected on the modes times the frame's
-actual omega_i omega_j, alpha_i and a_i (_load_case_energy); where a_i reads a free frame's
+actual omega_i omega_j, alpha_i and a_i (modal._load_case_energy); where a_i reads a free frame's
 q'', that part of the force joins M (not symmetric then: the runtime factors it by LU).
 What the generalisation keeps and drops: the bending planes couple only through the frame's
 motion, the foreshortening and the cubic term (both planes in one stretch); torsion is
@@ -83,7 +83,7 @@ from flexsym.model.system import (GROUND, SECOND, FlexibleBeam, Gravity, PointFo
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
                                       joint_coordinate, spring_force_on_a, start_of, violation)
 from flexsym.physics.body_kinds.spatial import kind_of
-from flexsym.physics.body_kinds.spatial.base import Frame, Motion, cross as _cross, rotation, skew as _skew, vec as _vec
+from flexsym.physics.body_kinds.spatial.base import Frame, Motion, cross, rotation, skew, vec
 from flexsym.physics.lagrange import equations_of_motion
 from flexsym.physics.spatial_ef import ef_elastic_output, ef_kinetic_output
 from flexsym.model.maneuver import parse_expression, t
@@ -154,16 +154,16 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
         kinds[b.name].part(der, b, psyms.get(b.name))
 
     grav = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0))
-    frames = {GROUND: Frame(sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1), _vec(grav))}
+    frames = {GROUND: Frame(sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1), vec(grav))}
     for body in tree.order:
         j = system.joint(tree.joint_of(body))
         if j.parent == GROUND:
-            fp, m_p = frames[GROUND], _vec(j.point)
+            fp, m_p = frames[GROUND], vec(j.point)
         else:
             pbody, pm = system.marker(j.parent)
             fp, m_p = kinds[pbody].hang(der, frames[pbody], pbody, pm)  # a beam's: its section's frame
         cm = system.marker(j.child)[1]
-        m_c = _vec((cm.x, cm.y, cm.z))
+        m_c = vec((cm.x, cm.y, cm.z))
         if j.kind == "spherical":
             e = sp.Matrix([x for x, _ in joint_sym[j.name]])
             ed = sp.Matrix([xd for _, xd in joint_sym[j.name]])
@@ -179,7 +179,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
         m_p = m_p + slide
         omega = Q.T * fp.omega + rel
         # v_rel = a s' needs no Q^T: Q turns about a itself (a cylindrical joint), or is I
-        V = Q.T * (fp.V + _cross(fp.omega, m_p)) - _cross(omega, m_c) + v_rel
+        V = Q.T * (fp.V + cross(fp.omega, m_p)) - cross(omega, m_c) + v_rel
         A_ = fp.A * Q
         R = fp.R + fp.A * m_p - A_ * m_c
         frames[body] = Frame(A_, R, omega, V, Q.T * fp.g)
@@ -189,7 +189,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
         _cut_rows(der)
 
     der.V_grav, der.Q = sp.Integer(0), sp.zeros(len(coords), 1)  # the kinds add to them
-    gvec = _vec(grav)
+    gvec = vec(grav)
     der.frame_T = []  # (T in the frame-motion placeholders, their actual values): sysgen, by AD
     for b in system.bodies:
         fr = frames[b.name]
@@ -229,7 +229,7 @@ def axis_motion(j, coordinates) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Mat
 
 
 def _unit_vec(axis) -> sp.Matrix:
-    a = _vec(axis)
+    a = vec(axis)
     return a / sp.sqrt(a.dot(a))
 
 
@@ -277,7 +277,7 @@ def _section_rotation(der, ref: str) -> sp.Matrix:
 
 def _cut_point(der, ref: str, point) -> sp.Matrix:
     """A cut joint's side's point (ground's: the joint's point)."""
-    return _vec(point) if ref == GROUND else _marker_point(der, ref)
+    return vec(point) if ref == GROUND else _marker_point(der, ref)
 
 
 def _cut_axes_of(der, ref: str) -> sp.Matrix:
@@ -317,13 +317,13 @@ def _cut_rows(der) -> None:
             loads += [("gap", None, False)] * 3
         if turn_rows == "cross":
             start = start or _start_values(der)
-            e1 = der.spatial["frames"][system.marker(j.child)[0]].A * _vec(j.axis)
-            e1 = e1 / sp.sqrt(_vec(j.axis).dot(_vec(j.axis)))
+            e1 = der.spatial["frames"][system.marker(j.child)[0]].A * vec(j.axis)
+            e1 = e1 / sp.sqrt(vec(j.axis).dot(vec(j.axis)))
             Rp = _section_rotation(der, j.parent)
             start |= getattr(der, "ef_start", {})  # an ef node's section: placeholders
             e1_0 = [float(v) for v in e1.xreplace(start).evalf()]
             x_0 = [float(v) for v in (Rp * sp.Matrix([1, 0, 0])).xreplace(start).evalf()]
-            e2_0 = _vec(_unit(np.cross(e1_0, x_0)))
+            e2_0 = vec(_unit(np.cross(e1_0, x_0)))
             e2_local = sp.Matrix([exact(float(v)) for v in (Rp.xreplace(start).evalf().T * e2_0)])
             e2 = Rp * e2_local
             der.constraints.append((f"{name}.cross", scale * e1.dot(e2)))
@@ -400,11 +400,11 @@ def cut_load(der, name: str, side: str) -> tuple[sp.Matrix, sp.Matrix]:
                 if gap is None:
                     j = der.system.joint(name)
                     gap = _cut_point(der, j.parent, j.point) - _marker_point(der, j.child)
-                torque += -lam * _cross(n, gap)
+                torque += -lam * cross(n, gap)
         else:
             u, w = load[1], load[2]
             mu = lam * scale
-            torque += -mu * (_cross(w, u) if parent else _cross(u, w))
+            torque += -mu * (cross(w, u) if parent else cross(u, w))
     return force, torque
 
 
@@ -412,7 +412,7 @@ def cut_load(der, name: str, side: str) -> tuple[sp.Matrix, sp.Matrix]:
 def euler_rotation(e: sp.Matrix) -> sp.Matrix:
     """A(e) (ground <- frame) of Euler parameters e = (e0, e1, e2, e3), |e| = 1."""
     v = e[1:, 0]
-    return (e[0]**2 - v.dot(v)) * sp.eye(3) + 2 * v * v.T + 2 * e[0] * _skew(v)
+    return (e[0]**2 - v.dot(v)) * sp.eye(3) + 2 * v * v.T + 2 * e[0] * skew(v)
 
 
 def euler_G(e: sp.Matrix) -> sp.Matrix:
@@ -462,13 +462,13 @@ def joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
 
     def add(force, at):
         nonlocal F, Mo
-        F, Mo = F + force, Mo + _cross(at, force)
+        F, Mo = F + force, Mo + cross(at, force)
 
     def inside(ref):
         return ref != GROUND and system.marker(ref)[0] in bodies
 
-    gvec = _vec(next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0)))
-    F, Mo = F + mass * gvec, Mo + _cross(S, gvec)
+    gvec = vec(next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0)))
+    F, Mo = F + mass * gvec, Mo + cross(S, gvec)
     for load in system.loads:
         if isinstance(load, PointForce) and inside(load.marker):
             add(_point_force(der, load), _marker_point(der, load.marker))
@@ -491,7 +491,7 @@ def joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
             Mo += tc
     P = _marker_point(der, joint.child)
     Fr = der.ddt(S, 2) - F
-    return Fr, der.ddt(_momentum(der, bodies)) - Mo - _cross(P, Fr)
+    return Fr, der.ddt(_momentum(der, bodies)) - Mo - cross(P, Fr)
 
 
 def _marker_point(der, ref: str) -> sp.Matrix:
@@ -501,7 +501,7 @@ def _marker_point(der, ref: str) -> sp.Matrix:
 
 
 def _spring_ends(der, load: SpringDamper) -> list[sp.Matrix]:
-    return [_vec(pt) if ref == GROUND else _marker_point(der, ref)
+    return [vec(pt) if ref == GROUND else _marker_point(der, ref)
             for ref, pt in ((load.a, load.point_a), (load.b, load.point_b))]
 
 
@@ -543,7 +543,7 @@ def _names(der) -> dict:
 
 def _point_force(der, load: PointForce) -> sp.Matrix:
     """A point force's vector in ground components (given in the ground's or its body's axes)."""
-    F = _vec((load.fx, load.fy, load.fz))
+    F = vec((load.fx, load.fy, load.fz))
     return der.spatial["frames"][der.system.marker(load.marker)[0]].A * F if load.frame == "body" else F
 
 
@@ -592,7 +592,7 @@ def _output(der, quantity: str) -> sp.Expr:
     if fn == "w":  # distance from the chord root-tip
         p0, p1, px = (kind.axis_point(der, beam.name, xx) for xx in (0.0, beam.length, x))
         d = p1 - p0
-        c = _cross(d, px - p0)
+        c = cross(d, px - p0)
         return sp.sqrt(c.dot(c) / d.dot(d))
     return _section(der, beam, x, fn)
 
@@ -642,10 +642,10 @@ def _loads_beyond(der, beam: FlexibleBeam, x: float, fn: str, out: sp.Expr, sect
         if force:
             out += Floc[k]
         else:
-            out += _cross(kind.axis_point(der, beam.name, m.x) - section, Floc)[k] + tloc[k]
+            out += cross(kind.axis_point(der, beam.name, m.x) - section, Floc)[k] + tloc[k]
     for ld in der.system.loads:  # point forces and spring ends on the part beyond x
         if isinstance(ld, PointForce):
-            acting = [(beyond(ld.marker), _vec((ld.fx, ld.fy, ld.fz)), ld.frame == "body")]
+            acting = [(beyond(ld.marker), vec((ld.fx, ld.fy, ld.fz)), ld.frame == "body")]
         elif isinstance(ld, SpringDamper) and (beyond(ld.a) or beyond(ld.b)):
             Fa = spring_force_on_a(der, ld, _spring_ends(der, ld))
             acting = [(beyond(ld.a), Fa, False), (beyond(ld.b), -Fa, False)]
@@ -658,5 +658,5 @@ def _loads_beyond(der, beam: FlexibleBeam, x: float, fn: str, out: sp.Expr, sect
             if force:
                 out += Floc[k]
             else:
-                out += _cross(kind.axis_point(der, beam.name, m.x) - section, Floc)[k]
+                out += cross(kind.axis_point(der, beam.name, m.x) - section, Floc)[k]
     return out

@@ -1,5 +1,5 @@
 """The geometrically exact reference `ef` of spatial systems (physics/rod3d.py's elements,
-casadi): a body kind of physics/spatial.py, which asks it for a beam's coordinates, gravity
+casadi), the spatial `ef` kind's (body_kinds/spatial/ef.py): its coordinates, gravity
 potential, axis points and section forces.
 
 A uniform beam clamped to its floating frame at its root, n two-node Simo-Reissner elements.
