@@ -109,7 +109,6 @@ def _params(system: System):
     return params, by_body
 
 
-
 def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation:
     """ef_free_ad: spatial ef beams on a free frame get their elements' kinetic energy through the
     whole-system AD path (der.casadi_T) instead of the per-element C kernels (a check)."""
@@ -129,9 +128,9 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
             e0, ed0 = initial_euler(j.direction, j.rate)
             coords += [Coordinate(f"{j.name}_e{k}", "joint", body, j.name, (e0[k], ed0[k]))
                        for k in range(4)]
-    kinds = {b.name: kind_of(b) for b in system.bodies}  # body_kinds/spatial
+    body_kind = {b.name: kind_of(b) for b in system.bodies}  # body_kinds/spatial
     for b in system.bodies:
-        coords += kinds[b.name].coordinates(b)
+        coords += body_kind[b.name].coordinates(b)
     q = sp.Matrix([sp.Symbol(c.name, real=True) for c in coords])
     qd = sp.Matrix([sp.Symbol(c.name + "_d", real=True) for c in coords])
     qdd = sp.Matrix([sp.Symbol(c.name + "_dd", real=True) for c in coords])
@@ -151,7 +150,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
     der.casadi_T_out = []
 
     for b in system.bodies:  # what the kinds build once (a body may hang from a beam's marker)
-        kinds[b.name].part(der, b, psyms.get(b.name))
+        body_kind[b.name].part(der, b, psyms.get(b.name))
 
     grav = next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0))
     frames = {GROUND: Frame(sp.eye(3), sp.zeros(3, 1), sp.zeros(3, 1), sp.zeros(3, 1), vec(grav))}
@@ -161,7 +160,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
             fp, m_p = frames[GROUND], vec(j.point)
         else:
             pbody, pm = system.marker(j.parent)
-            fp, m_p = kinds[pbody].hang(der, frames[pbody], pbody, pm)  # a beam's: its section's frame
+            fp, m_p = body_kind[pbody].hang(der, frames[pbody], pbody, pm)  # a beam's: its section's frame
         cm = system.marker(j.child)[1]
         m_c = vec((cm.x, cm.y, cm.z))
         if j.kind == "spherical":
@@ -172,7 +171,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
             # lengths); (e.e')^2 k/2 in T makes M regular and vanishes with its forces on it
             scale = exact(length_scale(system))
             der.constraints.append((f"{j.name}.norm", scale * (e.dot(e) - 1) / 2))
-            der.T += 2 * kinds[body].spin_inertia(system.body(body), psyms.get(body)) * e.dot(ed)**2
+            der.T += 2 * body_kind[body].spin_inertia(system.body(body), psyms.get(body)) * e.dot(ed)**2
             slide, v_rel = sp.zeros(3, 1), sp.zeros(3, 1)
         else:
             Q, rel, slide, v_rel = axis_motion(j, joint_sym.get(j.name, ()))
@@ -184,7 +183,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
         R = fp.R + fp.A * m_p - A_ * m_c
         frames[body] = Frame(A_, R, omega, V, Q.T * fp.g)
     der.spatial["frames"] = frames
-    early = not any(k.markers_after_energies for k in kinds.values())
+    early = not any(k.markers_after_energies for k in body_kind.values())
     if early:  # the loops' rows and their checks before the costly work (an ef beam's markers: after it)
         _cut_rows(der)
 
@@ -193,10 +192,9 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
     der.frame_T = []  # (T in the frame-motion placeholders, their actual values): sysgen, by AD
     for b in system.bodies:
         fr = frames[b.name]
-        kinds[b.name].contribute(der, b, psyms.get(b.name), fr, Motion.of(b.name, fr), gvec)
+        body_kind[b.name].contribute(der, b, psyms.get(b.name), fr, Motion.of(b.name, fr), gvec)
     V_grav, Q_ = der.V_grav, der.Q
     der.V += V_grav
-    der.V_grav = V_grav
     Q_ += sp.Matrix([-sp.diff(V_grav, x) for x in q])
     for load in system.loads:
         if isinstance(load, SpringDamper):
@@ -233,8 +231,6 @@ def _unit_vec(axis) -> sp.Matrix:
     return a / sp.sqrt(a.dot(a))
 
 
-
-
 def initial_euler(direction, rate) -> tuple[list[float], list[float]]:
     """A spherical joint's Euler parameters at t = 0: the shortest rotation turning the parent's
     x axis to `direction` (none: the identity), and their rates for the child's angular velocity
@@ -267,12 +263,10 @@ def _start_values(der) -> dict:
     return vals | getattr(der, "ef_start", {})  # an ef node's section rotation: I
 
 
-
 def _section_rotation(der, ref: str) -> sp.Matrix:
     """Ground <- section axes at 'body.marker' (its kind's: a beam's section's)."""
     body, m = der.system.marker(ref)
     return kind_of(der.system.body(body)).section_rotation(der, body, m)
-
 
 
 def _cut_point(der, ref: str, point) -> sp.Matrix:
@@ -408,7 +402,6 @@ def cut_load(der, name: str, side: str) -> tuple[sp.Matrix, sp.Matrix]:
     return force, torque
 
 
-
 def euler_rotation(e: sp.Matrix) -> sp.Matrix:
     """A(e) (ground <- frame) of Euler parameters e = (e0, e1, e2, e3), |e| = 1."""
     v = e[1:, 0]
@@ -419,7 +412,6 @@ def euler_G(e: sp.Matrix) -> sp.Matrix:
     """G(e): the frame's angular velocity in its own components is 2 G e' (G e = 0)."""
     e0, e1, e2, e3 = e
     return sp.Matrix([[-e1, e0, e3, -e2], [-e2, -e3, e0, e1], [-e3, e2, -e1, e0]])
-
 
 
 def _momentum(der, bodies=None) -> sp.Matrix:
@@ -503,7 +495,6 @@ def _marker_point(der, ref: str) -> sp.Matrix:
 def _spring_ends(der, load: SpringDamper) -> list[sp.Matrix]:
     return [vec(pt) if ref == GROUND else _marker_point(der, ref)
             for ref, pt in ((load.a, load.point_a), (load.b, load.point_b))]
-
 
 
 def _applied(der) -> sp.Matrix:

@@ -31,10 +31,6 @@ EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
 EF_V = sp.Symbol("V_rod_", real=True)  # the rod elements' elastic energy (casadi)
 
 
-def is_ef(b) -> bool:
-    return getattr(b.model, "kind", None) == "fe"
-
-
 def ef_coordinates(b) -> list[str]:
     """The coordinate names (without the body prefix) of a spatial ef beam."""
     return [f"{c}{k}" for k in range(1, b.model.elements + 1) for c in EF_NODE]

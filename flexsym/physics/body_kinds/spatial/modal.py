@@ -288,6 +288,7 @@ def _section_frame(der, fb: Frame, beam: str, x: float) -> Frame:
     return Frame(fb.A * S, fb.R + fb.A * r, S.T * fb.omega + rel,
                  S.T * (fb.V + cross(fb.omega, r) + der.ddt(r)), S.T * fb.g)
 
+
 def _section_turns(th: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix]:
     """(R_x, R_y, R_z) of a section's angles theta: its axes are the beam frame's turned by
     S = R_z R_y R_x, a rotation (orthonormal, unlike I + [theta]x), equal to it to first order."""
@@ -321,7 +322,6 @@ def _at(der, body: str, x: float, what: str):
 class _View:
     table: IntegralTable
     modes: dict
-
 
 
 def _frame_section(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) -> sp.Expr:
