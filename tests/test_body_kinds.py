@@ -1,6 +1,8 @@
-"""Planar body kinds (flexsym/physics/body_kinds/): the registry picks one kind per body from
-its data, every kind is one module listed in KINDS and in the generator's fingerprint, and
-derive_system reaches a body only through its kind."""
+"""Body kinds (flexsym/physics/body_kinds/, the spatial ones in its spatial/): the registry
+picks one kind per body from its data, every kind is one module listed in KINDS (KINDS of the
+spatial package) and in the generator's fingerprint, and derive_system (derive_spatial) reaches
+a body only through its kind."""
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -12,8 +14,13 @@ from flexsym.model.variant import builtin
 from flexsym.physics import body_kinds
 from flexsym.physics.assemble import derive_system
 from flexsym.physics.body_kinds import KINDS, kind_of
+from flexsym.physics.body_kinds import spatial
 from flexsym.physics.body_kinds.rigid import Rigid
+from flexsym.physics.body_kinds.spatial.rigid import Rigid as Rigid3
+from flexsym.physics.spatial import derive_spatial
 from flexsym.scenes.system_scene import system_from_dict
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_every_module_is_a_registered_kind_in_the_fingerprint():
@@ -72,3 +79,59 @@ def test_a_new_kind_registers_in_one_place(monkeypatch):
     monkeypatch.delitem(KINDS, "rigid")
     der = derive_system(system)
     assert calls == ["bob"] and der.mass == {"bob": 1}
+
+
+def test_every_spatial_module_is_a_registered_kind_in_the_fingerprint():
+    modules = {p.stem for p in Path(spatial.__file__).parent.glob("*.py")} - {"__init__", "base"}
+    assert set(spatial.KINDS) == modules  # a module not listed in KINDS is no kind: fails here
+    for name, kind in spatial.KINDS.items():
+        assert kind.name == name
+        assert f"physics.body_kinds.spatial.{name}" in GENERATOR_MODULES  # editing a kind regenerates
+
+
+S5_S7 = ("flap", "spherical_pendulum", "spatial_slider_crank")
+EF2 = {"variant": "ef", "elements": 2}
+
+
+@pytest.mark.parametrize("scene, model, beam", [(s, None, "modal") for s in S5_S7 + ("flap_mesh", "slew_arm")]
+                         + [(s, EF2, "ef") for s in S5_S7])
+def test_spatial_scene_bodies_map_to_their_kinds(scene, model, beam):
+    """S5 (from the analytic modes and from a mesh), S6, S7 and the slew arm as their scenes
+    give them (modal beams), and S5-S7 with every beam an ef (a uniform, undamped rod: not the
+    mesh, nor the slew arm's damped beam): each body's spatial kind."""
+    data = tomllib.loads((ROOT / "scenes" / f"{scene}.toml").read_text())
+    for b in data["body"]:
+        if b["kind"] == "beam" and model is not None:
+            b["model"] = model
+    system = system_from_dict(data, name=scene, base=ROOT / "scenes")
+    got = {b.name: spatial.kind_of(b).name for b in system.bodies}
+    assert got == {b.name: beam if b.flexible else "rigid" for b in system.bodies}
+    assert beam in got.values()
+
+
+def test_a_new_spatial_kind_registers_in_one_place(monkeypatch):
+    """As in the plane: a kind added to the spatial KINDS is found by kind_of (two that apply to
+    one body are refused), and derive_spatial goes through its methods."""
+    calls = []
+
+    class Counted(Rigid3):
+        name = "counted"
+
+        def contribute(self, der, b, P, fr, motion, gvec):
+            calls.append(b.name)
+            super().contribute(der, b, P, fr, motion, gvec)
+
+    system = system_from_dict({
+        "system": {"name": "top", "dimension": 3},
+        "body": [{"name": "top", "kind": "rigid", "mass": 2.0, "inertia": [0.035, 0.02, 0.02],
+                  "com": [0.1, 0.0, 0.0], "markers": {"pivot": [0.0, 0.0, 0.0]}}],
+        "joint": [{"name": "ball", "kind": "spherical", "parent": "ground", "point": [0.0, 0.0, 0.0],
+                   "child": "top.pivot"}],
+        "gravity": {"g": [0.0, 0.0, -9.81]},
+        "output": {"columns": {"z": "z(top.pivot)", "H": "Hz"}}}, name="top")
+    monkeypatch.setitem(spatial.KINDS, "counted", Counted())
+    with pytest.raises(SpecError, match="2 spatial body kinds apply"):
+        spatial.kind_of(system.bodies[0])
+    monkeypatch.delitem(spatial.KINDS, "rigid")
+    der = derive_spatial(system)
+    assert calls == ["top"] and len(der.frame_T) == 1

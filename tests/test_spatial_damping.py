@@ -1,5 +1,5 @@
-"""Structural damping of spatial modal beams (physics/spatial._dissipation, the planar
-body_kinds.modal.damping_dissipation on the 3D fields): the damping matrix against closed forms on
+"""Structural damping of spatial modal beams (physics/body_kinds/spatial/modal._dissipation,
+the planar body_kinds.modal.damping_dissipation on the 3D fields): the damping matrix against closed forms on
 natural modes in both bending planes and torsion, a damped planar system run as a spatial one,
 the energy balance and the modal decay rates of a cantilever ringing in both planes."""
 import math

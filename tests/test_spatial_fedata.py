@@ -1,7 +1,7 @@
 """Spatial beams from finite-element data (issue 20, item 3): a 3D beam mesh gives each bending
 plane's modes, the torsion modes, the invariants with its sections' distributions, and the
 geometric stiffness of the twelve unit inertial load cases projected on the modes, so that its
-stiffening follows its frame's actual motion (fedata.load_case_*, spatial._load_case_energy).
+stiffening follows its frame's actual motion (fedata.load_case_*, body_kinds/spatial/modal._load_case_energy).
 
 Checked: the load cases' axial forces against statics, their projected stiffness against the
 continuous modal integral (converging at the mesh's order 2), each plane's and the torsion's

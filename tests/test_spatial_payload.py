@@ -1,4 +1,4 @@
-"""A body hung from a spatial modal beam's marker (physics/spatial._section_frame: the deformed
+"""A body hung from a spatial modal beam's marker (physics/body_kinds/spatial/modal._section_frame: the deformed
 section's frame at the marker, S = R_z R_y R_x of the section's rotation): a payload clamped to
 a strip's tip, at rest against the cantilever formulas, swinging on a tilted pin against the
 conservation of energy, run in a plane against the planar derivation, and its C kernels

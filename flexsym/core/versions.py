@@ -11,10 +11,11 @@ import sympy
 from flexsym import __version__
 from flexsym.core.paths import module_file, templates_dir
 
-# One module per planar body kind (physics/body_kinds): in the generator's hash, and in a
-# system's fingerprint (sysgen._OWN)
-BODY_KIND_MODULES = tuple(f"physics.body_kinds.{f.stem}" for f in sorted(
-    module_file("physics.body_kinds.__init__").parent.glob("*.py")))
+# One module per body kind (physics/body_kinds: the planar kinds, and the spatial ones in its
+# subpackage spatial/): in the generator's hash, and in a system's fingerprint (sysgen._OWN)
+_KINDS_DIR = module_file("physics.body_kinds.__init__").parent
+BODY_KIND_MODULES = tuple("physics.body_kinds." + ".".join(f.relative_to(_KINDS_DIR).with_suffix("").parts)
+                          for f in sorted(_KINDS_DIR.rglob("*.py")))
 # Modules whose code decides what is generated: a change in any of them changes the
 # fingerprint of every variant, so checked-in generated code is detected as stale.
 GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "model.strain_models",

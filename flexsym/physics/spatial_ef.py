@@ -1,5 +1,5 @@
 """The geometrically exact reference `ef` of spatial systems (physics/rod3d.py's elements,
-casadi): a body kind of physics/spatial.py, which asks it for a beam's coordinates, gravity
+casadi), the spatial `ef` kind's (body_kinds/spatial/ef.py): its coordinates, gravity
 potential, axis points and section forces.
 
 A uniform beam clamped to its floating frame at its root, n two-node Simo-Reissner elements.
@@ -29,10 +29,6 @@ from flexsym.physics.rod3d import element_functions
 
 EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
 EF_V = sp.Symbol("V_rod_", real=True)  # the rod elements' elastic energy (casadi)
-
-
-def is_ef(b) -> bool:
-    return getattr(b.model, "kind", None) == "fe"
 
 
 def ef_coordinates(b) -> list[str]:

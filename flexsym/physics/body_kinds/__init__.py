@@ -9,8 +9,9 @@ moment and the strain forces (`contribute`, the body of derive_system's loop). O
 also gives the fields at a station (`fields_at`: u, v and the slope in its frame), from which
 a marker's pose follows (`marker_pose`), and N and M at a station (`own_stress`, or from
 equilibrium with its `inertial_stress`). The interface and what the kinds share are in
-base.py. A new kind is one module here (its KIND) plus its tests; `KINDS` lists them. 3D
-bodies are derived in physics/spatial.py, which does not use these yet.
+base.py. A new kind is one module here (its KIND) plus its tests; `KINDS` lists them. The
+spatial kinds (physics/spatial.py's) are the subpackage spatial/, with its own interface and
+registry.
 """
 from __future__ import annotations
 
