@@ -19,3 +19,13 @@ def test_every_module_sits_in_a_layer():
     pkg = ROOT / "flexsym"
     loose = [p.name for p in pkg.glob("*.py") if p.name != "__init__.py"]
     assert not loose, f"modules outside a layer: {loose}"
+
+
+def test_every_package_is_installed():
+    """pyproject's explicit package list names every folder of flexsym (an editable install finds
+    an unlisted one; a wheel would leave it out, and the imports from it would fail)."""
+    import tomllib
+
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "flexsym").rglob("__init__.py")}
+    assert found <= listed, f"not in pyproject's packages: {sorted(found - listed)}"
