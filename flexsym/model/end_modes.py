@@ -39,8 +39,8 @@ def end_family(system: System, tree: Tree, b: FlexibleBeam) -> str | None:
             and b.name in (j.parent.partition(".")[0], j.child.partition(".")[0])]
     if not ends:
         return "pf"
-    (j,) = ends if len(ends) == 1 else (None,)
-    if j is None or j.kind != "revolute" or j.name not in tree.cut:
+    j = ends[0]
+    if len(ends) > 1 or j.kind != "revolute" or j.name not in tree.cut:
         return None
     ref = j.parent if j.parent.partition(".")[0] == b.name else j.child
     return "pp" if system.marker(ref)[1].x == b.length else None
