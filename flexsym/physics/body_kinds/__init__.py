@@ -15,17 +15,12 @@ registry.
 """
 from __future__ import annotations
 
-from flexsym.core.errors import SpecError
 from flexsym.physics.body_kinds import ef, exact, modal, rigid
-from flexsym.physics.body_kinds.base import BodyKind
+from flexsym.physics.body_kinds.base import BodyKind, one_kind
 
 KINDS = {m.KIND.name: m.KIND for m in (rigid, modal, exact, ef)}  # by name
 
 
 def kind_of(body) -> BodyKind:
     """The one kind whose `applies` holds for the body's data."""
-    found = [k for k in KINDS.values() if k.applies(body)]
-    if len(found) != 1:
-        raise SpecError(f"body '{body.name}': {len(found)} planar body kinds apply to it "
-                        f"({', '.join(k.name for k in found) or 'none'})")
-    return found[0]
+    return one_kind(KINDS, body, "planar")

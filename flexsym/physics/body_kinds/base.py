@@ -152,3 +152,13 @@ def station(der, body: str, x: float) -> sp.Expr:
     """The undeformed axis coordinate of station x on a beam, in its length parameter."""
     part = der.flex[body]
     return exact(x) / exact(part.beam.length) * part.psyms[BEAM_PARAMS[4].symbol]
+
+
+def one_kind(kinds: dict, body, which: str):
+    """The one kind of `kinds` whose `applies` holds for the body's data (`which`: planar or
+    spatial, for the message); their predicates are disjoint, so none or two is a bug here."""
+    found = [k for k in kinds.values() if k.applies(body)]
+    if len(found) != 1:
+        raise SpecError(f"body '{body.name}': {len(found)} {which} body kinds apply to it "
+                        f"({', '.join(k.name for k in found) or 'none'})")
+    return found[0]

@@ -11,7 +11,7 @@ section loads. The interface and the vectors and frames it is written in are in 
 """
 from __future__ import annotations
 
-from flexsym.core.errors import SpecError
+from flexsym.physics.body_kinds.base import one_kind
 from flexsym.physics.body_kinds.spatial import ef, modal, rigid
 from flexsym.physics.body_kinds.spatial.base import SpatialKind
 
@@ -20,8 +20,4 @@ KINDS = {m.KIND.name: m.KIND for m in (rigid, modal, ef)}  # by name
 
 def kind_of(body) -> SpatialKind:
     """The one spatial kind whose `applies` holds for the body's data."""
-    found = [k for k in KINDS.values() if k.applies(body)]
-    if len(found) != 1:
-        raise SpecError(f"body '{body.name}': {len(found)} spatial body kinds apply to it "
-                        f"({', '.join(k.name for k in found) or 'none'})")
-    return found[0]
+    return one_kind(KINDS, body, "spatial")
