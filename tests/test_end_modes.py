@@ -59,10 +59,13 @@ def test_a_named_mode_set_is_kept(tmp_path):
     assert bending(path, model=None)["rod"] == ["cf1", "cf2", "cf3"]
 
 
-def test_the_default_is_the_named_set_it_stands_for(tmp_path):
-    """`--model exact` on S2 is the same model, fingerprint and generated code, as naming pp1-pp5."""
-    named = _edited(tmp_path, "slider_crank", 'model = "m2"',
-                    'model = { strain = "exact", bending = ["pp1", "pp2", "pp3", "pp4", "pp5"] }')
-    a = load_scene(SCENES / "slider_crank.toml", model="exact").system
+@pytest.mark.parametrize("scene, model, family", [("slider_crank", 'model = "m2"', "pp"),
+                                                  ("pendulum", 'model = "m3"', "pf")])
+def test_the_default_is_the_named_set_it_stands_for(tmp_path, scene, model, family):
+    """`--model exact` on S2 (S3) is the same model, fingerprint and generated code, as naming
+    pp1-pp5 (pf1-pf5)."""
+    modes = ", ".join(f'"{m}"' for m in five(family))
+    named = _edited(tmp_path, scene, model, f'model = {{ strain = "exact", bending = [{modes}] }}')
+    a = load_scene(SCENES / f"{scene}.toml", model="exact").system
     b = load_scene(named).system
     assert fingerprint(a) == fingerprint(b)

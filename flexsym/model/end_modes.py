@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from flexsym.model.system import FlexibleBeam, System, Tree, parse_output
-from flexsym.model.variant import VariantSpec, _refs, builtin
+from flexsym.model.variant import _refs, body_model, builtin
 
 # outputs that read the beam's frame (which these modes move to the chord or the pin)
 _FRAME_OUTPUTS = ("u", "v")
@@ -22,14 +22,11 @@ _JOINT_OUTPUTS = ("angle", "rate")
 
 def end_family(system: System, tree: Tree, b: FlexibleBeam) -> str | None:
     """'pp' (pinned at both ends), 'pf' (pinned root, free tip) or None (keep clamped-free)."""
-    if system.dimension != 2 or getattr(b.model, "body", None) is not None:
+    if getattr(b.model, "body", None) is not None or system.unpinned_root(tree, b):
         return None
     root = system.joint(tree.joint_of(b.name))
-    if root.kind != "revolute" or root.fixed or any(d.joint == root.name for d in system.drivers):
-        return None
-    for load in system.loads:  # exact refuses loads beyond the root; a torque would hold the frame
-        on = [getattr(load, k, None) or "" for k in ("marker", "a", "b")]
-        if getattr(load, "body", None) == b.name or any(r.partition(".")[0] == b.name for r in on):
+    for load in system.loads:  # exact refuses forces beyond the root (a torque: unpinned_root)
+        if any((getattr(load, k, None) or "").partition(".")[0] == b.name for k in ("marker", "a", "b")):
             return None
     for o in system.outputs:
         fn, args = parse_output(system, o.quantity)
@@ -52,9 +49,8 @@ def with_end_modes(system: System) -> System:
     exact, tree, bodies = builtin("exact"), system.tree(), []
     for b in system.bodies:
         family = end_family(system, tree, b) if b.flexible and b.model == exact else None
-        if family:  # as the scene reader makes a named mode set (system_scene._model)
+        if family:  # the model a scene naming these modes gets
             modes = _refs("bending", [f"{family}{k + 1}" for k in range(len(exact.bending))])
-            b = replace(b, model=VariantSpec("body", exact.strain, exact.axial, modes,
-                                             outputs=("M_B",)).validate())
+            b = replace(b, model=body_model(exact.strain, exact.axial, modes))
         bodies.append(b)
     return replace(system, bodies=tuple(bodies))

@@ -737,24 +737,31 @@ class System:
             if not b.flexible or getattr(b.model, "kind", None) != "modal":
                 continue
             free = [m.token for m in b.model.bending if root_slope_free(m)]
-            if not free:
-                continue
-            head = (f"system '{self.name}': body '{b.name}': bending mode {free[0]} leaves the root "
-                    "slope free (the frame is the chord's), so the root must be pinned")
-            if self.dimension == 3:
-                raise SpecError(f"{head}: not derived for spatial systems (use cf modes)")
-            j = self.joint(tree.joint_of(b.name))
-            if j.kind != "revolute":
-                raise SpecError(f"{head}, not held by a {j.kind} joint ('{j.name}': use cf modes)")
-            if j.fixed:
-                raise SpecError(f"{head}: joint '{j.name}' is fixed, a clamp (use cf modes)")
-            d = next((d for d in self.drivers if d.joint == j.name), None)
-            if d is not None:
-                raise SpecError(f"{head}: driver '{d.name}' on joint '{j.name}' would turn the chord, "
-                                "not the root section (use cf modes)")
-            if any(isinstance(load, Torque) and load.body == b.name for load in self.loads):
-                raise SpecError(f"{head}: a torque on '{b.name}' would act on the chord frame, not "
-                                "on a section (use cf modes)")
+            why = self.unpinned_root(tree, b) if free else ""
+            if why:
+                raise SpecError(f"system '{self.name}': body '{b.name}': bending mode {free[0]} leaves "
+                                f"the root slope free (the frame is the chord's), so the root must be "
+                                f"pinned{why}")
+
+    def unpinned_root(self, tree: Tree, b) -> str:
+        """Why beam b's root is not a free pin ('' when it is), as the end of
+        _check_pinned_roots' message: it must be a planar revolute joint that no driver turns,
+        not fixed, with no torque on the beam (all would act on the frame those modes move).
+        end_modes chooses such modes only where this is ''."""
+        if self.dimension == 3:
+            return ": not derived for spatial systems (use cf modes)"
+        j = self.joint(tree.joint_of(b.name))
+        if j.kind != "revolute":
+            return f", not held by a {j.kind} joint ('{j.name}': use cf modes)"
+        if j.fixed:
+            return f": joint '{j.name}' is fixed, a clamp (use cf modes)"
+        d = next((d for d in self.drivers if d.joint == j.name), None)
+        if d is not None:
+            return (f": driver '{d.name}' on joint '{j.name}' would turn the chord, not the root "
+                    "section (use cf modes)")
+        if any(isinstance(load, Torque) and load.body == b.name for load in self.loads):
+            return f": a torque on '{b.name}' would act on the chord frame, not on a section (use cf modes)"
+        return ""
 
     def _check_spatial(self) -> None:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line

@@ -275,6 +275,16 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
     return _named(spec, base, name)
 
 
+def body_model(strain: str, axial: tuple, bending: tuple) -> "VariantSpec":
+    """A system body's model from a strain model and mode sets (a scene's { strain, axial,
+    bending }, or the modes end_modes chooses). Its outputs are the body's scene's; validate
+    checks one the modes can carry: the one-beam v_tip (v at the tip, in the frame), or M_B
+    when every bending mode is zero at the tip (pp: the frame is the chord's)."""
+    tip = any(mode(m).value_at(0, 1) != 0 for m in bending)
+    return VariantSpec("body", strain, tuple(axial), tuple(bending),
+                       outputs=("v_tip",) if tip else ("M_B",)).validate()
+
+
 def check_clamped_root(spec) -> None:
     """A one-beam model clamps the beam to its hub: bending modes whose root slope is free
     (pp, pf: made for a pinned root, their frame the chord's or the pin's) are refused there."""

@@ -71,7 +71,6 @@ from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
 from flexsym.model.joint_kinds import KINDS
 from flexsym.model.end_modes import with_end_modes
-from flexsym.model.modes import mode
 from flexsym.model.system import (GROUND, SECOND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
                      parse_output)
@@ -366,7 +365,7 @@ def _fe_body(r: _Items, where: str, tab: dict, base: Path, spatial: bool = False
 def _model(r: _Items, where: str, given, flag: str | None):
     """A deformation model: a variant name, or { variant, elements } or { strain, axial, bending },
     either table with axial_force / moment = "constitutive" | "equilibrium"."""
-    from flexsym.model.variant import VariantSpec, _refs, builtin, customize
+    from flexsym.model.variant import _refs, body_model, builtin, customize
 
     where = flag or where
     if given is None:
@@ -406,12 +405,7 @@ def _model(r: _Items, where: str, given, flag: str | None):
         for key, val in (("axial", axial), ("bending", bending)):
             if not isinstance(val, list) or not all(isinstance(v, str) for v in val):
                 r.fail(f"{where} {key}", f"must be a list of mode names (got {val!r})")
-        bend = _refs("bending", bending)
-        # the one-beam v_tip (v at the tip in the frame) is zero for pp modes (the frame is the
-        # chord's); a system body's outputs are its scene's, so only a mode set is checked here
-        tip = any(mode(m).value_at(0, 1) != 0 for m in bend)
-        return VariantSpec("body", strain, _refs("axial", axial), bend,
-                           outputs=("v_tip",) if tip else ("M_B",)).validate()
+        return body_model(strain, _refs("axial", axial), _refs("bending", bending))
     except _Located:
         raise
     except SpecError as exc:
