@@ -93,13 +93,10 @@ class ExactDerivation(ExactKinematics, Derivation):
     def kinematics(self, quad: Quadrature, x: dict) -> dict:
         return self.beam_kinematics(quad, x["q"], x["qd"], x["p"][4])
 
-    @staticmethod
-    def _frame_acceleration(k: dict, rdd, drive, accelerates: bool):
-        """Absolute acceleration in moving-frame components: r'' + 2w z x r' + alpha z x r - w^2 r."""
-        r, rd, wz = k["r"], k["rd"], drive[0]
-        zx = lambda v: ca.horzcat(-v[:, 1], v[:, 0])  # noqa: E731
-        acc = rdd + 2 * wz * zx(rd) - wz * wz * r
-        return acc + drive[1] * zx(r) if accelerates else acc
+    def _frame_acceleration(self, quad: Quadrature, k: dict, gdd, drive, L):
+        """Absolute acceleration in moving-frame components: r'' + 2w z x r' + alpha z x r - w^2 r
+        (gdd: the q'' part of the integrand of r'', None to leave it out)."""
+        return self.acceleration(quad, k, gdd, drive[0], drive[1] if self.maneuver.accelerates else None, L)
 
     def mass_matrix(self, quad: Quadrature, k: dict, p):
         n = len(self.coords)
@@ -120,7 +117,7 @@ class ExactDerivation(ExactKinematics, Derivation):
         the same equations as Lagrange's (lagrange_equations, the test's cross-check)."""
         q, qd, drive, p = x["q"], x["qd"], x["drive"], x["p"]
         k = self.kinematics(quad, x)
-        acc = self._frame_acceleration(k, k["rdd_v"], drive, self.maneuver.accelerates)
+        acc = self._frame_acceleration(quad, k, None, drive, p[4])
         F = p[0] * p[2] * p[4] * acc * ca.repmat(ca.DM(quad.weights), 1, 2)
         Ft = self._cumulative_transpose(quad, F, k["scale"])  # N x 2
         f = -ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]]) - ca.gradient(V, q)
@@ -140,8 +137,7 @@ class ExactDerivation(ExactKinematics, Derivation):
         k = self.kinematics(quad, x)
         phidd, epsdd = self._fields(quad, qdd, p[4])
         gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
-        rdd_a, _ = self._cumulative(quad, gdd, k["scale"])
-        acc = self._frame_acceleration(k, k["rdd_v"] + rdd_a, drive, self.maneuver.accelerates)
+        acc = self._frame_acceleration(quad, k, gdd, drive, p[4])
         F = p[0] * p[2] * p[4] * acc * ca.repmat(ca.DM(quad.weights), 1, 2)
         Ft = self._cumulative_transpose(quad, F, k["scale"])
         return ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]]) + ca.gradient(V, q)
@@ -172,8 +168,7 @@ class ExactDerivation(ExactKinematics, Derivation):
         at = float(point_of(name, self.spec.points)[1])
         phidd, epsdd = self._fields(quad, qdd, p[4])
         gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
-        rdd_a, _ = self._cumulative(quad, gdd, k["scale"])
-        acc = self._frame_acceleration(k, k["rdd_v"] + rdd_a, drive, self.maneuver.accelerates)
+        acc = self._frame_acceleration(quad, k, gdd, drive, p[4])
         wb = ca.DM(quad.weights_between(at, 1.0))
         if name[0] == "M":
             g = k["t"] * ca.repmat(k["a"], 1, 2)

@@ -127,12 +127,8 @@ def _loads(part, tr, x, ddot):
     aO = Vd + om * ca.vertcat(-Vy, Vx)
     phidd, epsdd = part._fields(quad, qbdd, L)
     gdd = k["t"] * ca.repmat(epsdd, 1, 2) + k["n"] * ca.repmat(k["a"] * phidd, 1, 2)
-    rdd_a, _ = part._cumulative(quad, gdd, k["scale"])
-    rdd_a = part._with_points(quad, rdd_a, gdd, L)
-    r, rd = k["r"], k["rd"]
-    zx = lambda v: ca.horzcat(-v[:, 1], v[:, 0])  # noqa: E731
-    acc = (k["rdd_v"] + rdd_a + 2 * om * zx(rd) + alpha * zx(r) - om * om * r
-           + ca.repmat(ca.horzcat(aO[0] - gx, aO[1] - gy), r.shape[0], 1))
+    acc = part.acceleration(quad, k, gdd, om, alpha, L)
+    acc = acc + ca.repmat(ca.horzcat(aO[0] - gx, aO[1] - gy), acc.shape[0], 1)
     return k, rhoA * L * acc, om, V, L
 
 
@@ -150,8 +146,10 @@ def exact_residual(bodies, tr, x, ddot):
         F = mA * ca.repmat(ca.DM(part.mass_weights(part.quad)), 1, 2)  # N x 2 (and the point masses)
         Ft = part._transpose_with_points(part.quad, F, k["scale"], L)
         elastic = ca.vertcat(*[ca.sum1(ca.sum2(col * Ft)) for col in k["cols"]])
-        r = k["r"]
-        moment = ca.sum1(r[:, 0] * F[:, 1] - r[:, 1] * F[:, 0])
+        # sum_i r_i x F_i with r = C g (C: the cumulative integral and its rows at the point
+        # masses) is sum_j g_j x (C^T F)_j: the positions r_i are not needed
+        g = k["g"]
+        moment = ca.sum1(g[:, 0] * Ft[:, 1] - g[:, 1] * Ft[:, 0])
         r_b = ca.mtimes(ca.jacobian(V, qd).T, ca.sum1(F).T) + ca.jacobian(om, qd).T * moment
         for j, i in enumerate(part.index):
             r_b[i] += elastic[j]

@@ -244,7 +244,23 @@ class ExactKinematics:
         rdd_v, _ = self._cumulative(quad, gamma, scale)
         r, rd, rdd_v = (self._with_points(quad, c, h, L) for c, h in ((r, g), (rd, gd), (rdd_v, gamma)))
         return {"r": r, "tip": tip, "rd": rd, "rdd_v": rdd_v, "cols": cols, "scale": scale,
-                "t": t, "n": n, "a": a}
+                "t": t, "n": n, "a": a, "g": g, "gd": gd, "gamma": gamma}
+
+    def acceleration(self, quad: Quadrature, k: dict, gdd, omega, alpha, L):
+        """r'' + 2 omega z x r' + alpha z x r - omega^2 r at the nodes (N x 2, then a row per
+        point mass; moving-frame components): the acceleration relative to the frame's origin
+        of beam_kinematics' k, gdd being the q'' part of the integrand of r'' (None: left out),
+        alpha None when the frame does not accelerate. One cumulative integral of the sum of
+        the integrands: integrating along the beam is linear and omega, alpha are uniform on
+        it, so the four integrals r, r', r''_v, r''_a of the sum's parts are not needed."""
+        zx = lambda v: ca.horzcat(-v[:, 1], v[:, 0])  # noqa: E731
+        h = k["gamma"] + 2 * omega * zx(k["gd"]) - omega * omega * k["g"]
+        if gdd is not None:
+            h = h + gdd
+        if alpha is not None:
+            h = h + alpha * zx(k["g"])
+        acc, _ = self._cumulative(quad, h, k["scale"])
+        return self._with_points(quad, acc, h, L)
 
 
 def _test_state(der):
