@@ -25,7 +25,7 @@ from flexsym.core.errors import SpecError
 from flexsym.model.joint_kinds import KINDS
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
 from flexsym.model.modes import ModeRef, root_slope_free
-from flexsym.model.variant import NAME_RE  # one name rule for variants and systems (names become C identifiers)
+from flexsym.model.variant import NAME_RE, TORSION_MODES  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
 JOINT_KINDS = tuple(KINDS)  # one module each: flexsym/model/joint_kinds/
@@ -37,7 +37,6 @@ DIMENSIONS = (2, 3)  # a planar system (the x-y plane) or a spatial one
 # parallel to the parent's, two; "lock": the relative rotation stays what it is at t = 0, three)
 SPATIAL_CUT_ROWS = {k: kind.cut_rows for k, kind in KINDS.items() if 3 in kind.dimensions}
 SPATIAL_JOINT_KINDS = tuple(SPATIAL_CUT_ROWS)
-TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)  # a shaft's modes are the bar's shapes
 SPATIAL_STRAINS = ("linear", "geometric_stiffness", "foreshortening", "prestress")
 STARTS = ("undeformed", "static")  # the flexible bodies at t = 0
 DRIVER_KINDS = ("guided", "motor")
@@ -307,6 +306,8 @@ class FlexibleBeam:
         self.section.check(where, dimension)
         if getattr(self.model, "kind", None) not in ("modal", "fe"):
             raise SpecError(f"{where}: model must be a modal variant or 'ef' (got {self.model!r})")
+        if dimension == 2 and self.model.kind == "modal" and self.model.torsion != TORSION_MODES:
+            raise SpecError(f"{where}: torsion modes apply to spatial beams (a planar beam does not twist)")
         if self.damping is not None:
             if not isinstance(self.damping, Damping):
                 raise SpecError(f"{where}: damping must be a Damping(zeta, alpha, beta) or None")
@@ -332,7 +333,7 @@ def beam_coordinates(beam: FlexibleBeam) -> list[tuple[str, str, ModeRef]]:
     out = [(r.coordinate, "axial", r) for r in spec.axial]
     out += [(r.coordinate, "bending", r) for r in spec.bending]
     out += [("vz_" + r.token, "bending", r) for r in spec.bending]
-    out += [("phi_" + r.token, "torsion", r) for r in TORSION_MODES]
+    out += [("phi_" + r.token, "torsion", r) for r in spec.torsion]
     return out
 
 

@@ -25,6 +25,10 @@ NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")  # used with match: \Z, not $ (a
 QUAD_POINTS = 5  # ef: Gauss points per element (exact for EA eps^2, degree 8 in xi; kappa^2 is rational)
 RECOVERIES = ("auto", "constitutive", "equilibrium")
 CLAMP_OUTPUTS = ("N_A_clamp", "M_A_clamp")  # ef: N and M at the root from the clamp reaction
+# A spatial beam's torsion modes (the bar's shapes: St Venant torsion is the bar's equation):
+# one by default; a scene may give more, or none where nothing reads the twist and its stiff
+# mode would only cap the step (model = { ..., torsion = [] })
+TORSION_MODES = (ModeRef("axial", "fixed_free", 1),)
 
 
 @dataclass(frozen=True)
@@ -49,6 +53,7 @@ class VariantSpec:
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
     body: object = None  # fedata.BeamBody: modes computed from finite-element data
+    torsion: tuple[ModeRef, ...] = TORSION_MODES  # a spatial beam's (planar systems: none given)
 
     def mode(self, ref: ModeRef):
         """The shape of a mode: the library's analytic one, or the body's computed one."""
@@ -80,7 +85,8 @@ class VariantSpec:
             "points": [list(p) for p in self.points],
             "left_out": [list(x) for x in self.left_out],
         } | ({"body": self.body.to_dict()} if self.body is not None else {}) | (
-            {"moment": self.moment} if self.moment == "equilibrium" else {})
+            {"moment": self.moment} if self.moment == "equilibrium" else {}) | (
+            {"torsion": [m.token for m in self.torsion]} if self.torsion != TORSION_MODES else {})
 
     def validate(self) -> "VariantSpec":
         if not isinstance(self.name, str) or not NAME_RE.match(self.name):
@@ -90,14 +96,18 @@ class VariantSpec:
         if model is None:
             raise SpecError(f"variant '{self.name}': unknown strain model '{self.strain}' "
                             f"(known: {', '.join(STRAIN_MODELS)})")
-        for axis, refs in (("axial", self.axial), ("bending", self.bending)):
+        for axis, refs, what in (("axial", self.axial, "axial"), ("bending", self.bending, "bending"),
+                                 ("axial", self.torsion, "torsion")):
             seen = set()
             for r in refs:
                 if r.axis != axis:
-                    raise SpecError(f"variant '{self.name}': mode {r.token} is not a {axis} mode")
-                self.mode(r)  # validates family and index (and computes a body's mode)
+                    raise SpecError(f"variant '{self.name}': mode {r.token} is not a{'n' if axis == 'axial' else ''} "
+                                    f"{axis} mode{' (torsion takes the bar shapes)' if what == 'torsion' else ''}")
+                # validates family and index (and computes a body's mode; a body's torsion
+                # shapes are its torsion view's, computed where they are used)
+                self.mode(r) if what != "torsion" else mode(r)
                 if r in seen:
-                    raise SpecError(f"variant '{self.name}': duplicate {axis} mode '{r.token}'")
+                    raise SpecError(f"variant '{self.name}': duplicate {what} mode '{r.token}'")
                 seen.add(r)
         if not self.bending:
             raise SpecError(f"variant '{self.name}': at least one bending mode is required")

@@ -33,7 +33,8 @@ Q^T omega_p + Rot(a2, theta2)^T a1 theta1' + a2 theta2', s = 0.
 A beam's floating frame is its root section's; on it the beam carries, per unit s = x/L,
     r = (L s + u, v, vz),   u = axial modes (+ u_fs = -1/2 int (v_x^2 + vz_x^2) for #3),
     v, vz = the model's bending modes in the frame's x-y (I = I_z) and x-z (I_y) planes,
-    phi = torsion: the first fixed-free torsion mode sin(pi s / 2) (TORSION_MODES).
+    phi = torsion: the model's torsion modes, the bar's shapes (variant.TORSION_MODES, the
+          first fixed-free sin(pi s / 2), unless the scene gives others or none).
 Energies (uniform beam; Euler-Bernoulli, St Venant torsion, rotary inertia of bending left
 out, as the spatial benchmarks define it):
     T = 1/2 int rho A |V + r' + omega x r|^2 dx + 1/2 int rho (I_y + I_z) (phi' + omega.t)^2 dx,

@@ -376,21 +376,30 @@ def _model(r: _Items, where: str, given, flag: str | None):
         if not isinstance(given, dict):
             r.fail(where, f"must be a variant name or a table (got {given!r})")
         r.table(where, given, {"variant", "elements", "strain", "axial", "bending", "axial_force",
-                               "moment"})
-        recovery = {}
+                               "moment", "torsion"})
+        recovery = {}  # what modifies the model the other keys give
         for key in ("axial_force", "moment"):
             if key in given:
                 if given[key] not in ("constitutive", "equilibrium"):
                     r.fail(f"{where} {key}", f"must be \"constitutive\" or \"equilibrium\" "
                            f"(got {given[key]!r})")
                 recovery[key] = given[key]
+        if "torsion" in given:
+            val = given["torsion"]
+            if not isinstance(val, list) or not all(isinstance(v, str) for v in val):
+                r.fail(f"{where} torsion", f"must be a list of mode names, e.g. [\"ff1\"] or [] "
+                       f"(got {val!r})")
+            try:
+                recovery["torsion"] = _refs("axial", val)
+            except SpecError as exc:  # the bar's shapes, read as axial modes: name them as torsion's
+                r.fail(f"{where} torsion", str(exc).replace("axial mode", "torsion mode"))
         given = {k: v for k, v in given.items() if k not in recovery}
         if recovery:
             base = _model(r, where, given if len(given) > 1 or "strain" in given
                           else given.get("variant"), flag)
             if base.kind != "modal":
-                r.fail(where, "axial_force / moment apply to modal variants only")
-            return replace(base, **recovery)
+                r.fail(where, "axial_force / moment / torsion apply to modal variants only")
+            return replace(base, **recovery).validate()
         if "variant" in given:
             base = builtin(r.string(where, given, "variant"))
             if set(given) & {"strain", "axial", "bending"}:
@@ -620,12 +629,18 @@ def _carried(system: System, o: Output) -> None:
     if model.kind != "modal":
         return  # finite elements carry every field
     s = sp.nsimplify(x / beam.length, rational=True) if 0 < x < beam.length else sp.Integer(int(x > 0))
+    from flexsym.model.modes import mode
     from flexsym.model.output_names import axial_force_available
 
     if fn == "Mx":
-        if model.moment != "equilibrium" and x == beam.length:
-            raise SpecError(f"{where}: the torsion mode's twist rate is zero at the tip, so the "
-                            "constitutive torsion moment would be identically zero")
+        if model.moment != "equilibrium" and not model.torsion:
+            raise SpecError(f"{where}: model '{model.name}' has no torsion modes (torsion = []), so "
+                            "the constitutive torsion moment would be identically zero (give a "
+                            "torsion mode, or moment = \"equilibrium\")")
+        if model.moment != "equilibrium" and all(float(mode(m).value_at(1, s)) == 0 for m in model.torsion):
+            raise SpecError(f"{where}: the twist rate of every torsion mode of model '{model.name}' "
+                            f"is zero at x = {x:g} m, so the constitutive torsion moment would be "
+                            "identically zero")
         return
     if fn in ("v", "w", "vz") or (fn in ("M", "My", "Mz") and model.moment != "equilibrium"):
         order = 2 if fn in ("M", "My", "Mz") else 0
