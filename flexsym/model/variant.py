@@ -105,7 +105,10 @@ class VariantSpec:
                                     f"{axis} mode{' (torsion takes the bar shapes)' if what == 'torsion' else ''}")
                 # validates family and index (and computes a body's mode; a body's torsion
                 # shapes are its torsion view's, computed where they are used)
-                self.mode(r) if what != "torsion" else mode(r)
+                if what == "torsion":
+                    mode(r)
+                else:
+                    self.mode(r)
                 if r in seen:
                     raise SpecError(f"variant '{self.name}': duplicate {what} mode '{r.token}'")
                 seen.add(r)
