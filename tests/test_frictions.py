@@ -22,11 +22,13 @@ def run_cli(capsys, *argv):
 @pytest.mark.parametrize("scene", ["slider_crank", "pendulum", "hub", "four_bar", "stepped_hub"])
 def test_select_on_a_mechanism_checks_its_request_before_any_work(capsys, scene, tmp_path, monkeypatch):
     """select takes mechanisms (tests/test_select_systems.py); a one-beam flag on one is refused
-    in one line (it was a traceback: 'SystemScene' object has no attribute 'spec')."""
+    in one line (it was a traceback: 'SystemScene' object has no attribute 'spec'). --exact
+    applies to mechanisms too now; --max-bending does not, with or without it."""
     monkeypatch.setenv("FLEXSYM_CACHE", str(tmp_path / "cache"))
-    code, out, err = run_cli(capsys, "select", SCENES / f"{scene}.toml", "--tol", "0.01", "--exact")
+    code, out, err = run_cli(capsys, "select", SCENES / f"{scene}.toml", "--tol", "0.01", "--exact",
+                             "--max-bending", "2")
     assert code == 2 and out == ""
-    assert err.count("\n") == 1 and f"{scene}.toml" in err and "--exact" in err
+    assert err.count("\n") == 1 and f"{scene}.toml" in err and "--max-bending" in err
     assert not (tmp_path / "cache").exists()  # refused before any work
 
 

@@ -1,13 +1,32 @@
-"""`flexsym select MECHANISM.toml --tol TOL`: the cheapest model and step of a mechanism whose
-error against the geometrically exact `ef` stays under TOL in every output the scene names.
+"""`flexsym select MECHANISM.toml --tol TOL [--exact]`: the cheapest model and step of a
+mechanism whose error against the geometrically exact `ef` stays under TOL in every output the
+scene names.
 
 Candidates: every flexible body of the scene given the same built-in modal model (m1, m2, m3,
-prestress; a body from finite-element data keeps its data), each at STEP_FACTORS times the
-scene's step (those that divide the row interval), with the scene's integrator and its
-settings; a model the mechanism refuses (prestress on a beam held beyond its root, ...) is
-listed with its reason. Reference: every flexible body as REFERENCE_ELEMENTS ANCF elements at
-half the scene's step; its own error is estimated by halving its step and its elements, and
-printed (it should be well under TOL).
+prestress; with --exact also `exact`, its bending modes chosen from each beam's ends by
+end_modes as `--model exact` does; a body from finite-element data keeps its data), each at
+STEP_FACTORS times the scene's step (those that divide the row interval), with the scene's
+integrator and its settings; a model the mechanism refuses (prestress on a beam held beyond its
+root, exact with a load on the beam, ...) is listed with its reason.
+
+Reference: every flexible body as REFERENCE_ELEMENTS ANCF elements at half the scene's step;
+its own error is estimated by halving its step and its elements, and printed (it should be
+well under TOL). With --exact it must judge errors of 1e-5 to 1e-4 of the peaks, which ef-32
+does not: its section moment comes from the element curvature and converges at order 2 in
+the elements, 6.5e-4 of the peak off on the four-bar's M_mid (and 1.6e-4 at 64 elements, for
+a build of about 4 minutes). Section N and M from equilibrium are not derived for ef bodies.
+So --exact adds one cheap run, ef on REFERENCE_ELEMENTS / 4 elements (a build of about 20 s),
+and per column (mesh_extrapolated) extrapolates ef-32 by Richardson, R = F32 + (F32 - F16) / 3,
+only where the third mesh shows order 2 (the changes 8->16 and 16->32 falling by a ratio
+within ORDER_2); the other columns keep ef-32. Measured on scenes/four_bar.toml and
+scenes/flex_rocker.toml against ef on 64 elements (at dt/2): M_mid's changes fall by 4.00 and
+4.00 (8-16-32-64 elements), and R(16, 32) is within 6e-8 (four-bar) and 3e-8 (flex_rocker) of
+R(32, 64); N_mid's fall by 14 and 13 (kept: ef-32 is 1.1e-5 and 2.4e-6 off ef-64), the motion
+columns' by 16 (at round-off). The mesh part of the own error is, per column, the change of
+the extrapolation when every mesh is halved (extrapolated columns), the remainder d / (rho - 1)
+of changes falling by the measured rho (faster than order 2), or the last change d (slower);
+the step part is the default's (dt against dt/2). The default (without --exact) is unchanged.
+
 Error of a candidate: the largest over the scene's columns of max_t |y - y_ef| / max_t |y_ef|.
 Cost: CPU time of the integration (median of --repeat runs); costs within the timing noise
 band of the cheapest passing candidate (model_select.NOISE_FLOOR at least) count as equal, and
@@ -18,6 +37,8 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, replace
+
+import numpy as np
 
 from flexsym.analysis.model_select import NOISE_FLOOR
 from flexsym.analysis.system_bench import column_errors, ef_system, run_rows
@@ -30,6 +51,7 @@ from flexsym.toolchain.pipeline import prepare_system, system_folder
 MODELS = ("m1", "m2", "m3", "prestress")
 STEP_FACTORS = (1, 2, 4, 5)
 REFERENCE_ELEMENTS = 32  # ef's M from the element curvature: 16 elements are 2e-3 of the peak off
+ORDER_2 = (2 ** 1.8, 2 ** 2.2)  # --exact: ratios of successive mesh changes taken as order 2
 
 
 @dataclass
@@ -86,29 +108,93 @@ def check_selectable(scene) -> None:
                         "must move by guided drivers and clamps alone)")
 
 
-def select_system(scene, tol: float, repeat: int = 3, log=print):
-    """(candidates, chosen or None, reference's own step error)."""
-    check_selectable(scene)
-    columns = list(scene.columns)
+def _reference(scene, columns, log, extrapolate: bool):
+    """(reference rows by column, its own error estimated, the largest over the columns)."""
     o = scene.options
-    steps = [o.dt * k for k in STEP_FACTORS if o.out_every % k == 0]
-    log(f"reference: ef with {REFERENCE_ELEMENTS} elements per beam, {o.integrator} at dt = {o.dt / 2:g} s")
-    ef = ef_system(scene.system, REFERENCE_ELEMENTS)
+    n = REFERENCE_ELEMENTS
+    how = f"; --exact: extrapolated in the elements where {n // 4}, {n // 2} and {n} show order 2" \
+        if extrapolate else ""
+    log(f"reference: ef with {n} elements per beam, {o.integrator} at dt = {o.dt / 2:g} s{how}")
+    ef = ef_system(scene.system, n)
     ref = _run(ef, scene, o.dt / 2)
     if not ref.ok:
         raise SpecError(f"{scene.path}: the ef reference stopped ({ref.message}); select needs a "
                         "reference: try a smaller [solver] dt")
     # its own error, estimated by halving the step and the elements
     half_step = _run(ef, scene, o.dt)
-    half_mesh = _run(ef_system(scene.system, REFERENCE_ELEMENTS // 2), scene, o.dt / 2)
+    half_mesh = _run(ef_system(scene.system, n // 2), scene, o.dt / 2)
     own = [errors(r, ref, columns)[0] if r.ok else math.inf for r in (half_step, half_mesh)]
+    if not extrapolate:
+        log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0]:.1e}, elements "
+            f"({n // 2} against {n}) {own[1]:.1e} of the peaks")
+        return ref, max(own)
+    quarter = _run(ef_system(scene.system, n // 4), scene, o.dt / 2)
+    if not (half_mesh.ok and quarter.ok):
+        log(f"  not extrapolated: the run with {n // 2 if not half_mesh.ok else n // 4} elements stopped")
+        log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0]:.1e}, elements "
+            f"({n // 2} against {n}) {own[1]:.1e} of the peaks")
+        return ref, max(own)
+    values, mesh, notes = mesh_extrapolated(ref, half_mesh, quarter, columns)
+    log(f"  in the elements (ratio of the changes {n // 4}->{n // 2} and {n // 2}->{n}; 4 is order 2): "
+        + ", ".join(notes))
+    worst = max(columns, key=lambda c: mesh[c])
     log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0]:.1e}, elements "
-        f"({REFERENCE_ELEMENTS // 2} against {REFERENCE_ELEMENTS}) {own[1]:.1e} of the peaks")
-    ref_error = max(own)
+        f"{mesh[worst]:.1e} of the peaks (largest in {worst})")
+    return values, max(own[0], mesh[worst])
+
+
+def mesh_extrapolated(fine, half, quarter, columns):
+    """--exact's reference from ef on n, n/2 and n/4 elements (one step): per column, with the
+    changes d1 = |half - quarter| and d2 = |fine - half| (max over the rows, over the peak) and
+    their ratio rho = d1 / d2,
+    - rho within ORDER_2 (order 2, the curvature's and the axial strain's, shown by the third
+      mesh): fine + (fine - half) / 3, its error estimated as its change when every mesh is
+      halved, |(fine + (fine - half)/3) - (half + (half - quarter)/3)|;
+    - rho above (converging faster): fine, its error the remainder d2 / (rho - 1) of changes
+      that keep falling by rho;
+    - below (slower, or not yet converging): fine, its error d2 (the default's estimate).
+    Returns (rows by column, error by column, a note per column)."""
+    values, error, notes = {}, {}, []
+    for c in columns:
+        f, h, q = fine[c], half[c], quarter[c]
+        peak = float(np.max(np.abs(f))) or 1.0
+        d1, d2 = (float(np.max(np.abs(a - b))) / peak for a, b in ((h, q), (f, h)))
+        rho = d1 / d2 if d2 > 0 else math.inf
+        if ORDER_2[0] <= rho <= ORDER_2[1]:
+            values[c] = f + (f - h) / 3
+            error[c] = float(np.max(np.abs(values[c] - (h + (h - q) / 3)))) / peak
+            notes.append(f"{c} {rho:.2f} extrapolated")
+        else:
+            values[c] = f
+            error[c] = d2 / (rho - 1) if rho > ORDER_2[1] and math.isfinite(rho) else d2
+            notes.append(f"{c} {rho:.3g} kept")
+    return values, error, notes
+
+
+def exact_modes(system) -> str:
+    """The bending modes end_modes gave each flexible body: 'coupler pp1-pp5'."""
+    out = []
+    for b in system.bodies:
+        if b.flexible and getattr(b.model, "bending", None):
+            tokens = [m.token for m in b.model.bending]
+            out.append(f"{b.name} " + (f"{tokens[0]}-{tokens[-1]}" if len(tokens) > 2 else ", ".join(tokens)))
+    return "; ".join(out)
+
+
+def select_system(scene, tol: float, repeat: int = 3, log=print, exact: bool = False):
+    """(candidates, chosen or None, reference's own error); exact: also the built-in `exact`,
+    against the reference extrapolated in the elements (mesh_extrapolated)."""
+    check_selectable(scene)
+    columns = list(scene.columns)
+    o = scene.options
+    steps = [o.dt * k for k in STEP_FACTORS if o.out_every % k == 0]
+    ref, ref_error = _reference(scene, columns, log, exact)
     results = []
-    for name in MODELS:
+    for name in MODELS + (("exact",) if exact else ()):
         try:
             system = checked_system(with_model(scene.system, name), o.t_end)[0]
+            if name == "exact":
+                log(f"  exact: bending {exact_modes(system)} (a build takes a minute or more)")
             prepare_system(system)
         except SpecError as exc:  # what this mechanism cannot take from that model
             results.append(SystemCandidate(name, o.dt, status="refused: " + str(exc).split(": ", 2)[-1]))

@@ -540,13 +540,13 @@ MAX_BENDING = 5
 def _select_system(args, scene, tol: float, repeat: int) -> int:
     from flexsym.analysis.system_select import check_selectable, select_system, table
 
-    if args.exact or args.max_bending is not None:
-        flag = "--exact" if args.exact else "--max-bending"
-        raise SpecError(f"{args.scene}: {flag} applies to one-beam scenes; a mechanism's candidates "
-                        "are the built-in models m1, m2, m3 and prestress at 1, 2, 4 and 5 times its step")
+    if args.max_bending is not None:
+        raise SpecError(f"{args.scene}: --max-bending applies to one-beam scenes; a mechanism's "
+                        "candidates are the built-in models m1, m2, m3 and prestress (and exact with "
+                        "--exact) at 1, 2, 4 and 5 times its step")
     check_selectable(scene)
     print(f"{scene.path}: candidates on outputs {', '.join(scene.columns)}, tolerance {tol:g}")
-    results, best, ref_error = select_system(scene, tol, repeat=repeat)
+    results, best, ref_error = select_system(scene, tol, repeat=repeat, exact=args.exact)
     print()
     print(table(results, best, tol))
     if ref_error > tol / 3:
@@ -816,7 +816,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "one-beam scenes)")
     add_arguments(p, ("repeat",), defaults={"repeat": "3"})
     p.add_argument("--exact", action="store_true", help="also try the exact-kinematics model "
-                   "(strain exact, bending cf1..cfK; opt-in: each takes tens of seconds to compile)")
+                   "(one-beam scene: strain exact, bending cf1..cfK; mechanism: the built-in exact "
+                   "on every flexible body, its modes from the beam's ends, against ef extrapolated "
+                   "in the elements where a third mesh shows order 2). Opt-in: an exact model takes "
+                   "tens of seconds (one beam) to a few minutes (a mechanism) to compile")
     p.set_defaults(func=cmd_select)
 
     p = sub.add_parser("paper", help="reproduce the paper's Fig. 7-9 and Table 1, with an "
