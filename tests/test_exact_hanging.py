@@ -69,7 +69,9 @@ def test_kernels_are_lagrange_equations_of_their_energies_and_the_c_is_casadis(e
     and V (casadi AD on the whole T and V; the kernels' M and f come from sympy's Lagrange
     with the strip's position derivatives as placeholders, and from casadi's on the strip's
     and the bar's T); the one-pass residual against M q'' - f; the Newton Jacobians against
-    central differences of it; every generated C kernel against its casadi function."""
+    central differences of it; every generated C kernel against its casadi function. Measured:
+    M and f 2e-16 and 3e-16 of their largest entries, the residual 3e-16, the Jacobians 1.4e-10
+    (q) and 1.4e-9 (q', the differences' rounding at h = 1e-6)."""
     der = derive_system(system_from_dict(scene(EXACT3, "hang_exact"), name="hang_exact"))
     assert der.casadi_functions and der.T_casadi != 0  # the path under test
     k = {kk.name: kk.function for kk in build_system_kernels(der)}
@@ -89,18 +91,18 @@ def test_kernels_are_lagrange_equations_of_their_energies_and_the_c_is_casadis(e
         M, f = np.array(k["mass"](q, d, p)), np.array(k["force"](q, qd, d, p)).ravel()
         M_l, f_l = (np.array(v) for v in lagrange(q, qd))
         assert np.abs(M - M_l).max() <= 1e-13 * np.abs(M).max()
-        assert np.abs(f - f_l.ravel()).max() <= 1e-11 * np.abs(f).max()
+        assert np.abs(f - f_l.ravel()).max() <= 1e-13 * np.abs(f).max()
 
         def r(q_, qd_):
             return np.array(k["mass"](q_, d, p)) @ qdd - np.array(k["force"](q_, qd_, d, p)).ravel()
         one_pass = np.array(k["residual"](q, qd, qdd, d, p)).ravel()
-        assert np.abs(one_pass - r(q, qd)).max() <= 1e-12 * np.abs(r(q, qd)).max()
+        assert np.abs(one_pass - r(q, qd)).max() <= 1e-13 * np.abs(r(q, qd)).max()
         dq, dqd = (np.array(v) for v in k["residual_jac"](q, qd, qdd, d, p))
         h = 1e-6
         fd_q = np.column_stack([(r(q + h * u, qd) - r(q - h * u, qd)) / (2 * h) for u in np.eye(n)])
         fd_qd = np.column_stack([(r(q, qd + h * u) - r(q, qd - h * u)) / (2 * h) for u in np.eye(n)])
-        assert np.abs(dq - fd_q).max() <= 1e-6 * np.abs(fd_q).max()
-        assert np.abs(dqd - fd_qd).max() <= 1e-6 * np.abs(fd_qd).max()
+        assert np.abs(dq - fd_q).max() <= 1e-8 * np.abs(fd_q).max()
+        assert np.abs(dqd - fd_qd).max() <= 1e-8 * np.abs(fd_qd).max()
         inputs = {"mass": (q, d, p), "force": (q, qd, d, p), "residual": (q, qd, qdd, d, p),
                   "residual_jac": (q, qd, qdd, d, p), "energy": (q, qd, d, p),
                   "outputs": (q, qd, qdd, np.zeros(0), d, p)}
@@ -113,6 +115,81 @@ def test_kernels_are_lagrange_equations_of_their_energies_and_the_c_is_casadis(e
             fn(*[a.ctypes.data_as(ptr) for a in arrays], *[o.ctypes.data_as(ptr) for o in outs])
             for a, b in zip(outs, ref):
                 assert np.abs(a - b).max() <= 1e-12 * max(np.abs(b).max(), 1e-300), name
+
+
+def test_an_exact_beam_hanging_from_an_exact_beam_is_lagrange_too():
+    """The bar replaced by a second exact strip (two modes each, kernels in casadi only): its
+    frame's motion reads the first strip's tip position and its derivatives, inside its own
+    casadi T and d'Alembert residual. The mass and force kernels are Lagrange's equations of
+    the energy kernel's T and V (measured 9e-17 and 2e-16), the one-pass residual is M q'' - f
+    (2e-16), the Jacobian is its central differences (5e-12)."""
+    model = {"strain": "exact", "bending": ["cf1", "cf2"], "moment": "constitutive"}
+    data = scene(model, "exact_chain")
+    arm = next(b for b in data["body"] if b["name"] == "arm")
+    data["body"] = [b if b["name"] != "link" else {**copy.deepcopy(arm), "name": "link", "length": 0.3,
+                                                   "markers": {"tip": 0.3}} for b in data["body"]]
+    next(j for j in data["joint"] if j["name"] == "elbow")["child"] = "link.root"
+    der = derive_system(system_from_dict(data, name="exact_chain"))
+    assert len(der.exact_bodies) == 2 and der.casadi_functions
+    k = {kk.name: kk.function for kk in build_system_kernels(der)}
+    n = len(der.q)
+    p, d = np.array([v for _, _, v in der.params]), np.zeros(1)
+    qs, qds = ca.SX.sym("q", n), ca.SX.sym("qd", n)
+    e = k["energy"](qs, qds, d, p)
+    Mref, pref = ca.hessian(e[0], qds)
+    lagrange = ca.Function("lagrange", [qs, qds], [
+        Mref, ca.gradient(e[0], qs) - ca.jtimes(pref, qs, qds) - ca.gradient(e[1], qs)])
+    rnd = np.random.default_rng(1)
+    for _ in range(2):
+        q, qd, qdd = _state(n, rnd)
+        M, f = np.array(k["mass"](q, d, p)), np.array(k["force"](q, qd, d, p)).ravel()
+        M_l, f_l = (np.array(v) for v in lagrange(q, qd))
+        assert np.abs(M - M_l).max() <= 1e-13 * np.abs(M).max()
+        assert np.abs(f - f_l.ravel()).max() <= 1e-13 * np.abs(f).max()
+
+        def r(q_):
+            return np.array(k["mass"](q_, d, p)) @ qdd - np.array(k["force"](q_, qd, d, p)).ravel()
+        one_pass = np.array(k["residual"](q, qd, qdd, d, p)).ravel()
+        assert np.abs(one_pass - r(q)).max() <= 1e-13 * np.abs(r(q)).max()
+        dq = np.array(k["residual_jac"](q, qd, qdd, d, p)[0])
+        h = 1e-6
+        fd_q = np.column_stack([(r(q + h * u) - r(q - h * u)) / (2 * h) for u in np.eye(n)])
+        assert np.abs(dq - fd_q).max() <= 1e-9 * np.abs(fd_q).max()
+
+
+@pytest.mark.parametrize("hanging", [True, False], ids=["bar_hanging", "bar_on_ground"])
+def test_a_guided_joints_torque_is_the_power_it_gives(hanging):
+    """The strip's pin guided (a spin-up), the bar hanging from its tip or pinned to ground
+    apart, no spring (a spring's V is not in a guided joint's torque yet, for any beam): the
+    output torque(spin) times theta' is d(T + V)/dt along the motion (q'' from M q'' = f, the
+    energy kernel's T + V differentiated by AD), measured 2e-13 and 3e-15. The torque reads the
+    exact strip's T and gravity and the hanging bar's T through casadi (before, a system's
+    exact beam was missing from it: with the bar on ground the torque read 0)."""
+    data = scene(EXACT3, "guided_hang")
+    data["driver"] = [{"name": "spin", "kind": "guided", "joint": "shoulder", "maneuver": "spin-up",
+                       "omega": 6.0, "duration": 15.0}]
+    data["output"]["columns"] = {"tau": "torque(spin)"}
+    data["load"] = []
+    if not hanging:
+        elbow = next(j for j in data["joint"] if j["name"] == "elbow")
+        elbow.update({"parent": "ground", "point": [2.0, 0.0]})
+    der = derive_system(system_from_dict(data, name="guided_hang"))
+    assert bool(der.T_casadi != 0) == hanging
+    k = {kk.name: kk.function for kk in build_system_kernels(der)}
+    n = len(der.q)
+    p = np.array([v for _, _, v in der.params])
+    qs, qds, ds = ca.SX.sym("q", n), ca.SX.sym("qd", n), ca.SX.sym("d", 4)
+    e = k["energy"](qs, qds, ds, p)
+    grads = ca.Function("grads", [qs, qds, ds], [ca.gradient(e[0] + e[1], v) for v in (qs, qds, ds)])
+    rnd = np.random.default_rng(2)
+    for _ in range(3):
+        q, qd, _ = _state(n, rnd)
+        d = np.array([0.3, 0.4, 1.5, 2.0])  # t, theta, theta', theta''
+        qdd = np.linalg.solve(np.array(k["mass"](q, d, p)), np.array(k["force"](q, qd, d, p)).ravel())
+        tau = float(k["outputs"](q, qd, qdd, np.zeros(0), d, p))
+        gq, gqd, gd = (np.array(v).ravel() for v in grads(q, qd, d))
+        power = gq @ qd + gqd @ qdd + gd @ np.array([1.0, d[2], d[3], 0.0])
+        assert abs(tau * d[2] - power) <= 1e-11 * abs(power), (tau * d[2], power)
 
 
 def _peak_errors(run, ref, columns) -> dict:

@@ -132,6 +132,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
             tr.symbols[ef_guided_force(g.joint)] = (
                 ca.mtimes(ca.jacobian(p_th, q), qd) + ca.mtimes(ca.jacobian(p_th, qd), qdd)
                 + ca.mtimes(ca.jacobian(p_th, d), ddot) - ca.jacobian(T_ef, d[1 + 3 * k]))
+            if exact_bodies:  # and the exact beams' gravity, dV_g/dtheta
+                tr.symbols[ef_guided_force(g.joint)] += ca.jacobian(V_x, d[1 + 3 * k])
     else:
         tr.symbols[EF_T] = ca.SX(0.0)  # the T output's placeholder (spatial: nothing by AD)
     if der.ef_damping and any(e.has(EF_D) for e in der.outputs.values()):

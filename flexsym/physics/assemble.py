@@ -111,7 +111,9 @@ class Pose:
 
 
 # Placeholders in output expressions for what sysgen computes in casadi from the ef bodies'
-# kinetic energy T_ef: T_ef itself, and per guided joint d/dt dT_ef/dtheta' - dT_ef/dtheta.
+# kinetic energy T_ef: T_ef itself, and per guided joint d/dt dT_ef/dtheta' - dT_ef/dtheta
+# (T_ef with the exact beams' T and the T that reads their positions, plus dV_g/dtheta of their
+# gravity).
 EF_T = sp.Symbol("T_ef_", real=True)
 
 
@@ -444,7 +446,7 @@ def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
     th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
     p = sp.diff(der.T, thd)
     tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
-    if der.ef_kinetic or der.T_casadi != 0:
+    if der.ef_kinetic or der.exact_bodies:  # what casadi differentiates (sysgen)
         tau += ef_guided_force(driver.joint)
     for (_, phi), lam in zip(der.constraints, der.lam):
         tau += sp.diff(phi, th) * lam
