@@ -84,15 +84,16 @@ def test_mesh_extrapolation_only_where_a_third_mesh_shows_order_2():
     assert notes == ["two 4.00 extrapolated", "four 16 kept", "one 2 kept"]
 
 
-def test_exact_is_refused_with_its_reason_where_the_mechanism_has_a_load_on_the_beam(tmp_path):
-    """A force on the coupler's mid-span: exact refuses it in prepare_system's first check,
-    before any derivation, so select lists it as refused with that reason."""
-    scene = tmp_path / "loaded.toml"
-    scene.write_text((SCENES / "four_bar.toml").read_text() +
-                     '\n[[load]]\nkind = "force"\nmarker = "coupler.mid"\nfx = 0.0\nfy = 1.0\n')
+def test_exact_is_refused_with_its_reason_where_the_scene_reads_the_beams_momentum(tmp_path):
+    """The mechanism's momentum as an output: exact refuses it in prepare_system's first check,
+    before any derivation (its momentum is not derived), so select lists it as refused with
+    that reason."""
+    scene = tmp_path / "momentum.toml"
+    scene.write_text((SCENES / "four_bar.toml").read_text().replace(
+        'M_mid = "M(coupler, mid)" }', 'M_mid = "M(coupler, mid)", H = "momentum" }'))
     s = load_scene(scene)
     system = checked_system(with_model(s.system, "exact"), s.options.t_end)[0]
-    with pytest.raises(SpecError, match="acts on it beyond its root"):
+    with pytest.raises(SpecError, match="needs its momentum"):
         check_derivable(system)
 
 

@@ -7,7 +7,7 @@ prestress; with --exact also `exact`, its bending modes chosen from each beam's 
 end_modes as `--model exact` does; a body from finite-element data keeps its data), each at
 STEP_FACTORS times the scene's step (those that divide the row interval), with the scene's
 integrator and its settings; a model the mechanism refuses (prestress on a beam held beyond its
-root, exact with a load on the beam, ...) is listed with its reason.
+root, exact where the scene reads the momentum, ...) is listed with its reason.
 
 Reference: every flexible body as REFERENCE_ELEMENTS ANCF elements at half the scene's step;
 its own error is estimated by halving its step and its elements, and printed (it should be

@@ -27,6 +27,7 @@ import time
 import casadi as ca
 import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, derive_system, ef_guided_force,
                                       length_param, start_of)
@@ -77,6 +78,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
         for key, syms in (("q", der.q), ("qd", der.qd), ("qdd", der.qdd)):
             symbols[syms[i]], priority[syms[i]] = x[key][i], 2
     tr = SympyToCasadi(symbols, priority)
+    if getattr(der, "casadi_functions", None):  # positions on exact beams that sympy differentiated
+        tr.resolve = placeholder_values(der.casadi_functions, tr, x)
     psyms = [sym for _, sym, _ in der.params]
     q, qd, qdd, d, p = x["q"], x["qd"], x["qdd"], x["d"], x["p"]
     # d depends on time only through the guided theta_k: d' = [1, then theta_k', theta_k'', 0
@@ -109,6 +112,13 @@ def build_system_kernels(der: SystemDerivation) -> list:
             T_x, V_x = exact_energies(exact_bodies, tr, x)
             M_x, f_x = equations_of_motion_sx(T_x, -ca.gradient(V_x, q), q, qd, guided)
             r_exact = ca.mtimes(M + M_ef, qdd) - (f + f_ef) + exact_residual(exact_bodies, tr, x, ddot)
+            if der.T_casadi != 0:  # a hanging body's T, reading positions on an exact beam
+                T_h = tr(der.T_casadi)
+                M_h, f_h = equations_of_motion_sx(T_h, 0, q, qd, guided)
+                T_x, M_x, f_x = T_x + T_h, M_x + M_h, f_x + f_h
+                # its part of r, d/dt dT_h/dq' - dT_h/dq, by one forward sweep along the motion
+                r_exact += ca.jtimes(ca.gradient(T_h, qd), ca.vertcat(q, qd, d), ca.vertcat(qd, qdd, ddot)) \
+                    - ca.gradient(T_h, q)
             T_ef, M_ef, f_ef = T_ef + T_x, M_ef + M_x, f_ef + f_x
             tr.symbols[EXACT_VG], tr.priority[EXACT_VG] = V_x, 2
         M += M_ef
@@ -122,6 +132,8 @@ def build_system_kernels(der: SystemDerivation) -> list:
             tr.symbols[ef_guided_force(g.joint)] = (
                 ca.mtimes(ca.jacobian(p_th, q), qd) + ca.mtimes(ca.jacobian(p_th, qd), qdd)
                 + ca.mtimes(ca.jacobian(p_th, d), ddot) - ca.jacobian(T_ef, d[1 + 3 * k]))
+            if exact_bodies:  # and the exact beams' gravity, dV_g/dtheta
+                tr.symbols[ef_guided_force(g.joint)] += ca.jacobian(V_x, d[1 + 3 * k])
     else:
         tr.symbols[EF_T] = ca.SX(0.0)  # the T output's placeholder (spatial: nothing by AD)
     if der.ef_damping and any(e.has(EF_D) for e in der.outputs.values()):
@@ -181,6 +193,28 @@ def build_system_kernels(der: SystemDerivation) -> list:
         ("drive", "d = [t, theta_k, theta_k', theta_k''] of the guided joints",
          [("t", x["t"]), ("mp", x["mp"])], [("d", ca.vertcat(*drive))]),
     ])
+
+
+def placeholder_values(functions: dict, tr: SympyToCasadi, x: dict):
+    """tr.resolve for the applied-function placeholders (name -> value(tr, x), the derivation's
+    casadi_functions: positions on an exact beam, exact_body.position_symbols): r(q_b) is its
+    casadi value, Derivative(r(q_b), q_i, q_j, ...) casadi's derivatives of that value with
+    respect to the same coordinates, one after the other (each order built on the one below,
+    computed once)."""
+    cache = {}
+
+    def value(name: str, wrt: tuple):
+        if (name, wrt) not in cache:
+            cache[name, wrt] = (functions[name](tr, x) if not wrt
+                                else ca.jacobian(value(name, wrt[:-1]), tr(wrt[-1])))
+        return cache[name, wrt]
+
+    def resolve(e):
+        base, wrt = (e.expr, e.variables) if isinstance(e, sp.Derivative) else (e, ())
+        if not isinstance(base, AppliedUndef) or base.func.__name__ not in functions:
+            return None
+        return value(base.func.__name__, tuple(sorted(wrt, key=sp.default_sort_key)))
+    return resolve
 
 
 def _ef_element_kernel(der: SystemDerivation) -> list:

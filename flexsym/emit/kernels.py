@@ -46,6 +46,9 @@ class SympyToCasadi:
         self.symbols = symbols
         self.priority = priority
         self.memo: dict = {}
+        # e -> SX or None: the value of what is neither a symbol nor a known function (an
+        # applied function placeholder or its Derivative: sysgen.placeholder_values)
+        self.resolve = None
 
     def __call__(self, expr) -> ca.SX:
         key = expr if isinstance(expr, tuple) else (expr,)
@@ -131,6 +134,9 @@ class SympyToCasadi:
         fn = _FUNCS.get(type(e))
         if fn is not None:
             return fn(*[self(a) for a in e.args])
+        value = self.resolve(e) if self.resolve is not None else None
+        if value is not None:
+            return value
         raise ValueError(f"cannot translate {type(e).__name__} ({e}) to casadi")
 
     def _rank(self, f) -> int:

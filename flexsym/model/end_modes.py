@@ -25,7 +25,7 @@ def end_family(system: System, tree: Tree, b: FlexibleBeam) -> str | None:
     if getattr(b.model, "body", None) is not None or system.unpinned_root(tree, b):
         return None
     root = system.joint(tree.joint_of(b.name))
-    for load in system.loads:  # exact refuses forces beyond the root (a torque: unpinned_root)
+    for load in system.loads:  # a force or spring on the beam: clamped-free (a torque: unpinned_root)
         if any((getattr(load, k, None) or "").partition(".")[0] == b.name for k in ("marker", "a", "b")):
             return None
     for o in system.outputs:

@@ -47,6 +47,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from flexsym.model.exact_numbers import exact
 from flexsym.physics.body_kinds import kind_of
@@ -110,7 +111,9 @@ class Pose:
 
 
 # Placeholders in output expressions for what sysgen computes in casadi from the ef bodies'
-# kinetic energy T_ef: T_ef itself, and per guided joint d/dt dT_ef/dtheta' - dT_ef/dtheta.
+# kinetic energy T_ef: T_ef itself, and per guided joint d/dt dT_ef/dtheta' - dT_ef/dtheta
+# (T_ef with the exact beams' T and the T that reads their positions, plus dV_g/dtheta of their
+# gravity).
 EF_T = sp.Symbol("T_ef_", real=True)
 
 
@@ -160,6 +163,12 @@ class SystemDerivation:
     ef_damping: dict = field(default_factory=dict)
     exact_bodies: list = field(default_factory=list)  # ExactPart: T and V_g in casadi (sysgen)
     casadi_outputs: dict = field(default_factory=dict)  # placeholder -> value(tr, x) (sysgen)
+    # applied-function placeholders, name -> value(tr, x): positions on an exact beam that sympy
+    # differentiates (a body hangs from it, a load acts on it); sysgen gives their derivatives
+    casadi_functions: dict = field(default_factory=dict)
+    # the terms of the kinetic energy that read them (a hanging body's): not in T, M, f; sysgen
+    # translates it and adds its Lagrange terms by casadi AD, as the exact beams' own T
+    T_casadi: sp.Expr = sp.Integer(0)
 
     @property
     def drive_symbols(self) -> list[sp.Symbol]:
@@ -330,6 +339,10 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     Q += _applied_forces(der, list(q))
     der.Q = Q.applyfunc(sp.expand)
 
+    if der.casadi_functions:  # the terms of T that read positions on an exact beam: casadi's
+        terms = sp.Add.make_args(der.T)
+        der.T_casadi = sp.Add(*[e for e in terms if e.has(AppliedUndef)])
+        der.T = sp.Add(*[e for e in terms if not e.has(AppliedUndef)])
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
     der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
@@ -433,7 +446,7 @@ def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
     th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
     p = sp.diff(der.T, thd)
     tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
-    if der.ef_kinetic:
+    if der.ef_kinetic or der.exact_bodies:  # what casadi differentiates (sysgen)
         tau += ef_guided_force(driver.joint)
     for (_, phi), lam in zip(der.constraints, der.lam):
         tau += sp.diff(phi, th) * lam

@@ -13,10 +13,17 @@ A beam from finite-element data (ExactKinematics.fe_body) has rho A (s) in place
 for its point masses, which then take their share of the d'Alembert loads and section loads.
 
 T and V_g join the system's automatic-differentiation path (sysgen.build_system_kernels), and
-a position r(x) on the beam (a marker, an output, a cut joint's row) is a placeholder symbol in
-sympy whose casadi value sysgen substitutes. Sympy never differentiates a placeholder:
-check_derivable refuses what would (a tree joint, a load or a spring on the beam beyond its
-root, reactions), so the only derivatives taken of r(x) are casadi's.
+a position r(x) on the beam (a marker, an output, a cut joint's row) is a placeholder in sympy
+whose casadi value sysgen substitutes: a plain symbol, which sympy never differentiates, when
+only casadi differentiates r(x) (a cut joint's rows, outputs); an applied function r(q_b) of
+the beam's coordinates when sympy does (body_kinds/exact.differentiated: a body hangs from the
+beam, a force or a spring acts on it beyond its root). Then sympy's derivatives of it,
+Derivative(r(q_b), q_i, ...), are casadi's of the quadrature value (sysgen.placeholder_values),
+and the terms of T that read r(x) (the hanging bodies', through their pose) are left to casadi
+as the beam's own T (assemble: der.T_casadi): Lagrange on them by AD, their part of the
+one-pass residual d/dt dT/dq' - dT/dq by one forward sweep. Generalised forces (a force's
+F . dr/dq, a spring's -dV/dq, gravity's on the hanging bodies) and the reactions in the
+section loads stay sympy's, with first and second derivatives of r(x) as placeholders.
 """
 from __future__ import annotations
 
@@ -88,12 +95,21 @@ def exact_energies(bodies, tr, x) -> tuple:
     return T, Vg
 
 
-def position_symbols(part, outputs: dict, x: float) -> tuple[sp.Symbol, sp.Symbol]:
+def position_symbols(part, outputs: dict, x: float, args=None) -> tuple:
     """Placeholders for r(x) on the beam (frame components), registered in `outputs` (the
-    derivation's casadi_outputs) with their casadi values."""
+    derivation's casadi_outputs) with their casadi values. With args (the beam's coordinate
+    symbols, for a beam whose positions sympy differentiates: a tree joint hangs a body from it,
+    a load acts on it beyond its root), applied functions r_c(q_b) instead, registered in
+    `outputs` (then the derivation's casadi_functions) by name: sympy's derivatives of them,
+    Derivative(r_c(q_b), q_i, ...), are casadi's of the same value (sysgen.placeholder_values)."""
     at = float(exact(x) / exact(part.beam.length))
-    syms = tuple(sp.Symbol(f"r{c}_{part.beam.name}_{at!r}_", real=True) for c in "xy")
-    if syms[0] in outputs:
+    names = [f"r{c}_{part.beam.name}_{at!r}_" for c in "xy"]
+    if args is not None:
+        syms = tuple(sp.Function(n, real=True)(*args) for n in names)
+        keys = names
+    else:
+        syms = keys = tuple(sp.Symbol(n, real=True) for n in names)
+    if keys[0] in outputs:
         return syms
     weights = ca.DM(part.quad.weights_between(0.0, at))
 
@@ -102,8 +118,8 @@ def position_symbols(part, outputs: dict, x: float) -> tuple[sp.Symbol, sp.Symbo
         k = part.beam_kinematics(part.quad, q, qd, L)
         g = k["t"] * ca.repmat(k["a"], 1, 2)
         return L * ca.mtimes(weights.T, g[:, c])
-    outputs[syms[0]] = lambda tr, xx: value(tr, xx, 0)
-    outputs[syms[1]] = lambda tr, xx: value(tr, xx, 1)
+    outputs[keys[0]] = lambda tr, xx: value(tr, xx, 0)
+    outputs[keys[1]] = lambda tr, xx: value(tr, xx, 1)
     return syms
 
 

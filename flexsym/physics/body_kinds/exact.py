@@ -31,6 +31,16 @@ class ExactPart(FlexPart, ExactKinematics):
         return self.beam.model.body
 
 
+def differentiated(system, tree, beam: str) -> bool:
+    """Sympy differentiates the beam's positions: a tree joint hangs a body from it (the
+    body's pose, hence its T and V, reads them), or a load acts on it beyond its root (its
+    generalised force, or its spring's V). Its placeholders are then functions of its
+    coordinates (exact_body.position_symbols); else plain symbols, the derivatives of a cut
+    joint's rows (Phi_q, gamma) and of the outputs being casadi's alone."""
+    return bool(loaded_beyond_root(system, beam)) or any(
+        j.parent.partition(".")[0] == beam and j.name not in tree.cut for j in system.joints)
+
+
 class Exact(Modal):
     name = "exact"
 
@@ -41,11 +51,10 @@ class Exact(Modal):
     def check(self, system, tree, b) -> None:
         """What it is derived for: a planar beam (uniform, or sections and point masses from
         finite-element data; damped as a modal beam, its strain measures being linear in its
-        coordinates) from which nothing hangs and on which no load acts
-        beyond its root (their equations would differentiate its quadrature positions in
-        sympy), N and M its own (EA eps, EI dphi/dx), and no output that needs its momentum
-        (momentum, the reaction of a tree joint it lies beyond, N or M from equilibrium of a
-        beam it hangs from)."""
+        coordinates); bodies may hang from it and loads act on it anywhere (`differentiated`:
+        its positions are then functions of its coordinates, differentiated by casadi); no
+        output that needs its momentum (momentum, the reaction of a tree joint it lies beyond,
+        N or M from equilibrium of a beam it hangs from)."""
         where = f"system '{system.name}': body '{b.name}': the exact kinematics (strain model 'exact')"
         if system.dimension != 2:
             raise SpecError(f"{where} is derived for planar systems only")
@@ -53,13 +62,6 @@ class Exact(Modal):
         if body is not None and (body.matrices is not None or any(m.rotary for m in body.masses)):
             raise SpecError(f"{where} is derived for a beam from its sections and point masses "
                             "(not from imported matrices, nor with a point mass's rotary inertia)")
-        loaded = loaded_beyond_root(system, b.name)
-        for j in system.joints:
-            if j.parent.partition(".")[0] == b.name and j.name not in tree.cut:
-                raise SpecError(f"{where}: joint '{j.name}' hangs a body from it (a loop may close "
-                                "on it; a body hanging from it is not derived yet)")
-        if loaded:
-            raise SpecError(f"{where}: {loaded} acts on it beyond its root (not derived yet)")
         beyond = {j.name for j in system.joints if j.name not in tree.cut
                   and b.name in tree.subtree(system, j.name)}
         for o in system.outputs:
@@ -89,7 +91,11 @@ class Exact(Modal):
         part = der.flex[body]
         fa = field_reader(part, x)
         L_ = part.psyms[BEAM_PARAMS[4].symbol]
-        rx, ry = position_symbols(part, der.casadi_outputs, x)
+        if differentiated(der.system, der.tree, body):
+            args = [der.q[i] for i in part.index]
+            rx, ry = position_symbols(part, der.casadi_functions, x, args)
+        else:
+            rx, ry = position_symbols(part, der.casadi_outputs, x)
         return rx - station(der, body, x), ry, fa(part.fields.v_s) / L_
 
     def inertial_stress(self, der, beam, x: float, fn: str):
