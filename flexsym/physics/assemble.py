@@ -416,21 +416,26 @@ def spring_force_on_a(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.
     return (k * (length - l0) + c * der.ddt(length)) * delta / length
 
 
-def add_spring(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.Matrix:
+def spring_energy(der: SystemDerivation, load, ends: list[sp.Matrix], wrt) -> tuple[sp.Expr, sp.Matrix]:
     """A spring-damper between the points `ends` (ground components, planar or spatial): its
-    V = k (l - l0)^2 / 2 added to der.V and to der.terms, and its Q = -dV/dq - c l' dl/dq
-    returned."""
+    V = k (l - l0)^2 / 2 and its generalised force on the symbols `wrt`, -dV/dx - c l' dl/dx."""
     delta = ends[1] - ends[0]
     k, c, l0 = (exact(v) for v in (load.k, load.c, load.l0))
     if l0 == 0:  # no square root: smooth when the ends meet
         V = k * delta.dot(delta) / 2
         rate = der.ddt(delta)
-        damping = sp.Matrix([-c * rate.dot(delta.diff(x)) for x in der.q])
+        damping = sp.Matrix([-c * rate.dot(delta.diff(x)) for x in wrt])
     else:
         length = sp.sqrt(delta.dot(delta))
         V = k * (length - l0)**2 / 2
-        damping = sp.Matrix([-c * der.ddt(length) * sp.diff(length, x) for x in der.q])
-    Q = sp.Matrix([-sp.diff(V, x) for x in der.q]) + damping
+        damping = sp.Matrix([-c * der.ddt(length) * sp.diff(length, x) for x in wrt])
+    return V, sp.Matrix([-sp.diff(V, x) for x in wrt]) + damping
+
+
+def add_spring(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.Matrix:
+    """A spring-damper (spring_energy): its V added to der.V and to der.terms, and its Q on the
+    unknowns returned."""
+    V, Q = spring_energy(der, load, ends, der.q)
     der.V += V
     der.terms.append(("", f"spring {load.name or load.a + '-' + load.b}", ("all",), V, Q))
     return Q
@@ -439,13 +444,17 @@ def add_spring(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.Matrix:
 def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
     """torque(D): a motor's force as given; for a guided joint the generalised force that
     keeps it on theta(t): d/dt dT/dtheta' - dT/dtheta + dV_g/dtheta - Q_theta + Phi_theta^T
-    lambda (lambda: the cut joints' multipliers, M q'' = f - Phi_q^T lambda)."""
+    lambda (lambda: the cut joints' multipliers, M q'' = f - Phi_q^T lambda; Q_theta: the
+    motors', forces', torques' and spring-dampers')."""
     if driver.kind == "motor":
         j = next(c for c in der.coords if c.joint == driver.joint)
         return _applied_forces(der, [der.q[der.coords.index(j)]])[0]
     th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
     p = sp.diff(der.T, thd)
     tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
+    for load in der.system.loads:  # a spring-damper pulls on the guided joint too
+        if isinstance(load, SpringDamper):
+            tau -= spring_energy(der, load, _spring_ends(der, load), [th])[1][0]
     if der.ef_kinetic or der.exact_bodies:  # what casadi differentiates (sysgen)
         tau += ef_guided_force(driver.joint)
     for (_, phi), lam in zip(der.constraints, der.lam):
