@@ -68,24 +68,6 @@ def _spatial_quantity(q: str) -> str:
     return q
 
 
-def scene_and_twin(scene: str) -> tuple[dict, dict]:
-    """The scene as written and its spatial twin with the out-of-plane columns (w_out, T_root,
-    z_tip). S3's twin also has test_spatial_sections.py's columns (sigma and the shear along
-    the swing), so that both files share its one build: outputs are read from the motion and
-    leave it unchanged, and each test reads its own columns."""
-    data = tomllib.loads((ROOT / "scenes" / f"{scene}.toml").read_text())
-    twin = spatial_twin(data)
-    beam = next(b["name"] for b in data["body"] if b["kind"] == "beam")
-    twin["output"]["columns"] |= {"w_out": f"vz({beam}, tip)", "T_root": f"Mx({beam}, root)",
-                                  "z_tip": f"z({beam}.tip)"}
-    if scene == "pendulum":
-        from test_spatial_sections import TWIN_COLUMNS  # that module imports this one
-
-        assert not set(TWIN_COLUMNS) & set(twin["output"]["columns"])
-        twin["output"]["columns"] |= TWIN_COLUMNS
-    return data, twin
-
-
 @pytest.mark.parametrize("scene,kw", [
     ("pendulum", dict(t_end=1.0, dt=1e-4)),
     ("hub", dict(t_end=20.0, dt=1e-3)),
@@ -93,7 +75,11 @@ def scene_and_twin(scene: str) -> tuple[dict, dict]:
 def test_open_chain_run_as_spatial_reproduces_the_planar_rows(scene, kw):
     """S3 and S1: every column within 1e-9 of its peak (measured: 1e-14 to 3e-14 for S3,
     2.5e-15 to 4.3e-15 for S1); the out-of-plane deflection and the torsion stay exactly 0."""
-    data, twin = scene_and_twin(scene)
+    data = tomllib.loads((ROOT / "scenes" / f"{scene}.toml").read_text())
+    twin = spatial_twin(data)
+    beam = next(b["name"] for b in data["body"] if b["kind"] == "beam")
+    twin["output"]["columns"] |= {"w_out": f"vz({beam}, tip)", "T_root": f"Mx({beam}, root)",
+                                  "z_tip": f"z({beam}.tip)"}
     planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
     worst = {}
     for col, q in data["output"]["columns"].items():

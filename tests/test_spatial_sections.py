@@ -5,8 +5,7 @@ Q of a modal beam is always the force of the part beyond x from equilibrium (the
 Euler-Bernoulli beam has no shear strain), turned to the deformed section's axes like the
 moments: Q = (S - theta x S)_{y,z}, theta = (phi, -vz_x, v_x). sigma = N/A - Mz y/I_z + My z/I_y.
 Three builds: a clamped strip at rest (static start) under gravity and a tip force, the planar
-pendulum S3, and its spatial twin (tests/test_planar_as_spatial.py's rule; one build with that
-file's check of the twin, whose columns it shares)."""
+pendulum S3, and its spatial twin (tests/test_planar_as_spatial.py's rule)."""
 import tomllib
 from pathlib import Path
 
@@ -14,7 +13,7 @@ import numpy as np
 import pytest
 
 from system_data import built, run_ok
-from test_planar_as_spatial import scene_and_twin
+from test_planar_as_spatial import spatial_twin
 
 ROOT = Path(__file__).resolve().parent.parent
 RHO, E, A, IZ, IY, L, G = 2700.0, 7.0e10, 1.0e-4, 3.3333e-9, 2.0833e-10, 1.0, 9.81
@@ -103,12 +102,6 @@ def test_root_stress_against_its_columns_and_the_closed_form(strip):
 
 PENDULUM = tomllib.loads((ROOT / "scenes" / "pendulum.toml").read_text())
 C = 0.0025  # the outer fibre of the 5 mm strip in its plane of motion
-# S3's spatial twin's columns read below (test_planar_as_spatial.scene_and_twin adds them to
-# the twin it checks, so that the two files build it once)
-TWIN_COLUMNS = {"s": f"sigma(beam, {X}, {C}, 0.0)", "s_z": f"sigma(beam, {X}, {C}, 0.001)",
-                "N": f"N(beam, {X})", "Qy": f"Qy(beam, {X})", "Qz": f"Qz(beam, {X})"}
-for _k, _n in STEPS.items():
-    TWIN_COLUMNS |= {f"Mz_{_k}": f"Mz(beam, {X + _n * H:g})", f"v_{_k}": f"v(beam, {X + _n * H:g})"}
 
 
 def test_planar_sigma_is_the_spatial_sigma_at_z_0_and_the_moment_changes_by_the_shear():
@@ -122,8 +115,12 @@ def test_planar_sigma_is_the_spatial_sigma_at_z_0_and_the_moment_changes_by_the_
     the run's own v and N, is 2.6e-2 of the peak: the check sees it."""
     data = dict(PENDULUM, system=dict(PENDULUM["system"], name="pendulum_sigma"))
     data["output"] = {"interval": 0.001, "columns": {"s": f"sigma(beam, {X}, {C})"}}
-    _, twin = scene_and_twin("pendulum")  # TWIN_COLUMNS among its columns: one build shared
-    assert twin["output"]["interval"] == data["output"]["interval"]
+    twin = spatial_twin(dict(data, output={"interval": 0.001, "columns": {}}))
+    cols = {"s": f"sigma(beam, {X}, {C}, 0.0)", "s_z": f"sigma(beam, {X}, {C}, 0.001)",
+            "N": f"N(beam, {X})", "Qy": f"Qy(beam, {X})", "Qz": f"Qz(beam, {X})"}
+    for k, n in STEPS.items():
+        cols |= {f"Mz_{k}": f"Mz(beam, {X + n * H:g})", f"v_{k}": f"v(beam, {X + n * H:g})"}
+    twin["output"]["columns"] = cols
     kw = dict(integrator="genalpha", dt=1e-4, t_end=0.5)
     planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
     peak = np.abs(planar["s"]).max()
