@@ -109,7 +109,7 @@ def check_selectable(scene) -> None:
 
 
 def _reference(scene, columns, log, extrapolate: bool):
-    """(reference rows by column, its own error estimated, the largest over the columns)."""
+    """(reference rows by column, its own error estimated: the largest over the columns)."""
     o = scene.options
     n = REFERENCE_ELEMENTS
     how = f"; --exact: extrapolated in the elements where {n // 4}, {n // 2} and {n} show order 2" \
@@ -124,13 +124,11 @@ def _reference(scene, columns, log, extrapolate: bool):
     half_step = _run(ef, scene, o.dt)
     half_mesh = _run(ef_system(scene.system, n // 2), scene, o.dt / 2)
     own = [errors(r, ref, columns)[0] if r.ok else math.inf for r in (half_step, half_mesh)]
-    if not extrapolate:
-        log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0]:.1e}, elements "
-            f"({n // 2} against {n}) {own[1]:.1e} of the peaks")
-        return ref, max(own)
-    quarter = _run(ef_system(scene.system, n // 4), scene, o.dt / 2)
-    if not (half_mesh.ok and quarter.ok):
+    quarter = _run(ef_system(scene.system, n // 4), scene, o.dt / 2) if extrapolate else None
+    if extrapolate and not (half_mesh.ok and quarter.ok):
         log(f"  not extrapolated: the run with {n // 2 if not half_mesh.ok else n // 4} elements stopped")
+        extrapolate = False
+    if not extrapolate:
         log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0]:.1e}, elements "
             f"({n // 2} against {n}) {own[1]:.1e} of the peaks")
         return ref, max(own)

@@ -71,6 +71,7 @@ from flexsym.model.limits import MAX_BODIES, MAX_JOINTS
 from flexsym.model.options import OPTIONS, RunOptions, Where, validate
 from flexsym.model.joint_kinds import KINDS
 from flexsym.model.end_modes import with_end_modes
+from flexsym.model.modes import mode
 from flexsym.model.system import (GROUND, SECOND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
                      parse_output)
@@ -629,15 +630,16 @@ def _carried(system: System, o: Output) -> None:
     if model.kind != "modal":
         return  # finite elements carry every field
     s = sp.nsimplify(x / beam.length, rational=True) if 0 < x < beam.length else sp.Integer(int(x > 0))
-    from flexsym.model.modes import mode
     from flexsym.model.output_names import axial_force_available
 
     if fn == "Mx":
-        if model.moment != "equilibrium" and not model.torsion:
+        if model.moment == "equilibrium":
+            return  # the loads' torque
+        if not model.torsion:
             raise SpecError(f"{where}: model '{model.name}' has no torsion modes (torsion = []), so "
                             "the constitutive torsion moment would be identically zero (give a "
                             "torsion mode, or moment = \"equilibrium\")")
-        if model.moment != "equilibrium" and all(float(mode(m).value_at(1, s)) == 0 for m in model.torsion):
+        if all(float(mode(m).value_at(1, s)) == 0 for m in model.torsion):
             raise SpecError(f"{where}: the twist rate of every torsion mode of model '{model.name}' "
                             f"is zero at x = {x:g} m, so the constitutive torsion moment would be "
                             "identically zero")
