@@ -14,6 +14,7 @@ from flexsym.apps.cli import main
 from flexsym.core.errors import SpecError
 from flexsym.physics.assemble import check_derivable
 from flexsym.scenes.scene import load_scene
+from flexsym.model.variant import builtin
 from flexsym.scenes.system_scene import checked_system
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
@@ -151,3 +152,24 @@ def test_select_on_the_spatial_flap():
     assert 0.15 < worst["m1"][0] < 0.25 and worst["m1"][1] == "v_tip"
     assert best.model in ("prestress", "m3") and best.error <= 0.01
     assert 1e-2 < ref_error < 3e-2  # ef-16 against ef-32 in T_A: printed as a warning
+
+
+def test_modal_candidates_keep_the_scenes_torsion_and_recovery(tmp_path):
+    """A candidate changes a body's strain model only: a scene that drops the torsion modes and
+    asks for constitutive axial forces is scored with them (they change the rows: S7 without torsion
+    runs at twice the step), exact and ef candidates take their own, and a body from
+    finite-element data keeps its data."""
+    scene = tmp_path / "flap.toml"
+    scene.write_text((SCENES / "flap.toml").read_text().replace(
+        'model = "m3" ', 'model = { variant = "m2", torsion = [], axial_force = "constitutive" }'))
+    system = load_scene(scene).system
+    for name in ("m1", "m2", "prestress"):
+        blade = with_model(system, name).body("blade").model
+        assert (blade.strain, blade.torsion, blade.axial_force) == (builtin(name).strain, (), "constitutive")
+    default = with_model(load_scene(SCENES / "flap.toml").system, "m2").body("blade").model
+    assert default.torsion != () and default.axial_force == "equilibrium"  # a mechanism's default
+    assert with_model(system, "ef").body("blade").model.kind == "fe"
+    exact = with_model(system, "exact").body("blade").model
+    assert exact.axial_force == "equilibrium" and exact.torsion == default.torsion
+    mesh = load_scene(SCENES / "flap_mesh.toml").system
+    assert with_model(mesh, "m1").body("blade").model.body is mesh.body("blade").model.body is not None

@@ -43,6 +43,7 @@ import numpy as np
 from flexsym.analysis.model_select import NOISE_FLOOR
 from flexsym.analysis.system_bench import column_errors, ef_system, run_rows
 from flexsym.core.errors import SpecError
+from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.variant import builtin
 from flexsym.scenes.system_scene import checked_system
 from flexsym.codegen.generate import MANIFEST
@@ -66,12 +67,28 @@ class SystemCandidate:
     status: str = "ok"
 
 
+# A modal body's choices that are not its strain model: a modal candidate keeps them (a scene
+# that drops the torsion modes or asks for equilibrium moments is scored as it runs).
+KEPT = ("torsion", "axial_force", "moment")
+
+
+def _floating_modal(model) -> bool:
+    return model.kind == "modal" and STRAIN_MODELS[model.strain].kinematics != "exact"
+
+
 def with_model(system, name: str):
-    """Every flexible body with the built-in model `name` (a body's finite-element data kept)."""
+    """Every flexible body with the built-in model `name` (a body's finite-element data kept,
+    and a modal body's KEPT choices when `name` is modal)."""
     base = builtin(name)
-    return replace(system, bodies=tuple(
-        replace(b, model=replace(base, body=b.model.body) if getattr(b.model, "body", None) is not None
-                else base) if b.flexible else b for b in system.bodies))
+
+    def model(old):
+        new = base if getattr(old, "body", None) is None else replace(base, body=old.body)
+        if _floating_modal(base) and _floating_modal(old):
+            new = replace(new, **{k: getattr(old, k) for k in KEPT})
+        return new
+
+    return replace(system, bodies=tuple(replace(b, model=model(b.model)) if b.flexible else b
+                                        for b in system.bodies))
 
 
 TUNING = ("newton_tol", "rho_inf", "penalty", "newmark_beta", "newmark_gamma")
