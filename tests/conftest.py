@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
@@ -9,8 +10,14 @@ import pytest
 @pytest.fixture(scope="session", autouse=True)
 def isolated_cache(tmp_path_factory):
     """Builds and custom variants go to a fresh cache, as on a new machine; pytest-xdist's
-    workers share one (its builds are locked per folder), so each system is built once."""
-    if os.environ.get("PYTEST_XDIST_WORKER"):
+    workers share one (its builds are locked per folder), so each system is built once.
+    FLEXSYM_TEST_CACHE names that cache instead: .ci/run gives the suite and the documentation's
+    commands one fresh cache, so a scene both build is built once (builds are keyed by what
+    generates them, so sharing changes no result)."""
+    if os.environ.get("FLEXSYM_TEST_CACHE"):
+        path = Path(os.environ["FLEXSYM_TEST_CACHE"])
+        path.mkdir(parents=True, exist_ok=True)
+    elif os.environ.get("PYTEST_XDIST_WORKER"):
         path = tmp_path_factory.getbasetemp().parent / "flexsym-cache"
         path.mkdir(exist_ok=True)
     else:

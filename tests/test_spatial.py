@@ -490,6 +490,27 @@ def test_s7_holds_its_loop_and_tends_to_the_rigid_slider_crank(s7):
     assert np.abs(N[1]).max() > 100  # the slider's inertia really loads the rod
 
 
+def test_s7_violation_output_is_the_largest_constraint_row():
+    """The violation output (assemble.violation: a nest of Piecewise built on placeholders,
+    then the rows put in) is max_i |Phi_i| / L at states off the loop, its rows those of the
+    derivation: sympy evaluates both at random states, independently of casadi and the C."""
+    from flexsym.physics.spatial import derive_spatial
+
+    data = tomllib.loads(S7.read_text())
+    data["output"]["columns"] = {"viol": "violation"}
+    der = derive_spatial(system_from_dict(data, name="s7"))
+    rows = [phi for _, phi in der.constraints]
+    assert len(rows) == 5
+    rng = np.random.default_rng(7)
+    scale = next(v for n, _, v in der.params if n == "L")
+    for _ in range(4):
+        state = {x: rng.uniform(-0.5, 0.5) for x in sorted(set().union(*(r.free_symbols for r in rows)), key=str)}
+        state |= {sym: v for _, sym, v in der.params}  # the coordinates random, the parameters the scene's
+        values = [abs(float(r.xreplace(state))) for r in rows]
+        assert max(values) > 1e-3  # off the loop: the rows are not all zero
+        assert float(der.outputs["viol"].xreplace(state)) == pytest.approx(max(values) / scale, rel=1e-13)
+
+
 def test_s7_constrained_integrators_agree(s7):
     """genalpha3, rk4p and ali3p give the same slider motion and axial force: measured 8.5e-9 m
     and 5e-4 of the peak N (rk4p), 5.8e-10 m and 3.5e-5 (ali3p). ali3p failed at t = 0.25 s

@@ -564,12 +564,18 @@ def violation(der: SystemDerivation) -> sp.Expr:
     """max_i |Phi_i| / length scale (length_param's parameter, else length_scale): the
     runtime's `violation` column as an output (0 with no cut joint). A nest of Piecewise, as
     casadi's fmax takes two arguments."""
-    rows = [sp.Abs(phi) for _, phi in der.constraints]
-    if not rows:
+    if not der.constraints:
         return sp.Integer(0)
+    # The nest is built on placeholders, then the rows put in: sympy folds the conditions of a
+    # nested Piecewise through its logic simplification, which on a spatial loop's rows (Euler
+    # parameters) took minutes (S7: 207 of a 214 s derivation); on symbols it takes
+    # milliseconds and gives the same nest.
+    a = sp.symbols(f"_phi0:{len(der.constraints)}")
+    rows = [sp.Abs(x) for x in a]
     out = rows[0]
     for r in rows[1:]:
         out = sp.Piecewise((out, out >= r), (r, True))
+    out = out.xreplace({x: phi for x, (_, phi) in zip(a, der.constraints)})
     i = length_param(der)
     return out / (der.params[i][1] if i >= 0 else sp.Float(length_scale(der.system)))
 
