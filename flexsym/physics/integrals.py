@@ -136,16 +136,27 @@ class IntegralTable:
         """int_a^b density ds, with each factor monomial replaced by its integral symbol."""
         a, b = exact(a), exact(b)
         groups: dict[sp.Expr, list[sp.Expr]] = {}
-        for term in sp.Add.make_args(sp.expand(density)):
-            key_parts, rest = [], []
-            for base, exp in term.as_powers_dict().items():
-                if base == s or base in self._factor_of:
-                    key_parts.append((base, exp))
-                else:
-                    rest.append(base**exp)
-            key = self.monomial_symbol(key_parts, a, b)
-            groups.setdefault(key, []).append(sp.Mul(*rest))
+        for key_parts, rest in self._terms(density):
+            groups.setdefault(self.monomial_symbol(key_parts, a, b), []).append(rest)
         return sp.Add(*[k * sp.Add(*v) for k, v in groups.items()])
+
+    def _terms(self, density: sp.Expr) -> list[tuple[list, sp.Expr]]:
+        """(factor monomial, the rest) of each term of the expanded density. Kept per density:
+        section outputs integrate one density from several stations, and its expansion is what
+        costs (seconds for a spatial beam's moment)."""
+        memo = self.__dict__.setdefault("_terms_of", {})
+        if density not in memo:
+            terms = []
+            for term in sp.Add.make_args(sp.expand(density)):
+                key_parts, rest = [], []
+                for base, exp in term.as_powers_dict().items():
+                    if base == s or base in self._factor_of:
+                        key_parts.append((base, exp))
+                    else:
+                        rest.append(base**exp)
+                terms.append((key_parts, sp.Mul(*rest)))
+            memo[density] = terms
+        return memo[density]
 
     def monomial_symbol(self, parts, a=0, b=1) -> sp.Expr:
         """The symbol of int_a^b s^k * prod(factors) ds (a, b exact fractions of the length)."""

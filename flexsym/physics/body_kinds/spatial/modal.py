@@ -64,7 +64,7 @@ class Modal(SpatialBeam):
 
         def integral(density, a=0, b_=1, table=table, P=P):
             generic = {gp.symbol: P[gp.name] for gp in BEAM_PARAMS}
-            return table.integrate(sp.expand(density), a, b_).xreplace(table.substitutions()).xreplace(generic)
+            return table.integrate(density, a, b_).xreplace(table.substitutions()).xreplace(generic)
 
         der.frame_T.append((integral(rho * A * L / 2 * w("mu") * vel.dot(vel)
                                      + rho * (P["Iy"] + P["I"]) * L / 2 * w("ip") * spin**2), actual))
@@ -376,12 +376,14 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) 
     w = d["table"].weight
     load = rho * A * L * w("mu") * (gl - acc)
     force, k = fn[0] == "S", "xyz".index(fn[1])
+    section = _at(der, beam.name, x, "r")
     if force:
         out = d["integral"](load[k], at, 1)
     else:
-        rx = sp.Matrix([field_at(_View(d["table"], d["modes"]), e, at).xreplace({s: at})
-                        for e in r])
-        mom = cross(r - rx, load)
+        # int (r - r_x) x load = int r x load - r_x x int load (r_x is the station's, constant
+        # along the part): the densities are the same at every station, so each is expanded
+        # once (IntegralTable._terms) for all the stations an output list asks for
+        mom = cross(r, load)
         # minus the rate of the sections' spin momentum beyond x, h = rho (I_y + I_z) spin t
         # along the tangent t (as T's rotary term and _momentum hold it): its rate in the frame
         # plus omega x h (the gyroscopic part, in all three components)
@@ -390,10 +392,10 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) 
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
         h_rate = (spin_rate * tangent + d["spin"] * sp.Matrix([0, F["v_d_s"] / L, F["vz_d_s"] / L])
                   + cross(om, d["spin"] * tangent))
-        out = d["integral"](mom[k] - rho * (P["Iy"] + P["I"]) * L * w("ip") * h_rate[k], at, 1)
+        out = d["integral"](mom[k] - rho * (P["Iy"] + P["I"]) * L * w("ip") * h_rate[k], at, 1) \
+            - cross(section, sp.Matrix([d["integral"](load[j], at, 1) for j in range(3)]))[k]
     omega = fr.omega
     now = (d["actual"] | dict(zip(al, der.ddt(omega))) | dict(zip(gl, fr.g))
            | dict(zip(a0, der.ddt(fr.V) + cross(omega, fr.V))))
     out = out.xreplace(now)
-    section = _at(der, beam.name, x, "r")
     return loads_beyond(der, beam, x, fn, out, section)
