@@ -99,7 +99,7 @@ static fsr_status factor_w(csim* s, double h, double t1, int newton)
         s->m->constraint_hess(s->q1, s->lam, s->d, s->o->p, s->H);
         for (size_t ij = 0; ij < (size_t)n * (size_t)n; ++ij) s->S[ij] += 0.25 * h * h * s->H[ij];
     }
-    if (fsr_lu_factor(s->S, n, s->piv))
+    if (cs_factor(s, s->S))
         return cs_fail(s, FSR_SINGULAR, "ali3p: iteration matrix singular at t = %.6g s", t1);
     return FSR_OK;
 }

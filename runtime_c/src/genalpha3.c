@@ -86,7 +86,7 @@ static fsr_status genalpha3_step(csim* s)
             }
             s->r->jacobian_evaluations++;
             s->h_mat = h;
-            if (fsr_lu_factor(s->S, n, s->piv))
+            if (cs_factor(s, s->S))
                 return cs_fail(s, FSR_SINGULAR, "genalpha3: iteration matrix singular at t = %.6g s", t1);
             rebuild = o->newton_full;
             dq_prev = -1.0;
