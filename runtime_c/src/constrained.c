@@ -62,6 +62,22 @@ int cs_factor(csim* s, double* A)
     return s->banded ? fsr_bordered_factor(&s->band, A, s->piv) : fsr_lu_factor(A, s->n, s->piv);
 }
 
+int cs_row_spans(const csim* s, int i, int fill, int sp[6])
+{
+    const int n = s->n, lo = s->band.lo, hi = s->band.hi, bw = s->band.bw;
+    if (!s->banded || i < lo || i >= hi) {
+        sp[0] = 0;
+        sp[1] = n;
+        return 2;
+    }
+    int k = 0, j0 = i - bw < lo ? lo : i - bw, j1 = i + (fill ? 2 : 1) * bw;
+    if (lo > 0) sp[k++] = 0, sp[k++] = lo;
+    sp[k++] = j0;
+    sp[k++] = j1 < hi ? j1 + 1 : hi;
+    if (hi < n) sp[k++] = hi, sp[k++] = n;
+    return k;
+}
+
 /* B = A^-1 B (n x m) by the factor in A, Cholesky or LU (s->chol), bordered band (s->banded) */
 static void solve_columns(csim* s, const double* A, double* B, int m)
 {

@@ -58,6 +58,13 @@ double cs_max_abs(const double* x, int n);
 /* LU-factor A (n x n; the iteration matrix or M, in place), as a bordered band matrix when
  * the model has a band; 0, or k + 1 for a vanishing pivot at coordinate k. */
 int cs_factor(csim* s, double* A);
+/* The columns of row i of an n x n matrix of the model that can be nonzero, as up to three
+ * ascending spans [sp[2k], sp[2k + 1]); returns 2 x their count. Dense: [0, n). With a band
+ * (s->banded): a border row whole; a block row the border's columns and the band, i - bw to
+ * i + bw, or to i + 2 bw with fill (the entries the band LU fills in: an iteration matrix
+ * formed for cs_factor needs them zero). The entries left out are zero in M, the Jacobians
+ * and d(Phi_q^T lambda)/dq: products and sums over the spans are those over the whole row. */
+int cs_row_spans(const csim* s, int i, int fill, int sp[6]);
 /* x = A^-1 x with A factored by cs_factor (or by Cholesky, s->chol) in s->S (or the identity
  * when A is NULL) */
 void cs_solve(csim* s, const double* A, double* x);
