@@ -376,13 +376,45 @@ def rod_elements(der: SystemDerivation) -> list[dict]:
     return out
 
 
-def _bandwidth(der: SystemDerivation) -> int:
-    """Half-bandwidth of M and the Jacobians: 11 when every coordinate is a node of one spatial
-    ef beam (a node couples to its neighbours only: 6 + 5), else -1 (dense)."""
+def _band(der: SystemDerivation, kernels: list) -> tuple[int, int, int]:
+    """(half-bandwidth, band_first, band_end) of M and the Jacobians (system.h): the nodes of a
+    system's one spatial ef beam, contiguous coordinates [band_first, band_end), form a band (a
+    node couples to its neighbours only: half-bandwidth 6 + 5 = 11, the largest spread of an
+    element's coordinates); the others (a joint's, the beam's floating frame's) are a dense border
+    for the runtime's bordered band solve. band_first = band_end = 0 when every coordinate is a
+    node (no border). (-1, 0, 0): dense, when there is no such beam, its block is not wider than
+    twice its band, or a generated kernel couples two nodes farther apart than the band (M, the
+    Jacobians, d(Phi_q^T lambda)/dq, a constraint row through Phi_q^T Phi_q: its structural
+    nonzeros; the elements' parts, which system.c adds, are within it by construction)."""
     rods = getattr(der, "rod_bodies", ())
-    if len(rods) == 1 and all(c.group == "node" for c in der.coords) and len(der.coords) > 23:
-        return 11
-    return -1
+    nodes = [i for i, c in enumerate(der.coords) if c.group == "node"]
+    if len(rods) != 1 or not nodes or nodes != list(range(nodes[0], nodes[-1] + 1)):
+        return -1, 0, 0
+    lo, hi = nodes[0], nodes[-1] + 1
+    bw = max(max(i for i, _ in el if i >= 0) - min(i for i, _ in el if i >= 0)
+             for el in rod_elements(der)[0]["elements"])
+    if hi - lo <= 2 * bw + 1:
+        return -1, 0, 0
+    fn = {k.name: k.function for k in kernels}
+
+    def spread(name: str, out: int, rows: bool = False) -> int:
+        """The largest |i - j| of a structural nonzero (i, j) in the node block (rows: the
+        largest spread of one row's node columns)."""
+        f = fn[name]
+        r, c = ca.sparsify(f.call(f.sx_in())[out]).sparsity().get_triplet()
+        pairs = [(i, j) for i, j in zip(r, c) if lo <= j < hi and (rows or lo <= i < hi)]
+        if rows:
+            cols = {}
+            for i, j in pairs:
+                cols.setdefault(i, []).append(j)
+            return max((max(v) - min(v) for v in cols.values()), default=0)
+        return max((abs(i - j) for i, j in pairs), default=0)
+    checks = [("mass", 0, False), ("residual_jac", 0, False), ("residual_jac", 1, False)]
+    if der.constraints:
+        checks += [("constraint_hess", 0, False), ("constraint_jac", 0, True)]
+    if any(spread(*c) > bw for c in checks):
+        return -1, 0, 0
+    return (bw, 0, 0) if (lo, hi) == (0, len(der.coords)) else (bw, lo, hi)
 
 
 def _ef_damping_element():
@@ -581,13 +613,14 @@ def generate_system_files(system: System, log=None, ef_free_ad: bool = False) ->
         "outputs_use_acceleration": der.outputs_use_acceleration or placeholders_read("qdd"),
         "outputs_use_drive": der.outputs_use_drive or placeholders_read("d"),
         "ef_bodies": ef_elements(der), "ef_damped": bool(der.ef_damping),
-        "rod_bodies": rod_elements(der), "bandwidth": _bandwidth(der),
+        "rod_bodies": rod_elements(der),
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
         "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
         "kernel_ops": sum(k.total_ops for k in emitted),
         "has_residual": any(k.kernel.name == "residual" for k in emitted),
     }
+    ctx["bandwidth"], ctx["band_first"], ctx["band_end"] = _band(der, kernels)
     ctx["large_kernels"] = ctx["kernel_ops"] > LARGE_KERNELS
     if ctx["static_start"]:
         ctx["static_free"], ctx["static_rows"] = _static_unknowns(system, der, kernels)

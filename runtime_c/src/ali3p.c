@@ -75,11 +75,16 @@
 /* P = M + (h/2) C + (h^2/4) K at (q1, v1, a1) */
 static void build_p(csim* s, double h)
 {
-    const size_t nn = (size_t)s->n * (size_t)s->n;
+    const int n = s->n;
     const double c1 = 0.25 * h * h, cv = 0.5 * h;
     s->m->mass(s->q1, s->d, s->o->p, s->M);
     s->m->residual_jac(s->q1, s->v1, s->a1, s->d, s->o->p, s->Jq, s->Jv);
-    for (size_t ij = 0; ij < nn; ++ij) s->P[ij] = s->M[ij] + cv * s->Jv[ij] + c1 * s->Jq[ij];
+    for (int i = 0; i < n; ++i) {
+        int sp[6], ns = cs_row_spans(s, i, 1, sp);
+        for (int k = 0; k < ns; k += 2)
+            for (size_t ij = (size_t)i * (size_t)n + (size_t)sp[k]; ij < (size_t)i * (size_t)n + (size_t)sp[k + 1]; ++ij)
+                s->P[ij] = s->M[ij] + cv * s->Jv[ij] + c1 * s->Jq[ij];
+    }
     s->r->jacobian_evaluations++;
     s->h_mat = h;
 }
@@ -87,19 +92,20 @@ static void build_p(csim* s, double h)
 /* W = P + (h^2/4) alpha Phi_q^T Phi_q with the current Phi_q, LU-factored into S */
 static fsr_status factor_w(csim* s, double h, double t1, int newton)
 {
-    const int n = s->n, nc = s->nc;
+    const int n = s->n, nc = s->nc, hess = newton && nc && s->m->constraint_hess;
     const double c = 0.25 * h * h * s->alpha;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-            double pen = 0.0;
-            for (int l = 0; l < nc; ++l) pen += s->Pq[l * n + i] * s->Pq[l * n + j];
-            s->S[i * n + j] = s->P[i * n + j] + c * pen;
-        }
-    if (newton && nc && s->m->constraint_hess) {  /* + (h^2/4) d(Phi_q^T lambda*)/dq */
-        s->m->constraint_hess(s->q1, s->lam, s->d, s->o->p, s->H);
-        for (size_t ij = 0; ij < (size_t)n * (size_t)n; ++ij) s->S[ij] += 0.25 * h * h * s->H[ij];
+    if (hess) s->m->constraint_hess(s->q1, s->lam, s->d, s->o->p, s->H);
+    for (int i = 0; i < n; ++i) {
+        int sp[6], ns = cs_row_spans(s, i, 1, sp);
+        for (int k = 0; k < ns; k += 2)
+            for (int j = sp[k]; j < sp[k + 1]; ++j) {
+                double pen = 0.0;
+                for (int l = 0; l < nc; ++l) pen += s->Pq[l * n + i] * s->Pq[l * n + j];
+                s->S[i * n + j] = s->P[i * n + j] + c * pen;
+                if (hess) s->S[i * n + j] += 0.25 * h * h * s->H[i * n + j];  /* + (h^2/4) d(Phi_q^T lambda*)/dq */
+            }
     }
-    if (fsr_lu_factor(s->S, n, s->piv))
+    if (cs_factor(s, s->S))
         return cs_fail(s, FSR_SINGULAR, "ali3p: iteration matrix singular at t = %.6g s", t1);
     return FSR_OK;
 }
@@ -169,7 +175,9 @@ static fsr_status ali3p_step(csim* s)
         for (int l = 0; l < nc; ++l) s->e1[l] = s->alpha * s->phi[l] + lam[l];
         for (int i = 0; i < n; ++i) {  /* -g */
             double r = -s->f[i];
-            for (int j = 0; j < n; ++j) r += s->M[i * n + j] * a1[j];
+            int sp[6], ns = cs_row_spans(s, i, 0, sp);
+            for (int k = 0; k < ns; k += 2)
+                for (int j = sp[k]; j < sp[k + 1]; ++j) r += s->M[i * n + j] * a1[j];
             for (int l = 0; l < nc; ++l) r += s->Pq[l * n + i] * s->e1[l];
             res[i] = -c1 * r;
         }
@@ -233,8 +241,11 @@ static fsr_status ali3p_step(csim* s)
                                  constraint-block solve per step saved between rows) */
             m->force(q1, s->vout, s->d, o->p, res);
             s->r->force_evaluations++;
-            for (int i = 0; i < n; ++i)
-                for (int j = 0; j < n; ++j) res[i] -= s->M[i * n + j] * a1[j];
+            for (int i = 0; i < n; ++i) {
+                int sp[6], ns = cs_row_spans(s, i, 0, sp);
+                for (int k = 0; k < ns; k += 2)
+                    for (int j = sp[k]; j < sp[k + 1]; ++j) res[i] -= s->M[i * n + j] * a1[j];
+            }
             memset(s->e2, 0, sizeof(double) * (size_t)nc);
             memcpy(s->gam, s->e2, sizeof(double) * (size_t)nc);
             cs_kkt(s, NULL, res, s->gam, s->mult);

@@ -55,6 +55,15 @@ fsr_status fsr_check_step_limit(fsr_result* r, const char* name, double dt, doub
                     mant, e, instead);
 }
 
+int fsr_band_layout(const fsm_system* m, int nst, int* lo, int* hi)
+{
+    int bordered = m->band_end > m->band_first;
+    *lo = nst * (bordered ? m->band_first : 0);
+    *hi = nst * (bordered ? m->band_end : m->nq);
+    int kb = nst * (m->bandwidth + 1) - 1;
+    return m->bandwidth >= 0 && 2 * kb + 1 < *hi - *lo ? kb : -1;
+}
+
 double fsr_length_scale(const fsm_system* m, const double* p)
 {
     return m->length_param >= 0 ? p[m->length_param] : m->length_scale;

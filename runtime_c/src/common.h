@@ -35,6 +35,12 @@ fsr_status fsr_check_constrained_options(const fsr_options* o, const fsm_system*
  * (newton_tol x it), the blow-up limit (blowup x it) and the violation column scale with it. */
 double fsr_length_scale(const fsm_system* m, const double* p);
 
+/* The model's band (system.h) for solvers of nst coupled stages whose unknowns interleave the
+ * coordinates (coordinate r, stage i at r nst + i): the half-bandwidth nst (bandwidth + 1) - 1
+ * of the unknowns [nst band_first, nst band_end) into *lo, *hi; -1 (dense) when the model has
+ * none or the band would not be narrower than half its block. */
+int fsr_band_layout(const fsm_system* m, int nst, int* lo, int* hi);
+
 /* Coordinate i (value qi) is beyond limit = blowup x the length scale, and m->coord_unbounded
  * does not exempt it (inline: every step asks, for every coordinate). */
 static inline int fsr_beyond_blowup(const fsm_system* m, double limit, int i, double qi)

@@ -57,10 +57,33 @@ double cs_max_abs(const double* x, int n)
     return m;
 }
 
-/* B = A^-1 B (n x m) by the factor in A, Cholesky or LU (s->chol) */
+int cs_factor(csim* s, double* A)
+{
+    return s->banded ? fsr_bordered_factor(&s->band, A, s->piv) : fsr_lu_factor(A, s->n, s->piv);
+}
+
+int cs_row_spans(const csim* s, int i, int fill, int sp[6])
+{
+    const int n = s->n, lo = s->band.lo, hi = s->band.hi, bw = s->band.bw;
+    if (!s->banded || i < lo || i >= hi) {
+        sp[0] = 0;
+        sp[1] = n;
+        return 2;
+    }
+    int k = 0, j0 = i - bw < lo ? lo : i - bw, j1 = i + (fill ? 2 : 1) * bw;
+    if (lo > 0) sp[k++] = 0, sp[k++] = lo;
+    sp[k++] = j0;
+    sp[k++] = j1 < hi ? j1 + 1 : hi;
+    if (hi < n) sp[k++] = hi, sp[k++] = n;
+    return k;
+}
+
+/* B = A^-1 B (n x m) by the factor in A, Cholesky or LU (s->chol), bordered band (s->banded) */
 static void solve_columns(csim* s, const double* A, double* B, int m)
 {
     if (s->chol) fsr_chol_solve_columns(A, s->n, B, m);
+    else if (s->banded)
+        for (int c = 0; c < m; ++c) fsr_bordered_solve(&s->band, A, s->piv, B + c, m);
     else fsr_lu_solve_columns(A, s->n, s->piv, B, m);
 }
 
@@ -201,7 +224,7 @@ fsr_status cs_consistent_start(csim* s)
     }
     m->mass(q, s->d, s->o->p, s->M);
     memcpy(s->S, s->M, sizeof(double) * (size_t)n * (size_t)n);
-    if (fsr_lu_factor(s->S, n, s->piv))
+    if (cs_factor(s, s->S))
         return cs_fail(s, FSR_SINGULAR, "mass matrix singular at t = 0");
     s->h_mat = 0.0;
     m->force(q, v, s->d, s->o->p, s->a);
@@ -289,11 +312,14 @@ fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const
     s->capacity = capacity > 0 ? capacity : s->nsteps / o->out_every + 2;
     size_t nz = n > nc ? n : nc;
     size_t work = it->work_size(s->n);
-    size_t doubles = 12 * n + 5 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + (2 * nc + 1) * n + nc * nc
-                     + 2 * nc + nz + 1 + work;
+    int lo, hi;
+    s->banded = fsr_band_layout(m, 1, &lo, &hi) >= 0;
+    int border = s->banded ? s->n - (hi - lo) : 0;
+    size_t doubles = 12 * n + 6 * nc + (size_t)m->nd + (size_t)m->ny + 5 * nn + (2 * nc + 1) * n + nc * nc
+                     + 2 * nc + nz + 1 + work + FSR_BORDERED_DOUBLES(border, hi - lo);
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
     double* x = calloc(doubles, sizeof(double));
-    s->piv = malloc(sizeof(int) * (n + nc + 1));
+    s->piv = malloc(sizeof(int) * (n + nc + 1 + FSR_BORDERED_INTS(border)));
     if (!r->rows || !x || !s->piv) {
         free(x);
         free(s->piv);
@@ -332,8 +358,9 @@ fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const
     s->Z = x; x += (nc + 1) * n;
     s->G = x; x += nc * nc;
     s->work = x; x += work;
-    s->zero = x;
+    s->zero = x; x += nz + 1;
     s->cp = s->piv + n;
+    if (s->banded) fsr_bordered_init(&s->band, s->n, m->bandwidth, lo, hi, x, s->cp + nc + 1);
     return FSR_OK;
 }
 

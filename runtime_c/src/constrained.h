@@ -6,6 +6,7 @@
 
 #include "common.h"
 #include "integrator.h"
+#include "linalg.h"
 
 typedef struct csim {
     const fsm_system* m;
@@ -32,6 +33,8 @@ typedef struct csim {
     double* work;    /* the integrator's workspace (its work_size; zeros at the start) */
     int* piv;
     int chol;        /* S holds a Cholesky factor (rk4p: M symmetric), not an LU one */
+    int banded;      /* the model has a band (system.h): S is factored as a bordered band matrix */
+    fsr_bordered band;  /* its layout and border part (linalg.h) */
     double *Pq, *phi, *phit, *gam;  /* Phi_q (nc x n), Phi, Phi_t, gamma */
     double* H;                      /* d(Phi_q^T e)/dq (n x n) */
     double *Z, *G;   /* n x (nc + 1): S^-1 [b, Phi_q^T] (cs_kkt); nc x nc: Phi_q S^-1 Phi_q^T */
@@ -52,7 +55,18 @@ void cs_drive(csim* s, double t);
 /* Phi, Phi_q at (q, s->d) */
 void cs_constraints(csim* s, const double* q);
 double cs_max_abs(const double* x, int n);
-/* x = A^-1 x with A LU-factored in s->S (or the identity when A is NULL) */
+/* LU-factor A (n x n; the iteration matrix or M, in place), as a bordered band matrix when
+ * the model has a band; 0, or k + 1 for a vanishing pivot at coordinate k. */
+int cs_factor(csim* s, double* A);
+/* The columns of row i of an n x n matrix of the model that can be nonzero, as up to three
+ * ascending spans [sp[2k], sp[2k + 1]); returns 2 x their count. Dense: [0, n). With a band
+ * (s->banded): a border row whole; a block row the border's columns and the band, i - bw to
+ * i + bw, or to i + 2 bw with fill (the entries the band LU fills in: an iteration matrix
+ * formed for cs_factor needs them zero). The entries left out are zero in M, the Jacobians
+ * and d(Phi_q^T lambda)/dq: products and sums over the spans are those over the whole row. */
+int cs_row_spans(const csim* s, int i, int fill, int sp[6]);
+/* x = A^-1 x with A factored by cs_factor (or by Cholesky, s->chol) in s->S (or the identity
+ * when A is NULL) */
 void cs_solve(csim* s, const double* A, double* x);
 /* Solve  A x + Phi_q^T lam = b,  Phi_q x = c  for x (in b) and lam, with A LU-factored in A
  * (NULL: identity) and Phi_q in s->Pq, by the Schur complement Phi_q A^-1 Phi_q^T. Dependent

@@ -72,21 +72,27 @@ static fsr_status genalpha3_step(csim* s)
         if (it == o->newton_max) return cs_newton_failed(s, t1, dq, it);
         for (int i = 0; i < n; ++i) {
             double r = res[i];
-            for (int j = 0; j < n; ++j) r -= s->M[i * n + j] * a1[j];
+            int sp[6], ns = cs_row_spans(s, i, 0, sp);
+            for (int k = 0; k < ns; k += 2)
+                for (int j = sp[k]; j < sp[k + 1]; ++j) r -= s->M[i * n + j] * a1[j];
             for (int l = 0; l < nc; ++l) r -= s->Pq[l * n + i] * lam1[l];
             res[i] = r;
         }
         if (rebuild) {
+            int hess = nc && m->constraint_hess;  /* + cb d(Phi_q^T lambda1)/dq */
             m->residual_jac(q1, v1, a1, s->d, o->p, s->Jq, s->Jv);
-            for (size_t ij = 0; ij < (size_t)n * (size_t)n; ++ij)
-                s->S[ij] = s->M[ij] + cb * s->Jq[ij] + cg * s->Jv[ij];
-            if (nc && m->constraint_hess) {  /* + cb d(Phi_q^T lambda1)/dq */
-                m->constraint_hess(q1, lam1, s->d, o->p, s->H);
-                for (size_t ij = 0; ij < (size_t)n * (size_t)n; ++ij) s->S[ij] += cb * s->H[ij];
+            if (hess) m->constraint_hess(q1, lam1, s->d, o->p, s->H);
+            for (int i = 0; i < n; ++i) {
+                int sp[6], ns = cs_row_spans(s, i, 1, sp);
+                for (int k = 0; k < ns; k += 2)
+                    for (size_t ij = (size_t)i * (size_t)n + (size_t)sp[k]; ij < (size_t)i * (size_t)n + (size_t)sp[k + 1]; ++ij) {
+                        s->S[ij] = s->M[ij] + cb * s->Jq[ij] + cg * s->Jv[ij];
+                        if (hess) s->S[ij] += cb * s->H[ij];
+                    }
             }
             s->r->jacobian_evaluations++;
             s->h_mat = h;
-            if (fsr_lu_factor(s->S, n, s->piv))
+            if (cs_factor(s, s->S))
                 return cs_fail(s, FSR_SINGULAR, "genalpha3: iteration matrix singular at t = %.6g s", t1);
             rebuild = o->newton_full;
             dq_prev = -1.0;

@@ -74,6 +74,11 @@ int fsr_symmetric(const double* A, int n)
     return off <= 1e-13 * big;
 }
 
+static int min_int(int a, int b)
+{
+    return a < b ? a : b;
+}
+
 int fsr_lu_factor(double* A, int n, int* piv)
 {
     return fsr_band_lu_factor(A, n, n - 1, n - 1, piv);
@@ -84,59 +89,128 @@ void fsr_lu_solve(const double* A, int n, const int* piv, double* b)
     fsr_band_lu_solve(A, n, n - 1, n - 1, piv, b);
 }
 
-static int min_int(int a, int b)
-{
-    return a < b ? a : b;
-}
-
-/* Banded LU with partial pivoting (LAPACK dgbtrf's algorithm) on dense row-major storage.
- * Row interchanges widen the upper band to kl + ku; the multipliers of column k stay where
- * step k put them, so the forward solve interleaves interchanges and eliminations.
- * With kl = ku = n - 1 it is the dense LU. */
-int fsr_band_lu_factor(double* A, int n, int kl, int ku, int* piv)
+/* Banded LU with partial pivoting (LAPACK dgbtrf's algorithm) on dense row-major storage
+ * (row stride ld: the n x n block may sit inside a larger matrix). Row interchanges widen the
+ * upper band to kl + ku; the multipliers of column k stay where step k put them, so the
+ * forward solve interleaves interchanges and eliminations. With kl = ku = n - 1 it is the
+ * dense LU. */
+static int band_lu_factor(double* A, int n, int ld, int kl, int ku, int* piv)
 {
     int ku2 = min_int(kl + ku, n - 1);
     for (int k = 0; k < n; ++k) {
         int last = min_int(k + kl, n - 1), jend = min_int(k + ku2, n - 1);
         int p = k;
-        double best = fabs(A[k * n + k]);
+        double best = fabs(A[k * ld + k]);
         for (int i = k + 1; i <= last; ++i) {
-            double v = fabs(A[i * n + k]);
+            double v = fabs(A[i * ld + k]);
             if (v > best) { best = v; p = i; }
         }
         if (!(best > 0.0)) return k + 1;
         piv[k] = p;
         if (p != k) {
             for (int j = k; j <= jend; ++j) {
-                double t = A[k * n + j]; A[k * n + j] = A[p * n + j]; A[p * n + j] = t;
+                double t = A[k * ld + j]; A[k * ld + j] = A[p * ld + j]; A[p * ld + j] = t;
             }
         }
-        double inv = 1.0 / A[k * n + k];
-        A[k * n + k] = inv;
+        double inv = 1.0 / A[k * ld + k];
+        A[k * ld + k] = inv;
         for (int i = k + 1; i <= last; ++i) {
-            double l = A[i * n + k] * inv;
-            A[i * n + k] = l;
+            double l = A[i * ld + k] * inv;
+            A[i * ld + k] = l;
             if (l != 0.0)
-                for (int j = k + 1; j <= jend; ++j) A[i * n + j] -= l * A[k * n + j];
+                for (int j = k + 1; j <= jend; ++j) A[i * ld + j] -= l * A[k * ld + j];
         }
     }
     return 0;
 }
 
-void fsr_band_lu_solve(const double* A, int n, int kl, int ku, const int* piv, double* b)
+/* Its solve, b with stride inc. */
+static void band_lu_solve(const double* A, int n, int ld, int kl, int ku, const int* piv, double* b, int inc)
 {
     int ku2 = min_int(kl + ku, n - 1);
     for (int k = 0; k < n; ++k) {
         int p = piv[k], last = min_int(k + kl, n - 1);
-        if (p != k) { double t = b[k]; b[k] = b[p]; b[p] = t; }
-        for (int i = k + 1; i <= last; ++i) b[i] -= A[i * n + k] * b[k];
+        if (p != k) { double t = b[k * inc]; b[k * inc] = b[p * inc]; b[p * inc] = t; }
+        for (int i = k + 1; i <= last; ++i) b[i * inc] -= A[i * ld + k] * b[k * inc];
     }
     for (int i = n - 1; i >= 0; --i) {
         int jend = min_int(i + ku2, n - 1);
-        double s = b[i];
-        for (int j = i + 1; j <= jend; ++j) s -= A[i * n + j] * b[j];
-        b[i] = s * A[i * n + i];
+        double s = b[i * inc];
+        for (int j = i + 1; j <= jend; ++j) s -= A[i * ld + j] * b[j * inc];
+        b[i * inc] = s * A[i * ld + i];
     }
+}
+
+int fsr_band_lu_factor(double* A, int n, int kl, int ku, int* piv)
+{
+    return band_lu_factor(A, n, n, kl, ku, piv);
+}
+
+void fsr_band_lu_solve(const double* A, int n, int kl, int ku, const int* piv, double* b)
+{
+    band_lu_solve(A, n, n, kl, ku, piv, b, 1);
+}
+
+void fsr_bordered_init(fsr_bordered* b, int n, int bw, int lo, int hi, double* dwork, int* iwork)
+{
+    b->n = n;
+    b->bw = bw;
+    b->lo = lo;
+    b->hi = hi;
+    b->m = n - (hi - lo);
+    b->idx = iwork;
+    b->gpiv = iwork + b->m;
+    b->X = dwork;
+    b->G = dwork + (size_t)b->m * (size_t)(hi - lo);
+    b->r = b->G + (size_t)b->m * (size_t)b->m;
+    for (int i = 0, c = 0; i < n; ++i)
+        if (i < lo || i >= hi) b->idx[c++] = i;
+}
+
+int fsr_bordered_factor(fsr_bordered* b, double* S, int* piv)
+{
+    const int n = b->n, lo = b->lo, nb = b->hi - b->lo, m = b->m;
+    double *A = S + (size_t)lo * (size_t)n + lo, *X = b->X, *G = b->G;
+    int bad = band_lu_factor(A, nb, n, b->bw, b->bw, piv + lo);
+    if (bad) return lo + bad;
+    for (int c = 0; c < m; ++c) {  /* row c of X: A^-1 times the block's part of column idx[c] */
+        double* x = X + (size_t)c * (size_t)nb;
+        for (int i = 0; i < nb; ++i) x[i] = A[(size_t)i * (size_t)n + (b->idx[c] - lo)];
+        band_lu_solve(A, nb, n, b->bw, b->bw, piv + lo, x, 1);
+    }
+    for (int a = 0; a < m; ++a) {  /* G = D - C A^-1 B */
+        const double* Ca = S + (size_t)b->idx[a] * (size_t)n + lo;
+        for (int c = 0; c < m; ++c) {
+            const double* x = X + (size_t)c * (size_t)nb;
+            double g = 0.0;
+            for (int i = 0; i < nb; ++i) g += Ca[i] * x[i];
+            G[a * m + c] = S[(size_t)b->idx[a] * (size_t)n + b->idx[c]] - g;
+        }
+    }
+    bad = m ? fsr_lu_factor(G, m, b->gpiv) : 0;
+    return bad ? b->idx[bad - 1] + 1 : 0;
+}
+
+void fsr_bordered_solve(const fsr_bordered* b, const double* S, const int* piv, double* x, int inc)
+{
+    const int n = b->n, lo = b->lo, nb = b->hi - b->lo, m = b->m;
+    const double* A = S + (size_t)lo * (size_t)n + lo;
+    double *y = x + (size_t)lo * (size_t)inc, *r = b->r;
+    band_lu_solve(A, nb, n, b->bw, b->bw, piv + lo, y, inc);  /* y = A^-1 x_A */
+    if (!m) return;
+    for (int a = 0; a < m; ++a) {  /* r = x_D - C y */
+        const double* Ca = S + (size_t)b->idx[a] * (size_t)n + lo;
+        double s = 0.0;
+        for (int i = 0; i < nb; ++i) s += Ca[i] * y[(size_t)i * (size_t)inc];
+        r[a] = x[(size_t)b->idx[a] * (size_t)inc] - s;
+    }
+    fsr_lu_solve(b->G, m, b->gpiv, r);  /* x_D = G^-1 r */
+    for (int i = 0; i < nb; ++i) {  /* x_A = y - A^-1 B x_D */
+        double s = 0.0;
+        for (int c = 0; c < m; ++c) s += b->X[(size_t)c * (size_t)nb + i] * r[c];
+        y[(size_t)i * (size_t)inc] -= s;
+    }
+    for (int a = 0; a < m; ++a) x[(size_t)b->idx[a] * (size_t)inc] = r[a];
 }
 
 void fsr_lu_solve_columns(const double* A, int n, const int* piv, double* B, int m)

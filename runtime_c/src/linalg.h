@@ -4,6 +4,8 @@
 #ifndef FLEXSYM_LINALG_H
 #define FLEXSYM_LINALG_H
 
+#include <stddef.h>
+
 /* Cholesky A = L L^T in the lower triangle (diagonal: 1 / L_jj); returns 0, or k+1 if the
  * k-th pivot is not positive. */
 int fsr_chol_factor(double* A, int n);
@@ -19,6 +21,33 @@ void fsr_lu_solve(const double* A, int n, const int* piv, double* b);
 /* The same for a matrix with kl sub- and ku super-diagonals (zero elsewhere). */
 int fsr_band_lu_factor(double* A, int n, int kl, int ku, int* piv);
 void fsr_band_lu_solve(const double* A, int n, int kl, int ku, const int* piv, double* b);
+/* A bordered band matrix S (n x n, row-major): its coordinates [lo, hi) form a block A of
+ * half-bandwidth bw (a spatial ef beam's nodes), the others (the border: a joint's or frame's
+ * coordinates, before lo and from hi on) couple with everything. Ordered [A B; C D], S is
+ * factored by block elimination: A by band LU (in place in S), X = A^-1 B, and the Schur
+ * complement G = D - C X (m x m, m the border's size) by dense LU; the solve is
+ * y = A^-1 x_A, x_D = G^-1 (x_D - C y), x_A = y - X x_D. With m = 0 it is the band LU. The
+ * block's pivots are chosen inside A only: A must be regular (a mass matrix's node block is). */
+typedef struct {
+    int n, bw, lo, hi;
+    int m;        /* border size, n - (hi - lo) */
+    int* idx;     /* m: the border's coordinates, ascending */
+    int* gpiv;    /* m: G's pivots */
+    double* X;    /* m x (hi - lo): row c is A^-1 (column idx[c] of S in the block's rows) */
+    double* G;    /* m x m: G's LU factor */
+    double* r;    /* m: scratch of the solve */
+} fsr_bordered;
+/* Workspace: FSR_BORDERED_DOUBLES doubles and FSR_BORDERED_INTS ints for border size m and
+ * block size nb. */
+#define FSR_BORDERED_DOUBLES(m, nb) ((size_t)(m) * ((size_t)(nb) + (size_t)(m) + 1))
+#define FSR_BORDERED_INTS(m) (2 * (size_t)(m))
+void fsr_bordered_init(fsr_bordered* b, int n, int bw, int lo, int hi, double* dwork, int* iwork);
+/* Factor S in place (its block part; the border's rows and columns are read, not written);
+ * piv: n ints (the block's pivots at lo..hi - 1). Returns 0, or i + 1 for the coordinate i at
+ * which a pivot vanished. */
+int fsr_bordered_factor(fsr_bordered* b, double* S, int* piv);
+/* x = S^-1 x for x with stride inc (a column of a row-major matrix: inc = its columns). */
+void fsr_bordered_solve(const fsr_bordered* b, const double* S, const int* piv, double* x, int inc);
 /* fsr_lu_solve on the m columns of B (n x m, row-major) at once: each column gets the same
  * operations in the same order (the same bits); the columns' dependency chains interleave. */
 void fsr_lu_solve_columns(const double* A, int n, const int* piv, double* B, int m);

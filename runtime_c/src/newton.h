@@ -26,12 +26,13 @@ typedef struct {
 /* Rows r nst + i (r < n) of the Newton iteration matrix of a method with nst coupled stages:
  * block (i, j) = [i == j] M + cq[j] dr/dq + cv[j] dr/dq' from Mraw, Jq, Jv (generalized-alpha:
  * one stage, S = M + cb dr/dq + cg dr/dq'). The unknowns are interleaved by coordinate, so a
- * banded model gives a banded matrix (half-bandwidth kb = nst (bw + 1) - 1); the band LU fills
- * in up to 2 kb above the diagonal, and those entries are written too (zeros: the model's
- * matrices vanish outside their band). */
+ * banded model gives a banded matrix (half-bandwidth kb = nst (bw + 1) - 1; with a border, a
+ * bordered band one: its band block's rows get the band and the border's columns, the border's
+ * rows every column); the band LU fills in up to 2 kb above the diagonal, and those entries
+ * are written too (zeros: the model's matrices vanish outside their band). */
 void newton_rows(sim* s, int i, const double* cq, const double* cv);
 
-/* LU-factor the iteration matrix, banded when the model is; a dense one also gets its inverse
+/* LU-factor the iteration matrix, (bordered) banded when the model is; a dense one also gets its inverse
  * (the solves are then matrix-vector products, which have no dependency chain: radau5 on #3 at
  * 0.25 s takes 0.127 ms with it, 0.153 ms with LU solves). */
 fsr_status newton_factor(sim* s, double t);
@@ -39,7 +40,7 @@ fsr_status newton_factor(sim* s, double t);
 /* x = S^-1 x */
 static inline void newton_solve(sim* s, double* x)
 {
-    if (s->kb >= 0) fsr_band_lu_solve(s->S, s->N, s->kb, s->kb, s->piv, x);
+    if (s->kb >= 0) fsr_bordered_solve(&s->band, s->S, s->piv, x, 1);
     else sim_apply_inverse(s, s->Sinv, s->N, x);
 }
 

@@ -205,7 +205,8 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsm_system* m, const
     int n = s->n;
     s->nd = m->nd;
     s->L = fsr_length_scale(m, o->p);
-    s->bw = m->bandwidth >= 0 && 2 * m->bandwidth + 1 < n ? m->bandwidth : -1;
+    int lo, hi;  /* M's band: only without a border (a bordered M is treated as dense) */
+    s->bw = fsr_band_layout(m, 1, &lo, &hi) >= 0 && lo == 0 && hi == n ? m->bandwidth : -1;
     s->nsteps = fsr_step_count(o);
     s->msteps = s->nsteps;
     s->next_row = fsr_next_row(0, o->out_every, s->nsteps);
@@ -213,14 +214,16 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsm_system* m, const
     /* the Newton system: nst stages of n coordinates, interleaved (see newton.h) */
     s->nst = it->stages;
     s->N = s->nst * n;
-    s->kb = s->bw >= 0 && 2 * (s->nst * (s->bw + 1) - 1) + 1 < s->N ? s->nst * (s->bw + 1) - 1 : -1;
+    s->kb = fsr_band_layout(m, s->nst, &lo, &hi);
+    int border = s->kb >= 0 ? s->N - (hi - lo) : 0;
     size_t nn = (size_t)n * (size_t)n, NN = (size_t)s->N * (size_t)s->N;
     size_t work = 2 * (size_t)n + it->work_size(n);  /* 2n: dense, then the integrator's */
     r->rows = malloc(sizeof(double) * (size_t)s->capacity * (size_t)r->ncols);
-    size_t base = 5 * nn + 2 * NN + (size_t)m->ny + (size_t)s->N + 4 * (size_t)n + work;
+    size_t base = 5 * nn + 2 * NN + (size_t)m->ny + (size_t)s->N + 4 * (size_t)n + work
+                  + FSR_BORDERED_DOUBLES(border, hi - lo);
     size_t drives = (size_t)(DW_COUNT + 2) * (size_t)m->nd;  /* after the rest, at mem + base */
     double* mem = malloc(sizeof(double) * (base + drives));
-    s->piv = malloc(sizeof(int) * (size_t)(s->N + n));
+    s->piv = malloc(sizeof(int) * ((size_t)(s->N + n) + FSR_BORDERED_INTS(border)));
     s->ms = it->state_size ? calloc(1, it->state_size) : NULL;
     if (!r->rows || !mem || !s->piv || (it->state_size && !s->ms)) {
         free(mem);
@@ -246,6 +249,8 @@ fsr_status sim_open(sim* s, const fsr_integrator* it, const fsm_system* m, const
     s->state = s->zero + n;  /* [q, q'] */
     s->dense = s->state + 2 * n;
     s->work = s->dense + 2 * n;
+    if (s->kb >= 0)
+        fsr_bordered_init(&s->band, s->N, s->kb, lo, hi, s->work + work - 2 * (size_t)n, s->piv + s->N + n);
     s->dw = mem + base;
     s->drive_v[0] = s->dw + DW_COUNT * m->nd;
     s->drive_v[1] = s->drive_v[0] + m->nd;

@@ -24,10 +24,12 @@ typedef struct sim {
     const fsr_options* o;
     fsr_result* r;
     int n;
-    int bw;        /* half-bandwidth of the model's matrices used by the solvers, -1 = dense */
+    int bw;        /* half-bandwidth of M used by the solvers, -1 = dense (or with a border) */
     int nst;       /* stages coupled in the Newton system: 1, or 3 for radau5 */
     int N;         /* its size, nst n (unknowns interleaved: coordinate r, stage i at r nst + i) */
-    int kb;        /* its half-bandwidth, nst (bw + 1) - 1, or -1 = dense */
+    int kb;        /* its half-bandwidth (of its band block when the model has a border, see
+                      fsr_band_layout), nst (bandwidth + 1) - 1, or -1 = dense */
+    fsr_bordered band;  /* with kb >= 0: its factor's layout and border part (linalg.h) */
     double L;      /* length scale (fsr_length_scale) */
     long nsteps;   /* grid points t_k = k dt, t_nsteps = t_end */
     long next_row; /* grid index of the next output row; nsteps + 1 when all are written */

@@ -37,8 +37,8 @@ static fsr_status accel(csim* s, double t, const double* q, const double* v, dou
     const int n = s->n;
     cs_drive(s, t);
     m->mass(q, s->d, s->o->p, s->S);
-    s->chol = fsr_symmetric(s->S, n);  /* Cholesky: half LU's work (as ode.c's M) */
-    if (s->chol ? fsr_chol_factor(s->S, n) : fsr_lu_factor(s->S, n, s->piv))
+    s->chol = !s->banded && fsr_symmetric(s->S, n);  /* Cholesky: half LU's work (as ode.c's M) */
+    if (s->chol ? fsr_chol_factor(s->S, n) : cs_factor(s, s->S))
         return cs_fail(s, FSR_SINGULAR, "rk4p: mass matrix singular at t = %.6g s", t);
     m->force(q, v, s->d, s->o->p, a);
     s->r->force_evaluations++;

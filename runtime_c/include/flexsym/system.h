@@ -35,7 +35,8 @@ typedef struct fsm_system {
     int length_param;            /* index in p of a parameter that is the length scale (a one-beam
                                     model's L, so that it follows --param L=...), or -1 */
     int mass_constant;           /* 1 when M depends on neither q nor d: factored once */
-    int bandwidth;               /* half-bandwidth of M and the Jacobians; -1 when dense */
+    int bandwidth;               /* half-bandwidth of M and the Jacobians (of their block
+                                    [band_first, band_end) when given); -1 when dense */
     int outputs_use_acceleration;/* 1 when outputs read q'' (else it may be anything) */
     int outputs_use_drive;       /* 1 when outputs read d (else it may be anything) */
     const char* const* coord_names;       /* nq */
@@ -86,6 +87,11 @@ typedef struct fsm_system {
      * it, and the implicit integrators' Newton iterations then never form M (sim_residual). */
     void (*residual)(const double* q, const double* qd, const double* qdd, const double* d,
                      const double* p, double* r);
+    /* With bandwidth >= 0: the coordinates [band_first, band_end) are the band's (a spatial ef
+     * beam's nodes); the others, a dense border (a joint's or a floating frame's coordinates),
+     * may couple with every coordinate. After residual, so that a positional initializer that
+     * ends before them leaves 0, 0: the band is every coordinate. */
+    int band_first, band_end;
 } fsm_system;
 
 #endif
