@@ -68,7 +68,7 @@ class SystemCandidate:
 
 
 # A modal body's choices that are not its strain model: a modal candidate keeps them (a scene
-# that drops the torsion modes or asks for equilibrium moments is scored as it runs).
+# that drops the torsion modes or asks for constitutive N is scored as it runs).
 KEPT = ("torsion", "axial_force", "moment")
 
 

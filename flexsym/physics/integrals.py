@@ -98,6 +98,7 @@ class IntegralTable:
         self._symbols: dict[tuple, sp.Symbol] = {}
         self._monomial_of: dict[sp.Symbol, tuple] = {}
         self._values: dict[sp.Symbol, IntegralValue] = {}
+        self._terms_of: dict[sp.Expr, list[tuple[list, sp.Expr]]] = {}  # _terms, per density
         self._numeric_cache: dict[tuple, list] = {}
 
     # ----- placeholders used while building energy densities ---------------------------
@@ -144,7 +145,7 @@ class IntegralTable:
         """(factor monomial, the rest) of each term of the expanded density. Kept per density:
         section outputs integrate one density from several stations, and its expansion is what
         costs (seconds for a spatial beam's moment)."""
-        memo = self.__dict__.setdefault("_terms_of", {})
+        memo = self._terms_of
         if density not in memo:
             terms = []
             for term in sp.Add.make_args(sp.expand(density)):
