@@ -43,7 +43,6 @@ import numpy as np
 from flexsym.analysis.model_select import NOISE_FLOOR
 from flexsym.analysis.system_bench import column_errors, ef_system, run_rows
 from flexsym.core.errors import SpecError
-from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.variant import builtin
 from flexsym.scenes.system_scene import checked_system
 from flexsym.codegen.generate import MANIFEST
@@ -73,7 +72,7 @@ KEPT = ("torsion", "axial_force", "moment")
 
 
 def _floating_modal(model) -> bool:
-    return model.kind == "modal" and STRAIN_MODELS[model.strain].kinematics != "exact"
+    return model.kind == "modal" and not model.exact_kinematics
 
 
 def with_model(system, name: str):

@@ -7,18 +7,13 @@ from flexsym.physics.exact import build_exact_kernels, derive_exact
 from flexsym.emit.kernels import Kernel
 from flexsym.physics.modal import Derivation, build_modal_kernels, derive_modal
 from flexsym.model.variant import VariantSpec, check_clamped_root
-from flexsym.model.strain_models import STRAIN_MODELS
-
-
-def _exact(spec: VariantSpec) -> bool:
-    return STRAIN_MODELS[spec.strain].kinematics == "exact"
 
 
 def derive(spec: VariantSpec) -> Derivation:
     spec.validate()
     check_clamped_root(spec)
-    return derive_exact(spec) if _exact(spec) else derive_modal(spec)
+    return derive_exact(spec) if spec.exact_kinematics else derive_modal(spec)
 
 
 def build_kernels(der: Derivation) -> list[Kernel]:
-    return build_exact_kernels(der) if _exact(der.spec) else build_modal_kernels(der)
+    return build_exact_kernels(der) if der.spec.exact_kinematics else build_modal_kernels(der)

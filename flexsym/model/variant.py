@@ -55,6 +55,11 @@ class VariantSpec:
     body: object = None  # fedata.BeamBody: modes computed from finite-element data
     torsion: tuple[ModeRef, ...] = TORSION_MODES  # a spatial beam's (planar systems: none given)
 
+    @property
+    def exact_kinematics(self) -> bool:
+        """The section rotation from the modes' slopes (`exact`), not a floating frame's."""
+        return STRAIN_MODELS[self.strain].kinematics == "exact"
+
     def mode(self, ref: ModeRef):
         """The shape of a mode: the library's analytic one, or the body's computed one."""
         if self.body is None:

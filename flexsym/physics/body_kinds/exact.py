@@ -8,7 +8,6 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from flexsym.core.errors import SpecError
-from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.system import parse_output
 from flexsym.physics.body_kinds.base import rot, station
 from flexsym.physics.body_kinds.modal import FlexPart, Modal, field_reader, loaded_beyond_root
@@ -45,8 +44,7 @@ class Exact(Modal):
     name = "exact"
 
     def applies(self, body) -> bool:
-        return (body.flexible and body.model.kind == "modal"
-                and STRAIN_MODELS[body.model.strain].kinematics == "exact")
+        return body.flexible and body.model.kind == "modal" and body.model.exact_kinematics
 
     def check(self, system, tree, b) -> None:
         """What it is derived for: a planar beam (uniform, or sections and point masses from

@@ -80,8 +80,7 @@ class Modal(BeamKind):
     name = "modal"
 
     def applies(self, body) -> bool:
-        return (body.flexible and body.model.kind == "modal"
-                and STRAIN_MODELS[body.model.strain].kinematics != "exact")
+        return body.flexible and body.model.kind == "modal" and not body.model.exact_kinematics
 
     def coordinates(self, b) -> list[tuple[str, str]]:
         return [(f"{b.name}_{r.coordinate}", r.axis) for r in b.model.modes]
