@@ -42,11 +42,18 @@ function(_flexsym_objects target)
   target_compile_options(${target} PRIVATE ${FLEXSYM_CODEGEN})
 endfunction()
 
-# The runtime, compiled once per project and linked with every model of it.
+# The runtime, compiled once per project and linked with every model of it; or, given
+# FLEXSYM_RUNTIME_OBJECTS (flexsym's own builds: toolchain/build.py), the objects of a build of
+# this very target with the same compiler and flags, compiled once for every model.
 if(NOT TARGET flexsym_runtime)
-  add_library(flexsym_runtime OBJECT ${FLEXSYM_RUNTIME_SOURCES})
-  _flexsym_objects(flexsym_runtime)
-  set_target_properties(flexsym_runtime PROPERTIES EXCLUDE_FROM_ALL ON)  # built when linked (not by an FMU)
+  if(FLEXSYM_RUNTIME_OBJECTS)
+    add_library(flexsym_runtime OBJECT IMPORTED)
+    set_target_properties(flexsym_runtime PROPERTIES IMPORTED_OBJECTS "${FLEXSYM_RUNTIME_OBJECTS}")
+  else()
+    add_library(flexsym_runtime OBJECT ${FLEXSYM_RUNTIME_SOURCES})
+    _flexsym_objects(flexsym_runtime)
+    set_target_properties(flexsym_runtime PROPERTIES EXCLUDE_FROM_ALL ON)  # built when linked (not by an FMU)
+  endif()
 endif()
 
 # flexsym_NAME_objects: the model's sources, each with its own folder on the include path (a

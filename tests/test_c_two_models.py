@@ -9,7 +9,7 @@ import json
 import subprocess
 from pathlib import Path
 
-from flexsym.core.paths import generated_dir
+from flexsym.core.paths import generated_dir, runtime_dir
 from flexsym.toolchain.build import build, find_cmake, find_compiler
 
 C_MODELS = Path(__file__).parent / "c_models"
@@ -35,3 +35,23 @@ def test_two_generated_models_in_one_program(tmp_path):
         rows = alone.read_text().splitlines()[1:]  # without the header
         assert len(rows) == 1001
         assert together[name].read_text().splitlines() == rows, name
+
+
+def test_a_model_linked_with_the_cached_runtime_is_the_one_compiling_it(tmp_path):
+    """build() compiles the runtime once per compiler and flags and links its objects into each
+    model (runtime_c/CMakeLists.txt, FLEXSYM_RUNTIME_OBJECTS): the driver and the library are
+    byte for byte those of a plain CMake build of the generated folder, which compiles the
+    runtime's sources itself."""
+    folder = generated_dir() / "systems" / "hub"
+    built = build(folder, root=tmp_path / "cache")
+    plain = tmp_path / "plain"
+    for cmd in ([find_cmake(), "-S", str(folder), "-B", str(plain), "-DCMAKE_BUILD_TYPE=Release",
+                 f"-DCMAKE_C_COMPILER={find_compiler()}", f"-DFLEXSYM_RUNTIME_DIR={runtime_dir()}"],
+                [find_cmake(), "--build", str(plain), "-j", "2"]):
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+    listed = (next((tmp_path / "cache" / ".runtime").iterdir()) / "objects.txt").read_text().split()
+    assert len(listed) >= 10 and all(o.endswith(".c.o") for o in listed)
+    for mine, theirs in ((built.executable, plain / "flexsym_hub"), (built.library, plain / "libflexsym_hub.so")):
+        assert mine.read_bytes() == theirs.read_bytes(), mine.name
+    assert not list(built.build_dir.rglob("linalg.c.o"))  # the model's build compiled no runtime

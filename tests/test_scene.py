@@ -234,7 +234,9 @@ def test_concurrent_builds_of_one_variant_are_safe(tmp_path):
     exes = {o[0].strip().split(": ")[-1] for o in outs}
     assert len(exes) == 1
     builds = [d for d in (tmp_path / "cache" / "build").iterdir() if d.is_dir()]
-    assert len(builds) == 1 and not builds[0].name.startswith(".")
+    assert sorted(d.name.startswith(".") for d in builds) == [False, True]  # the model, .runtime
+    runtimes = [d for d in (tmp_path / "cache" / "build" / ".runtime").iterdir() if d.is_dir()]
+    assert len(runtimes) == 1 and not runtimes[0].name.startswith(".")  # the runtime's objects
     variants = [d for d in (tmp_path / "cache" / "variants").iterdir() if d.is_dir()]
     assert len(variants) == 1 and json.loads((variants[0] / "manifest.json").read_text())
 

@@ -73,15 +73,30 @@ class Mode:
         return self.ref.coordinate
 
     def derivative(self, order: int) -> sp.Expr:
-        return sp.diff(self.expr, s, order) if order else self.expr
+        return _derivative(self, order) if order else self.expr
 
     def value_at(self, order: int, at) -> sp.Expr:
         """d^order/ds^order at s = at; a boundary condition gives the exact value."""
+        return _value_at(self, order, at)
+
+    def _value_at(self, order: int, at) -> sp.Expr:
         for bc in self.bcs:
             if bc.order == order and bc.at == at:
                 return sp.Integer(bc.value)
         v = self.derivative(order).subs(s, at)
         return sp.simplify(v) if self.exact else sp.Float(sp.N(v, EIGEN_DPS - 6), EIGEN_DPS - 6)
+
+
+# A derivation asks for the same few shapes' derivatives and station values thousands of times
+# (each spatial section output reads every field at its station): each is worked out once.
+@lru_cache(maxsize=None)
+def _derivative(m: Mode, order: int) -> sp.Expr:
+    return sp.diff(m.expr, s, order)
+
+
+@lru_cache(maxsize=None, typed=True)  # a Rational station is not its Float
+def _value_at(m: Mode, order: int, at) -> sp.Expr:
+    return m._value_at(order, at)
 
 
 @dataclass(frozen=True)

@@ -65,14 +65,16 @@ def _runtime_hash() -> str:
     h = hashlib.sha256()
     root = runtime_dir()
     for f in sorted(root.rglob("*")):
-        if f.is_file() and f.suffix in (".c", ".h", ".cmake"):
+        if f.is_file() and (f.suffix in (".c", ".h", ".cmake") or f.name == "CMakeLists.txt"):
             h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes())
     return h.hexdigest()
 
 
-def build_key(gen_dir: Path, compiler: str, flags: str = "") -> str:
+def build_key(gen_dir: Path | None, compiler: str, flags: str = "") -> str:
+    """The key of a build of gen_dir (None: of the runtime alone) with compiler and flags."""
     h = hashlib.sha256()
-    h.update(folder_hash(gen_dir).encode())
+    if gen_dir is not None:
+        h.update(folder_hash(gen_dir).encode())
     h.update(_runtime_hash().encode())
     h.update(compiler.encode())
     h.update(flags.encode())
@@ -99,18 +101,49 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
     cmake = find_cmake()
     root = Path(root) if root is not None else cache_dir() / "build"
     flags = SANITIZE_FLAGS if sanitize else ""
-    final = root / f"{name}-{'asan-' if sanitize else ''}{build_key(gen_dir, compiler, flags)}"
+    tag = "asan-" if sanitize else ""
+    final = root / f"{name}-{tag}{build_key(gen_dir, compiler, flags)}"
     built = Built(name, final, final / f"flexsym_{name}", final / f"libflexsym_{name}.so")
-    if _complete(built):
-        return built
-    with file_lock(root / f".{final.name}.lock"):
-        if not _complete(built):  # not built meanwhile by another process
-            if final.exists():  # marked complete but an artefact is gone: built again
-                shutil.rmtree(final)
+    if not _complete(built):
+        objects = _runtime_objects(root / ".runtime" / f"{tag}{build_key(None, compiler, flags)}",
+                                   cmake, compiler, jobs, flags)
+
+        def make():
             if log:
                 log(f"compiling '{name}' (cmake, {Path(compiler).name})")
-            _build_into(gen_dir, final, name, cmake, compiler, jobs, flags)
+            _cmake_into(gen_dir, final, f"variant '{name}'", cmake, compiler, jobs, flags,
+                        [f"-DFLEXSYM_RUNTIME_OBJECTS={';'.join(map(str, objects))}"])
+        _once(final, lambda: _complete(built), make)
     return built
+
+
+def _runtime_objects(final: Path, cmake: str, compiler: str, jobs: int, flags: str) -> list[Path]:
+    """The runtime's objects, compiled once per compiler and flags into final (runtime_c's
+    CMakeLists.txt: the target and flags every model's build would compile them with)."""
+    listing = final / "objects.txt"
+
+    def complete():
+        return (final / COMPLETE).is_file() and all(p.is_file() for p in _listed(final))
+    _once(final, complete, lambda: _cmake_into(runtime_dir(), final, "the runtime", cmake,
+                                               compiler, jobs, flags, [], relocate=listing))
+    return _listed(final)
+
+
+def _listed(final: Path) -> list[Path]:
+    listing = final / "objects.txt"
+    return [final / line for line in listing.read_text().split()] if listing.is_file() else [final / "-"]
+
+
+def _once(final: Path, complete, make) -> None:
+    """make() unless complete(), under a lock on final: two processes building the same thing
+    at once both end with it complete and neither sees it half-built."""
+    if complete():
+        return
+    with file_lock(final.parent / f".{final.name}.lock"):
+        if not complete():  # not built meanwhile by another process
+            if final.exists():  # marked complete but an artefact is gone: built again
+                shutil.rmtree(final)
+            make()
 
 
 def _complete(built: Built) -> bool:
@@ -118,18 +151,25 @@ def _complete(built: Built) -> bool:
     return all(p.is_file() for p in (built.build_dir / COMPLETE, built.executable, built.library))
 
 
-def _build_into(gen_dir: Path, final: Path, name: str, cmake: str, compiler: str, jobs: int,
-                flags: str = "") -> None:
+def _cmake_into(source: Path, final: Path, what: str, cmake: str, compiler: str, jobs: int,
+                flags: str, defines: list[str], relocate: Path | None = None) -> None:
+    """Configure and build the CMake project source in a private directory renamed to final
+    when complete (atomic: final is complete or absent). relocate: a file of object paths the
+    build wrote, rewritten relative to the build directory (which is renamed)."""
     root = final.parent
-    tmp = Path(tempfile.mkdtemp(prefix=f".{name}-", dir=root))
+    root.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}-", dir=root))
     try:
-        _run([cmake, "-S", str(gen_dir), "-B", str(tmp), f"-DFLEXSYM_RUNTIME_DIR={runtime_dir()}",
-              f"-DCMAKE_C_COMPILER={compiler}", "-DCMAKE_BUILD_TYPE=Release"]
+        _run([cmake, "-S", str(source), "-B", str(tmp), f"-DFLEXSYM_RUNTIME_DIR={runtime_dir()}",
+              f"-DCMAKE_C_COMPILER={compiler}", "-DCMAKE_BUILD_TYPE=Release", *defines]
              + ([f"-DCMAKE_C_FLAGS={flags}", f"-DCMAKE_EXE_LINKER_FLAGS={flags}",
                  f"-DCMAKE_SHARED_LINKER_FLAGS={flags}"] if flags else []),
-             f"configuring variant '{name}'")
-        _run([cmake, "--build", str(tmp), "-j", str(jobs)], f"compiling variant '{name}'")
-        (tmp / COMPLETE).write_text(str(gen_dir) + "\n")
+             f"configuring {what}")
+        _run([cmake, "--build", str(tmp), "-j", str(jobs)], f"compiling {what}")
+        if relocate is not None:
+            listed = (tmp / relocate.name).read_text().split()
+            (tmp / relocate.name).write_text("".join(f"{Path(p).relative_to(tmp)}\n" for p in listed))
+        (tmp / COMPLETE).write_text(str(source) + "\n")
         os.rename(tmp, final)  # atomic: a build directory is complete or absent
     finally:
         if tmp.exists():

@@ -64,7 +64,7 @@ class Modal(SpatialBeam):
 
         def integral(density, a=0, b_=1, table=table, P=P):
             generic = {gp.symbol: P[gp.name] for gp in BEAM_PARAMS}
-            return table.integrate(density, a, b_).xreplace(table.substitutions()).xreplace(generic)
+            return table.integrate_values(density, a, b_).xreplace(generic)
 
         der.frame_T.append((integral(rho * A * L / 2 * w("mu") * vel.dot(vel)
                                      + rho * (P["Iy"] + P["I"]) * L / 2 * w("ip") * spin**2), actual))
