@@ -401,10 +401,12 @@ def test_build_with_its_library_gone_is_rebuilt(m1_kernels):
     assert again.build_dir == built.build_dir and again.library.is_file() and again.executable.is_file()
 
 
-@pytest.mark.parametrize("gone", ["driver", "marker", "library-and-marker"])
+@pytest.mark.parametrize("gone", ["driver", "marker", "library-and-marker", "runtime-object-and-marker"])
 def test_build_with_another_artefact_gone_is_rebuilt(tmp_path, gone):
     """The sibling cases, on a build root of the test's own: a deleted driver, a lost .complete
-    marker (a directory half removed), both library and marker; the rebuilt model runs."""
+    marker (a directory half removed), both library and marker, an object of the cached
+    runtime with the marker (the runtime is compiled again, then linked); the rebuilt model
+    runs."""
     from flexsym.model.variant import builtin
     from flexsym.toolchain.build import COMPLETE, build
     from flexsym.toolchain.pipeline import generated_folder
@@ -413,10 +415,13 @@ def test_build_with_another_artefact_gone_is_rebuilt(tmp_path, gone):
     folder = generated_folder(builtin("m1"))
     built = build(folder, root=tmp_path)
     marker = built.build_dir / COMPLETE
+    runtime_object = next((tmp_path / ".runtime").rglob("linalg.c.o"))
     for part in {"driver": [built.executable], "marker": [marker],
-                 "library-and-marker": [built.library, marker]}[gone]:
+                 "library-and-marker": [built.library, marker],
+                 "runtime-object-and-marker": [runtime_object, marker]}[gone]:
         part.unlink()
     again = build(folder, root=tmp_path)
     assert again == built and all(p.is_file() for p in (again.executable, again.library, marker))
+    assert runtime_object.is_file()
     assert run_built(again, t_end=0.1, dt=0.01).ok
-    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.endswith(".lock")) == [built.build_dir.name]
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.endswith(".lock")) == [".runtime", built.build_dir.name]
