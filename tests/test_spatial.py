@@ -698,3 +698,23 @@ def test_a_ball_joint_pointing_back_along_x_starts_turned_half_about_z():
     assert np.allclose(frames[body], np.diag([-1.0, -1.0, 1.0]), atol=1e-15)
     e, _ = initial_euler(ball["direction"], None)
     assert np.allclose(np.array(euler_rotation(sp.Matrix(e)).evalf(), dtype=float), frames[body], atol=1e-15)
+
+
+def test_a_spatial_four_bar_written_with_a_rounded_length_assembles():
+    """scenes/spatial_four_bar.toml (an RSUR four-bar as a user writes it: the coupler's length
+    0.2265 m where the loop closes at 0.226495 m) assembles at t = 0 by turning the rocker and
+    the ball joint's direction; independently of the assembly, the coupler's tip, L along the
+    found direction from the crank pin, is then the rocker's tip to 1e-12 m."""
+    from flexsym.scenes.system_scene import checked_system, system_from_data
+
+    data = tomllib.loads((ROOT / "scenes" / "spatial_four_bar.toml").read_text())
+    system, report = checked_system(system_from_data(data, "four-bar: ", "spatial_four_bar")[0])
+    joints = {j.name: j for j in system.joints}
+    theta = joints["rocker_joint"].initial
+    d = np.array(joints["ball"].direction)
+    tip = np.array([0.05, 0.0, 0.0]) + 0.2265 * d / np.linalg.norm(d)
+    rocker_tip = np.array([0.2 + 0.12 * np.sin(theta), 0.12, 0.12 * np.cos(theta)])
+    assert np.linalg.norm(tip - rocker_tip) < 1e-12
+    assert 1e-5 < abs(theta) < 1e-3
+    line = report.line()
+    assert line.startswith("assembly: joint rocker_joint moved") and "joint ball direction turned" in line

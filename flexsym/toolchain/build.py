@@ -3,7 +3,9 @@
 The build key hashes the generated files, the runtime sources and the compiler, so an
 unchanged variant is never rebuilt. Builds happen in a private temporary directory that is
 renamed into place when complete: two runs building the same variant at once both end with
-a complete build and neither sees a half-built one.
+a complete build and neither sees a half-built one. The runtime is compiled once per compiler
+and flags (build/.runtime/) and its objects are linked into every model, which then compiles
+its own sources alone: the binaries are byte for byte those of a plain CMake build.
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ from flexsym.codegen.generate import folder_hash, read_manifest
 from flexsym.core.paths import cache_dir, file_lock, runtime_dir
 
 COMPLETE = ".complete"
+OBJECTS = "objects.txt"  # the runtime's objects, listed by runtime_c/CMakeLists.txt
 # A checking build (tests/test_sanitizers.py): every generated variant and the runtime under
 # AddressSanitizer and UndefinedBehaviorSanitizer, float-to-integer overflow included; the
 # first error aborts the run.
@@ -120,18 +123,18 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
 def _runtime_objects(final: Path, cmake: str, compiler: str, jobs: int, flags: str) -> list[Path]:
     """The runtime's objects, compiled once per compiler and flags into final (runtime_c's
     CMakeLists.txt: the target and flags every model's build would compile them with)."""
-    listing = final / "objects.txt"
+    listing = final / OBJECTS
 
     def complete():
-        return (final / COMPLETE).is_file() and all(p.is_file() for p in _listed(final))
+        return ((final / COMPLETE).is_file() and listing.is_file()
+                and all(p.is_file() for p in _listed(final)))
     _once(final, complete, lambda: _cmake_into(runtime_dir(), final, "the runtime", cmake,
-                                               compiler, jobs, flags, [], relocate=listing))
+                                               compiler, jobs, flags, [], listing=OBJECTS))
     return _listed(final)
 
 
 def _listed(final: Path) -> list[Path]:
-    listing = final / "objects.txt"
-    return [final / line for line in listing.read_text().split()] if listing.is_file() else [final / "-"]
+    return [final / line for line in (final / OBJECTS).read_text().split()]
 
 
 def _once(final: Path, complete, make) -> None:
@@ -152,10 +155,10 @@ def _complete(built: Built) -> bool:
 
 
 def _cmake_into(source: Path, final: Path, what: str, cmake: str, compiler: str, jobs: int,
-                flags: str, defines: list[str], relocate: Path | None = None) -> None:
+                flags: str, defines: list[str], listing: str | None = None) -> None:
     """Configure and build the CMake project source in a private directory renamed to final
-    when complete (atomic: final is complete or absent). relocate: a file of object paths the
-    build wrote, rewritten relative to the build directory (which is renamed)."""
+    when complete (atomic: final is complete or absent). listing: the name of a file of object
+    paths the build wrote, rewritten relative to the build directory (which is renamed)."""
     root = final.parent
     root.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}-", dir=root))
@@ -166,9 +169,9 @@ def _cmake_into(source: Path, final: Path, what: str, cmake: str, compiler: str,
                  f"-DCMAKE_SHARED_LINKER_FLAGS={flags}"] if flags else []),
              f"configuring {what}")
         _run([cmake, "--build", str(tmp), "-j", str(jobs)], f"compiling {what}")
-        if relocate is not None:
-            listed = (tmp / relocate.name).read_text().split()
-            (tmp / relocate.name).write_text("".join(f"{Path(p).relative_to(tmp)}\n" for p in listed))
+        if listing is not None:
+            listed = (tmp / listing).read_text().split()
+            (tmp / listing).write_text("".join(f"{Path(p).relative_to(tmp)}\n" for p in listed))
         (tmp / COMPLETE).write_text(str(source) + "\n")
         os.rename(tmp, final)  # atomic: a build directory is complete or absent
     finally:

@@ -106,7 +106,7 @@ static fsr_status factor_w(csim* s, double h, double t1, int newton)
             }
     }
     if (cs_factor(s, s->S))
-        return cs_fail(s, FSR_SINGULAR, "ali3p: iteration matrix singular at t = %.6g s", t1);
+        return cs_factor_failed(s, s->S, t1, "ali3p: iteration matrix");
     return FSR_OK;
 }
 
@@ -167,6 +167,7 @@ static fsr_status ali3p_step(csim* s)
     int rebuild = o->newton_full || fabs(h - s->h_mat) > 1e-6 * h;
     int factored = nc == 0;  /* nc = 0: W = P, factored when P is built */
     double dq = 0.0, dq_prev = -1.0;
+    s->dq_last = 0.0;
     for (int it = 0;; ++it) {
         if (it == o->newton_max) return cs_newton_failed(s, t1, dq, it);
         m->mass(q1, s->d, o->p, s->M);
@@ -201,6 +202,7 @@ static fsr_status ali3p_step(csim* s)
             if (x > dq || x != x) dq = x;
         }
         s->r->newton_iterations++;
+        s->dq_last = dq;
         if (!isfinite(dq)) return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: Newton update not finite", t1);
         if (nc) {
             cs_constraints(s, q1);
@@ -210,6 +212,7 @@ static fsr_status ali3p_step(csim* s)
         if (dq_prev > ALI3P_SLOW_FLOOR * s->tol && dq > ALI3P_THETA_MAX * dq_prev) rebuild = 1;
         dq_prev = dq;
     }
+    s->dq_last = 0.0;  /* converged: a failed factor below is the matrix's own */
     if (nc) {  /* projections with W at the converged point */
         if ((st = factor_w(s, h, t1, 0))) return st;
         m->constraint_rate(q1, s->d, o->p, s->phit);
