@@ -18,6 +18,7 @@ from flexsym.toolchain.build import SANITIZE_FLAGS, find_compiler
 from test_spatial_ef_free import _s6_ef  # its build (the module's fixture s6ef) serves both
 
 ROOT = Path(__file__).resolve().parent.parent
+FSR_DIVERGED, FSR_SINGULAR = 1, 3  # runtime_c/include/flexsym/runtime.h
 
 
 @pytest.mark.parametrize("flags", ["-O2", SANITIZE_FLAGS], ids=["optimised", "sanitizers"])
@@ -37,6 +38,31 @@ def test_bordered_solve_equals_the_dense_lu(tmp_path, flags):
     run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
     assert run.returncode == 0 and "Sanitizer" not in run.stderr, run.stdout + run.stderr
     assert len(run.stdout.splitlines()) == 8
+
+
+def test_a_failed_factorization_says_whether_the_newton_iterations_diverged(tmp_path):
+    """tests/c_models/factor_failed_check.c calls cs_factor_failed as genalpha3 and ali3p do when
+    the iteration matrix will not factor: a matrix with a NaN, or one rebuilt after a Newton
+    update beyond blowup x L (a user's spatial four-bar on 32 ef elements reached 2.4e99), is
+    the iterations diverging (FSR_DIVERGED, reduce --dt); after a small update, or before any,
+    the matrix is singular (FSR_SINGULAR)."""
+    exe = tmp_path / "factor_failed_check"
+    sources = [str(f) for f in sorted((ROOT / "runtime_c" / "src").glob("*.c")) if f.name != "driver.c"]
+    cc = subprocess.run([find_compiler(), "-O2", "-std=c99", f"-I{ROOT / 'runtime_c' / 'src'}",
+                         f"-I{ROOT / 'runtime_c' / 'include'}",
+                         str(ROOT / "tests" / "c_models" / "factor_failed_check.c"), *sources, "-lm",
+                         "-o", str(exe)], capture_output=True, text=True)
+    assert cc.returncode == 0, cc.stderr
+    lines = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60).stdout.splitlines()
+    (nan_st, nan_msg), (big_st, big_msg), (small_st, small_msg), (none_st, none_msg) = (
+        line.split("|", 1) for line in lines)
+    diverged, singular = str(FSR_DIVERGED), str(FSR_SINGULAR)
+    assert nan_st == diverged and "iteration matrix is not finite" in nan_msg and "reduce --dt" in nan_msg
+    assert big_st == diverged and big_msg == ("genalpha3: iteration matrix singular at t = 0.25 s after a "
+                                              "Newton update of 2.4e+99, beyond 10 x L = 5 m: the "
+                                              "iterations diverged; reduce --dt")
+    assert small_st == none_st == singular
+    assert small_msg == none_msg == "genalpha3: iteration matrix singular at t = 0.25 s"
 
 
 class _System(ctypes.Structure):
