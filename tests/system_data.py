@@ -2,15 +2,48 @@
 from flexsym.scenes.system_scene import system_from_dict
 
 
+_derived: dict = {}  # fingerprint -> the derivation built() generated a folder from
+
+
 def built(data: dict, model: str | None = None):
-    """The built system of scene data (every beam given `model` when one is named)."""
+    """The built system of scene data (every beam given `model` when one is named). A folder
+    generated here keeps its derivation for derivation(data)."""
+    from flexsym.codegen import sysgen
     from flexsym.toolchain.pipeline import prepare_system
 
     if model is not None:
         for b in data["body"]:
             if b["kind"] == "beam":
                 b["model"] = model
-    return prepare_system(system_from_dict(data, name=data["system"]["name"]), log=lambda m: None)
+    system = system_from_dict(data, name=data["system"]["name"])
+    originals = sysgen.derive_spatial, sysgen.derive_system
+
+    def keep(derive):
+        def derived(*args, **kw):
+            der = derive(*args, **kw)
+            _derived[sysgen.fingerprint(system)] = der
+            return der
+        return derived
+    sysgen.derive_spatial, sysgen.derive_system = map(keep, originals)
+    try:
+        return prepare_system(system, log=lambda m: None)
+    finally:
+        sysgen.derive_spatial, sysgen.derive_system = originals
+
+
+def derivation(data: dict):
+    """The derivation of scene data's system: the one its generated C came from when built()
+    generated it in this process (a spatial one with sections takes up to a minute), else made
+    now."""
+    from flexsym.codegen import sysgen
+    from flexsym.physics.assemble import derive_system
+    from flexsym.physics.spatial import derive_spatial
+
+    system = system_from_dict(data, name=data["system"]["name"])
+    der = _derived.get(sysgen.fingerprint(system))
+    if der is None:
+        der = derive_spatial(system) if system.dimension == 3 else derive_system(system)
+    return der
 
 
 def run_ok(built_system, **kw):

@@ -11,7 +11,7 @@ import pytest
 import sympy as sp
 
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, edited_scene, refused_in_one_line, run_ok
+from system_data import built, derivation, edited_scene, refused_in_one_line, run_ok
 
 ROOT = Path(__file__).resolve().parent.parent
 FLAP = ROOT / "scenes" / "flap.toml"
@@ -190,10 +190,7 @@ def test_a_beam_markers_orientation_is_a_rotation_along_the_deformed_axis(tilted
 def test_spatial_kernels_c_casadi_sympy(tilted, system_kernels_agree):
     """The tilted pendulum's generated C kernels against casadi against sympy at a random state
     (its outputs: section moments, a shear force, a stress, joint reactions, an orientation)."""
-    from flexsym.physics.spatial import derive_spatial
-
-    system_kernels_agree(derive_spatial(system_from_dict(_tilted_pendulum(), name="tilted")), tilted,
-                         t=0.3, seed=5)
+    system_kernels_agree(derivation(_tilted_pendulum()), tilted, t=0.3, seed=5)
 
 
 S6 = ROOT / "scenes" / "spherical_pendulum.toml"

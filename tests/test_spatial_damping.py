@@ -10,7 +10,7 @@ import sympy as sp
 
 from flexsym.model.modes import clamped_free_beta
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, run_ok
+from system_data import built, derivation, run_ok
 from test_damping import decay_rate, energy_balance
 from test_planar_as_spatial import spatial_twin
 
@@ -111,8 +111,5 @@ def test_each_plane_decays_at_its_modal_rate(ringing, coordinate, zeta, I, k):
 def test_damped_kernels_c_casadi_sympy(ringing, system_kernels_agree):
     """The damped cantilever's generated C kernels (its force holds -dD/dq', its outputs the
     dissipated power) against casadi against sympy at a random state."""
-    from flexsym.physics.spatial import derive_spatial
-
     data = cantilever({"zeta": [0.02, 0.05, 0.03, 0.04, 0.01]})
-    system_kernels_agree(derive_spatial(system_from_dict(data, name=data["system"]["name"])),
-                         ringing[2], t=0.3, seed=3)
+    system_kernels_agree(derivation(data), ringing[2], t=0.3, seed=3)

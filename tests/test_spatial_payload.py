@@ -6,8 +6,7 @@ against casadi against sympy."""
 import numpy as np
 import pytest
 
-from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, run_ok
+from system_data import built, derivation, run_ok
 from test_planar_as_spatial import spatial_twin
 
 RHO, E, A, L, IY, IZ, M, G = 2700.0, 7.0e10, 1.0e-4, 1.0, 2.0833e-10, 3.3333e-9, 0.05, 9.81
@@ -72,10 +71,8 @@ def test_a_swinging_payload_conserves_energy(swinging):
 
 
 def test_payload_kernels_c_casadi_sympy(swinging, system_kernels_agree):
-    from flexsym.physics.spatial import derive_spatial
-
     data, b = swinging
-    system_kernels_agree(derive_spatial(system_from_dict(data, name=data["system"]["name"])), b, t=0.3, seed=7)
+    system_kernels_agree(derivation(data), b, t=0.3, seed=7)
 
 
 def test_a_planar_payload_run_as_spatial_reproduces_the_planar_rows():

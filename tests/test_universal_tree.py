@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, edited_scene, refused_in_one_line, run_ok, scene_text_refused, scene_text_runs
+from system_data import built, derivation, edited_scene, refused_in_one_line, run_ok, scene_text_refused, scene_text_runs
 from test_spatial import PLANAR, S7, CARDAN_AXIS
 
 G = 9.81
@@ -269,9 +269,7 @@ def test_the_chain_conserves_energy_and_momentum_about_the_vertical(chain):
 def test_universal_kernels_c_casadi_sympy(chain, system_kernels_agree):
     """The chain's generated C kernels against casadi against sympy at a random state (its
     outputs: both angles and rates, a marker, an orientation, the joint's reaction, Hz)."""
-    from flexsym.physics.spatial import derive_spatial
-
-    system_kernels_agree(derive_spatial(system_from_dict(_chain(), name="uj_chain")), chain, t=0.3, seed=11)
+    system_kernels_agree(derivation(_chain()), chain, t=0.3, seed=11)
 
 
 # ----- malformed scenes
