@@ -68,6 +68,38 @@ def _spatial_quantity(q: str) -> str:
     return q
 
 
+# S3's section stations (tests/test_spatial_sections.py): a stress at X, moments and
+# deflections at X + k H for fourth-order differences
+X, H, C = 0.3, 0.01, 0.0025  # m; C: the outer fibre of the 5 mm strip in its plane of motion
+STEPS = {"m2": -2, "m1": -1, "p1": 1, "p2": 2}
+HUB_JOINTS = ("hub_joint", "clamp")  # S1's, whose reactions test_spatial_reactions.py checks
+
+
+def open_chain_pair(scene: str) -> tuple[dict, dict]:
+    """A shipped open chain and its twin, with the out-of-plane columns (w_out, T_root, z_tip:
+    zero in the plane) and the outputs the other files check on it: S3's sections
+    (test_spatial_sections.py), S1's joint reactions (test_spatial_reactions.py). One twin build
+    serves them all (a spatial beam's outputs cost most of its derivation)."""
+    data = tomllib.loads((ROOT / "scenes" / f"{scene}.toml").read_text())
+    beam = next(b["name"] for b in data["body"] if b["kind"] == "beam")
+    if scene == "pendulum":
+        data["output"]["columns"]["s"] = f"sigma({beam}, {X}, {C})"
+    if scene == "hub":
+        data["output"]["columns"] |= {f"{j}_{c}": f"reaction({j}, {c})" for j in HUB_JOINTS
+                                      for c in ("x", "y", "moment")}
+    twin = spatial_twin(data)  # reaction(J, moment) -> reaction(J, mz)
+    cols = twin["output"]["columns"]
+    cols |= {"w_out": f"vz({beam}, tip)", "T_root": f"Mx({beam}, root)", "z_tip": f"z({beam}.tip)"}
+    if scene == "hub":
+        cols |= {f"{j}_{c}": f"reaction({j}, {c})" for j in HUB_JOINTS for c in ("z", "mx", "my")}
+    if scene == "pendulum":
+        cols |= {"s": f"sigma({beam}, {X}, {C}, 0.0)", "s_z": f"sigma({beam}, {X}, {C}, 0.001)",
+                 "N": f"N({beam}, {X})", "Qy": f"Qy({beam}, {X})", "Qz": f"Qz({beam}, {X})"}
+        for k, n in STEPS.items():
+            cols |= {f"Mz_{k}": f"Mz({beam}, {X + n * H:g})", f"v_{k}": f"v({beam}, {X + n * H:g})"}
+    return data, twin
+
+
 @pytest.mark.parametrize("scene,kw", [
     ("pendulum", dict(t_end=1.0, dt=1e-4)),
     ("hub", dict(t_end=20.0, dt=1e-3)),
@@ -75,11 +107,7 @@ def _spatial_quantity(q: str) -> str:
 def test_open_chain_run_as_spatial_reproduces_the_planar_rows(scene, kw):
     """S3 and S1: every column within 1e-9 of its peak (measured: 1e-14 to 3e-14 for S3,
     2.5e-15 to 4.3e-15 for S1); the out-of-plane deflection and the torsion stay exactly 0."""
-    data = tomllib.loads((ROOT / "scenes" / f"{scene}.toml").read_text())
-    twin = spatial_twin(data)
-    beam = next(b["name"] for b in data["body"] if b["kind"] == "beam")
-    twin["output"]["columns"] |= {"w_out": f"vz({beam}, tip)", "T_root": f"Mx({beam}, root)",
-                                  "z_tip": f"z({beam}.tip)"}
+    data, twin = open_chain_pair(scene)
     planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
     worst = {}
     for col, q in data["output"]["columns"].items():

@@ -271,15 +271,10 @@ def test_planar_reactions_are_the_spatial_twins():
     moment and angular momentum, up to 83 N and 240 N m), within 1e-12 of each column's peak
     (measured 4e-16 to 1.1e-15: sympy's planar derivation against the spatial one, casadi's T);
     the out-of-plane z, mx, my are exactly 0."""
-    from test_planar_as_spatial import spatial_twin
+    from test_planar_as_spatial import open_chain_pair
 
-    data = tomllib.loads((ROOT / "scenes" / "hub.toml").read_text())
-    data["output"]["columns"] = {f"{j}_{c}": f"reaction({j}, {c})" for j in ("hub_joint", "clamp")
-                                 for c in ("x", "y", "moment")}
-    twin = spatial_twin(data)  # reaction(J, moment) -> reaction(J, mz)
+    data, twin = open_chain_pair("hub")  # the twin test_planar_as_spatial.py runs too
     assert twin["output"]["columns"]["clamp_moment"] == "reaction(clamp, mz)"
-    twin["output"]["columns"] |= {f"{j}_{c}": f"reaction({j}, {c})" for j in ("hub_joint", "clamp")
-                                  for c in ("z", "mx", "my")}
     kw = dict(t_end=5.0, dt=1e-3)
     planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
     for j in ("hub_joint", "clamp"):

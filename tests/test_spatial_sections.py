@@ -5,23 +5,19 @@ Q of a modal beam is always the force of the part beyond x from equilibrium (the
 Euler-Bernoulli beam has no shear strain), turned to the deformed section's axes like the
 moments: Q = (S - theta x S)_{y,z}, theta = (phi, -vz_x, v_x). sigma = N/A - Mz y/I_z + My z/I_y.
 Three builds: a clamped strip at rest (static start) under gravity and a tip force, the planar
-pendulum S3, and its spatial twin (tests/test_planar_as_spatial.py's rule)."""
-import tomllib
+pendulum S3, and its spatial twin (tests/test_planar_as_spatial.py's pair, built once for both)."""
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from system_data import built, run_ok
-from test_planar_as_spatial import spatial_twin
+from test_planar_as_spatial import C, H, STEPS, X, open_chain_pair
 
 ROOT = Path(__file__).resolve().parent.parent
 RHO, E, A, IZ, IY, L, G = 2700.0, 7.0e10, 1.0e-4, 3.3333e-9, 2.0833e-10, 1.0, 9.81
 FX, FZ = 40.0, -0.3  # the tip force (ground axes): a pull along the strip and a push down
 W = RHO * A * G  # the weight per metre
-H = 0.01  # the finite-difference step (m) around the station X
-X = 0.3
-STEPS = {"m2": -2, "m1": -1, "p1": 1, "p2": 2}  # stations X + k H (fourth-order differences)
 Y, Z = 0.004, 0.0012  # a section point (within the 20 mm x 5 mm strip's reach)
 
 
@@ -100,10 +96,6 @@ def test_root_stress_against_its_columns_and_the_closed_form(strip):
     assert abs(strip["s0"][0] - want) <= 1e-12 * abs(want), (strip["s0"][0], want)
 
 
-PENDULUM = tomllib.loads((ROOT / "scenes" / "pendulum.toml").read_text())
-C = 0.0025  # the outer fibre of the 5 mm strip in its plane of motion
-
-
 def test_planar_sigma_is_the_spatial_sigma_at_z_0_and_the_moment_changes_by_the_shear():
     """S3 (the pendulum falling from horizontal, 0.5 s) run planar and as its spatial twin:
     sigma(beam, X, C) planar = sigma(beam, X, C, 0) spatial to 1e-9 of the peak (the open
@@ -112,15 +104,9 @@ def test_planar_sigma_is_the_spatial_sigma_at_z_0_and_the_moment_changes_by_the_
     -(1 + u') S_y + v_x S_x = -Qy - u' S_y, with u' = -v_x^2/2 (foreshortening), by
     fourth-order differences at X + k H; measured 2.6e-6 of the peak |Qy| (second-order
     differences: 8e-4, H^2 S_y''/6 of the vibration's higher modes). The turn of Q, v_x S_x from
-    the run's own v and N, is 2.6e-2 of the peak: the check sees it."""
-    data = dict(PENDULUM, system=dict(PENDULUM["system"], name="pendulum_sigma"))
-    data["output"] = {"interval": 0.001, "columns": {"s": f"sigma(beam, {X}, {C})"}}
-    twin = spatial_twin(dict(data, output={"interval": 0.001, "columns": {}}))
-    cols = {"s": f"sigma(beam, {X}, {C}, 0.0)", "s_z": f"sigma(beam, {X}, {C}, 0.001)",
-            "N": f"N(beam, {X})", "Qy": f"Qy(beam, {X})", "Qz": f"Qz(beam, {X})"}
-    for k, n in STEPS.items():
-        cols |= {f"Mz_{k}": f"Mz(beam, {X + n * H:g})", f"v_{k}": f"v(beam, {X + n * H:g})"}
-    twin["output"]["columns"] = cols
+    the run's own v and N, is 2.6e-2 of the peak: the check sees it. The pair is
+    test_planar_as_spatial's (one twin build for both files)."""
+    data, twin = open_chain_pair("pendulum")
     kw = dict(integrator="genalpha", dt=1e-4, t_end=0.5)
     planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)
     peak = np.abs(planar["s"]).max()
