@@ -266,15 +266,18 @@ class IntegralTable:
         products per node where an inner rule on [0, x] costs its node count n (the first took
         a minute of a spatial beam's section outputs); an inner rule at the outer node count
         where no degree converges."""
-        da, db = (sp.lambdify(s, sp.diff(self.modes[m].expr, s), "mpmath") for m in (f.a, f.b))
+        def slopes():
+            return (sp.lambdify(s, sp.diff(self.modes[m].expr, s), "mpmath") for m in (f.a, f.b))
         with mpmath.workdps(QUAD_DPS + 10):
             if f not in self._fs_series:  # once per pair: every station's nodes read it
+                da, db = slopes()
                 self._fs_series[f] = next(
                     (c for c in (chebyshev_antiderivative(lambda x: da(x) * db(x), degree)
                                  for degree in CHEB_DEGREES) if c is not None), None)
             series = self._fs_series[f]
             if series is not None:
                 return [clenshaw(series, 2 * x - 1) for x in xs]
+            da, db = slopes()
             ixs, iws = gauss_legendre(len(xs))
             return [x * mpmath.fsum(w * da(x * y) * db(x * y) for y, w in zip(ixs, iws)) for x in xs]
 

@@ -294,8 +294,8 @@ fsr_status cs_factor_failed(csim* s, const double* A, double t, const char* what
 {
     for (size_t k = 0; k < (size_t)s->n * (size_t)s->n; ++k)
         if (!isfinite(A[k]))  /* a NaN pivot reads as a vanishing one: say what it is */
-            return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: the %s is not finite (the Newton "
-                           "iterates blew up); reduce --dt", t, what);
+            return cs_fail(s, FSR_DIVERGED, "%s not finite at t = %.6g s: the Newton iterations "
+                           "diverged; reduce --dt", what, t);
     if (s->dq_last > s->o->blowup * s->L)  /* an update beyond the runtime's bound of divergence */
         return cs_fail(s, FSR_DIVERGED, "%s singular at t = %.6g s after a Newton update of %.3g, "
                        "beyond %g x L = %.4g m: the iterations diverged; reduce --dt", what, t,
