@@ -41,8 +41,9 @@ def test_bordered_solve_equals_the_dense_lu(tmp_path, flags):
 
 
 def test_a_failed_factorization_says_whether_the_newton_iterations_diverged(tmp_path):
-    """tests/c_models/factor_failed_check.c calls cs_factor_failed as genalpha3 and ali3p do when
-    the iteration matrix will not factor: a matrix with a NaN, or one rebuilt after a Newton
+    """tests/c_models/factor_failed_check.c calls fsr_factor_failed as genalpha3, ali3p and the
+    unconstrained Newton (genalpha, newmark, radau5) do when their matrix will not factor: a
+    matrix with a NaN, or one rebuilt after a Newton
     update beyond blowup x L (a user's spatial four-bar on 32 ef elements reached 2.4e99), is
     the iterations diverging (FSR_DIVERGED, reduce --dt); after a small update, or before any,
     the matrix is singular (FSR_SINGULAR)."""

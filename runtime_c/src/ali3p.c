@@ -89,8 +89,9 @@ static void build_p(csim* s, double h)
     s->h_mat = h;
 }
 
-/* W = P + (h^2/4) alpha Phi_q^T Phi_q with the current Phi_q, LU-factored into S */
-static fsr_status factor_w(csim* s, double h, double t1, int newton)
+/* W = P + (h^2/4) alpha Phi_q^T Phi_q with the current Phi_q, LU-factored into S; dq: the last
+ * Newton update (0: none), which tells a diverging iteration from a singular W */
+static fsr_status factor_w(csim* s, double h, double t1, int newton, double dq)
 {
     const int n = s->n, nc = s->nc, hess = newton && nc && s->m->constraint_hess;
     const double c = 0.25 * h * h * s->alpha;
@@ -106,7 +107,7 @@ static fsr_status factor_w(csim* s, double h, double t1, int newton)
             }
     }
     if (cs_factor(s, s->S))
-        return cs_factor_failed(s, s->S, t1, "ali3p: iteration matrix");
+        return fsr_factor_failed(s->r, s->o, s->L, s->S, n, dq, t1, "ali3p: iteration matrix");
     return FSR_OK;
 }
 
@@ -167,7 +168,6 @@ static fsr_status ali3p_step(csim* s)
     int rebuild = o->newton_full || fabs(h - s->h_mat) > 1e-6 * h;
     int factored = nc == 0;  /* nc = 0: W = P, factored when P is built */
     double dq = 0.0, dq_prev = -1.0;
-    s->dq_last = 0.0;
     for (int it = 0;; ++it) {
         if (it == o->newton_max) return cs_newton_failed(s, t1, dq, it);
         m->mass(q1, s->d, o->p, s->M);
@@ -189,7 +189,7 @@ static fsr_status ali3p_step(csim* s)
             factored = 0;
         }
         if (nc || !factored) {
-            if ((st = factor_w(s, h, t1, 1))) return st;
+            if ((st = factor_w(s, h, t1, 1, dq))) return st;
             factored = 1;
         }
         cs_solve(s, s->S, res);
@@ -202,7 +202,6 @@ static fsr_status ali3p_step(csim* s)
             if (x > dq || x != x) dq = x;
         }
         s->r->newton_iterations++;
-        s->dq_last = dq;
         if (!isfinite(dq)) return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: Newton update not finite", t1);
         if (nc) {
             cs_constraints(s, q1);
@@ -212,9 +211,8 @@ static fsr_status ali3p_step(csim* s)
         if (dq_prev > ALI3P_SLOW_FLOOR * s->tol && dq > ALI3P_THETA_MAX * dq_prev) rebuild = 1;
         dq_prev = dq;
     }
-    s->dq_last = 0.0;  /* converged: a failed factor below is the matrix's own */
     if (nc) {  /* projections with W at the converged point */
-        if ((st = factor_w(s, h, t1, 0))) return st;
+        if ((st = factor_w(s, h, t1, 0, 0.0))) return st;  /* converged: a failure is the matrix's own */
         m->constraint_rate(q1, s->d, o->p, s->phit);
         for (int l = 0; l < nc; ++l) {
             double e = s->phit[l];

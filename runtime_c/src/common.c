@@ -55,6 +55,20 @@ fsr_status fsr_check_step_limit(fsr_result* r, const char* name, double dt, doub
                     mant, e, instead);
 }
 
+fsr_status fsr_factor_failed(fsr_result* r, const fsr_options* o, double L, const double* A, int n,
+                             double dq, double t, const char* what)
+{
+    for (size_t k = 0; k < (size_t)n * (size_t)n; ++k)
+        if (!isfinite(A[k]))
+            return fsr_fail(r, FSR_DIVERGED, "%s not finite at t = %.6g s: the Newton iterations "
+                            "diverged; reduce --dt", what, t);
+    if (dq > o->blowup * L)
+        return fsr_fail(r, FSR_DIVERGED, "%s singular at t = %.6g s after a Newton update of %.3g, "
+                        "beyond %g x L = %.4g m: the iterations diverged; reduce --dt", what, t, dq,
+                        o->blowup, o->blowup * L);
+    return fsr_fail(r, FSR_SINGULAR, "%s singular at t = %.6g s", what, t);
+}
+
 int fsr_band_layout(const fsm_system* m, int nst, int* lo, int* hi)
 {
     int bordered = m->band_end > m->band_first;

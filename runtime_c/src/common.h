@@ -41,6 +41,13 @@ double fsr_length_scale(const fsm_system* m, const double* p);
  * none or the band would not be narrower than half its block. */
 int fsr_band_layout(const fsm_system* m, int nst, int* lo, int* hi);
 
+/* A factorization of `what` (A, n x n) that failed at t, dq the last Newton update before it
+ * (0: none): the Newton iterations diverged when A holds a non-finite entry (a NaN pivot
+ * reads as a vanishing one) or dq is beyond blowup x L (FSR_DIVERGED, reduce --dt: a diverging
+ * iteration reaches a singular matrix where a converging one would not); else A is singular. */
+fsr_status fsr_factor_failed(fsr_result* r, const fsr_options* o, double L, const double* A, int n,
+                             double dq, double t, const char* what);
+
 /* Coordinate i (value qi) is beyond limit = blowup x the length scale, and m->coord_unbounded
  * does not exempt it (inline: every step asks, for every coordinate). */
 static inline int fsr_beyond_blowup(const fsm_system* m, double limit, int i, double qi)

@@ -290,19 +290,6 @@ fsr_status cs_newton_failed(csim* s, double t1, double dq, int it)
                    "after %d iterations); reduce --dt", t1, dq, cs_max_abs(s->phi, s->nc), it);
 }
 
-fsr_status cs_factor_failed(csim* s, const double* A, double t, const char* what)
-{
-    for (size_t k = 0; k < (size_t)s->n * (size_t)s->n; ++k)
-        if (!isfinite(A[k]))  /* a NaN pivot reads as a vanishing one: say what it is */
-            return cs_fail(s, FSR_DIVERGED, "%s not finite at t = %.6g s: the Newton iterations "
-                           "diverged; reduce --dt", what, t);
-    if (s->dq_last > s->o->blowup * s->L)  /* an update beyond the runtime's bound of divergence */
-        return cs_fail(s, FSR_DIVERGED, "%s singular at t = %.6g s after a Newton update of %.3g, "
-                       "beyond %g x L = %.4g m: the iterations diverged; reduce --dt", what, t,
-                       s->dq_last, s->o->blowup, s->o->blowup * s->L);
-    return cs_fail(s, FSR_SINGULAR, "%s singular at t = %.6g s", what, t);
-}
-
 /* Workspace in one block: doubles, then ints. */
 fsr_status cs_open(csim* s, const fsr_integrator* it, const fsm_system* m, const fsr_options* o,
                    fsr_result* r, long capacity)

@@ -46,7 +46,6 @@ typedef struct csim {
     double alpha;    /* ali3p penalty */
     double am, af, gm, bt, ra, pa, pb;  /* genalpha3 */
     double h_mat;    /* step the iteration matrix was built for; 0: none */
-    double dq_last;  /* the step's last Newton update (0: none yet), for cs_factor_failed */
 } csim;
 
 fsr_status cs_fail(csim* s, fsr_status st, const char* fmt, ...);
@@ -81,11 +80,6 @@ int cs_row_due(const csim* s);
 /* An accepted step to t1 with the state in q, v, a, lam: finiteness, counters, row if due. */
 fsr_status cs_accept(csim* s, double t1);
 fsr_status cs_newton_failed(csim* s, double t1, double dq, int it);
-/* cs_factor of `what` ("genalpha3: iteration matrix") failed at t: the Newton iterates blew
- * up when A holds a non-finite entry or was rebuilt after a Newton update (s->dq_last) beyond
- * blowup x L (FSR_DIVERGED, reduce --dt: a diverging iteration reaches a singular matrix where
- * a converging one would not), else A is singular. */
-fsr_status cs_factor_failed(csim* s, const double* A, double t, const char* what);
 
 /* A run of model m by integrator `it`, resumable step by step (simulate.c: fsr_simulate,
  * fsr_stepper): cs_open with room for `capacity` rows (0: every row of the run), cs_start

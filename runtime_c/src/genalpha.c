@@ -84,7 +84,7 @@ fsr_status alpha_step(sim* s)
             if ((st = sim_newton_mass(s, t1, q1, drive))) return st;
             s->m->residual_jac(q1, v1, a1, drive, o->p, s->Jq, s->Jv);
             newton_rows(s, 0, &cb, &cg);
-            if ((st = newton_factor(s, t1))) return st;
+            if ((st = newton_factor(s, t1, dq))) return st;
             ns->h = h;
             ns->theta = dq_prev = -1.0;
             rebuild = o->newton_full;

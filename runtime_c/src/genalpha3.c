@@ -63,7 +63,6 @@ static fsr_status genalpha3_step(csim* s)
     cs_drive(s, t1);
     int rebuild = o->newton_full || fabs(h - s->h_mat) > 1e-6 * h;
     double dq = 0.0, dq_prev = -1.0;
-    s->dq_last = 0.0;
     for (int it = 0;; ++it) {
         m->mass(q1, s->d, o->p, s->M);
         m->force(q1, v1, s->d, o->p, res);
@@ -94,7 +93,7 @@ static fsr_status genalpha3_step(csim* s)
             s->r->jacobian_evaluations++;
             s->h_mat = h;
             if (cs_factor(s, s->S))
-                return cs_factor_failed(s, s->S, t1, "genalpha3: iteration matrix");
+                return fsr_factor_failed(s->r, s->o, s->L, s->S, n, dq, t1, "genalpha3: iteration matrix");
             rebuild = o->newton_full;
             dq_prev = -1.0;
         }
@@ -110,7 +109,6 @@ static fsr_status genalpha3_step(csim* s)
         }
         for (int l = 0; l < nc; ++l) lam1[l] += dlam[l];
         s->r->newton_iterations++;
-        s->dq_last = dq;
         if (!isfinite(dq)) return cs_fail(s, FSR_DIVERGED, "diverged at t = %.6g s: Newton update not finite", t1);
         if (dq_prev > 0.0 && dq > GA3_THETA_MAX * dq_prev) rebuild = 1;
         dq_prev = dq;

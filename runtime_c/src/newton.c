@@ -34,12 +34,12 @@ void newton_rows(sim* s, int i, const double* cq, const double* cv)
     }
 }
 
-fsr_status newton_factor(sim* s, double t)
+fsr_status newton_factor(sim* s, double t, double dq)
 {
     int N = s->N, kb = s->kb;
     s->r->jacobian_evaluations++;
     int bad = kb >= 0 ? fsr_bordered_factor(&s->band, s->S, s->piv) : fsr_lu_factor(s->S, N, s->piv);
-    if (bad) return sim_fail(s, FSR_SINGULAR, "Newton matrix singular at t = %.6g s", t);
+    if (bad) return fsr_factor_failed(s->r, s->o, s->L, s->S, N, dq, t, "Newton matrix");
     if (kb < 0) fsr_lu_inverse(s->S, N, s->piv, s->Sinv, s->tmp);
     return FSR_OK;
 }

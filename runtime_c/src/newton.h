@@ -34,8 +34,9 @@ void newton_rows(sim* s, int i, const double* cq, const double* cv);
 
 /* LU-factor the iteration matrix, (bordered) banded when the model is; a dense one also gets its inverse
  * (the solves are then matrix-vector products, which have no dependency chain: radau5 on #3 at
- * 0.25 s takes 0.127 ms with it, 0.153 ms with LU solves). */
-fsr_status newton_factor(sim* s, double t);
+ * 0.25 s takes 0.127 ms with it, 0.153 ms with LU solves). dq: the last Newton update (0: none),
+ * for fsr_factor_failed. */
+fsr_status newton_factor(sim* s, double t, double dq);
 
 /* x = S^-1 x */
 static inline void newton_solve(sim* s, double* x)

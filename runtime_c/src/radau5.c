@@ -224,7 +224,7 @@ static fsr_status radau_step(sim* s)
             }
         }
         if (rebuild) {
-            if ((st = newton_factor(s, t1))) return st;
+            if ((st = newton_factor(s, t1, dq))) return st;
             ns->h = h;
             ns->theta = dq_prev = -1.0;
             ratios = 0;
