@@ -62,16 +62,48 @@ function(flexsym_add_model_objects name)
   set(objs flexsym_${name}_objects)
   add_library(${objs} OBJECT ${ARGN})
   _flexsym_objects(${objs})
+  _flexsym_source_dirs(${objs} ${ARGN})
+endfunction()
+
+function(_flexsym_source_dirs target)
   foreach(src ${ARGN})
     get_filename_component(dir "${src}" ABSOLUTE)
     get_filename_component(dir "${dir}" DIRECTORY)
-    target_include_directories(${objs} PRIVATE "${dir}")
+    target_include_directories(${target} PRIVATE "${dir}")
   endforeach()
 endfunction()
 
+# flexsym_add_kernels(NAME sources...): a model's kernels, compiled apart from its other sources
+# (flexsym_NAME_kernels), which flexsym_add_model(NAME ...) links before them. Given
+# FLEXSYM_KERNELS_OBJECTS (flexsym's own builds: toolchain/build.py), the objects of a build of
+# this very target, made once for every folder with the same kernels (a system's folders that
+# differ in its run-time parameters' values alone); with FLEXSYM_KERNELS_ONLY, that build: the
+# kernels alone, their objects listed in objects.txt.
+function(flexsym_add_kernels name)
+  set(kernels flexsym_${name}_kernels)
+  if(FLEXSYM_KERNELS_OBJECTS)
+    add_library(${kernels} OBJECT IMPORTED)
+    set_target_properties(${kernels} PROPERTIES IMPORTED_OBJECTS "${FLEXSYM_KERNELS_OBJECTS}")
+  else()
+    add_library(${kernels} OBJECT ${ARGN})
+    _flexsym_objects(${kernels})
+    _flexsym_source_dirs(${kernels} ${ARGN})
+  endif()
+  if(FLEXSYM_KERNELS_ONLY)
+    file(GENERATE OUTPUT "${CMAKE_BINARY_DIR}/objects.txt"
+         CONTENT "$<JOIN:$<TARGET_OBJECTS:${kernels}>,\n>\n")
+  endif()
+endfunction()
+
 function(flexsym_add_model name accessor)
+  if(FLEXSYM_KERNELS_ONLY)
+    return()
+  endif()
   flexsym_add_model_objects(${name} ${ARGN})
   set(objs flexsym_${name}_objects)
+  if(TARGET flexsym_${name}_kernels)
+    set(objs flexsym_${name}_kernels ${objs})
+  endif()
   add_executable(flexsym_${name} "${FLEXSYM_RUNTIME_DIR}/src/driver.c")
   set_target_properties(flexsym_${name} PROPERTIES C_STANDARD 99 C_STANDARD_REQUIRED ON
                         C_EXTENSIONS OFF)
@@ -79,7 +111,8 @@ function(flexsym_add_model name accessor)
   target_compile_definitions(flexsym_${name} PRIVATE FSM_MODEL=${accessor})
   target_link_libraries(flexsym_${name} PRIVATE ${objs} flexsym_runtime m)
 
-  add_library(flexsym_${name}_shared SHARED $<TARGET_OBJECTS:${objs}> $<TARGET_OBJECTS:flexsym_runtime>)
+  list(TRANSFORM objs REPLACE "(.+)" "$<TARGET_OBJECTS:\\1>" OUTPUT_VARIABLE objects)
+  add_library(flexsym_${name}_shared SHARED ${objects} $<TARGET_OBJECTS:flexsym_runtime>)
   set_target_properties(flexsym_${name}_shared PROPERTIES OUTPUT_NAME flexsym_${name})
   target_link_libraries(flexsym_${name}_shared PRIVATE m)
 endfunction()

@@ -39,9 +39,9 @@ def test_two_generated_models_in_one_program(tmp_path):
 
 def test_a_model_linked_with_the_cached_runtime_is_the_one_compiling_it(tmp_path):
     """build() compiles the runtime once per compiler and flags and links its objects into each
-    model (runtime_c/CMakeLists.txt, FLEXSYM_RUNTIME_OBJECTS): the driver and the library are
-    byte for byte those of a plain CMake build of the generated folder, which compiles the
-    runtime's sources itself."""
+    model (runtime_c/CMakeLists.txt, FLEXSYM_RUNTIME_OBJECTS), and a system's kernels once per
+    derivation (FLEXSYM_KERNELS_OBJECTS): the driver and the library are byte for byte those of
+    a plain CMake build of the generated folder, which compiles all the sources itself."""
     folder = generated_dir() / "systems" / "hub"
     built = build(folder, root=tmp_path / "cache")
     plain = tmp_path / "plain"
@@ -56,3 +56,6 @@ def test_a_model_linked_with_the_cached_runtime_is_the_one_compiling_it(tmp_path
     for mine, theirs in ((built.executable, plain / "flexsym_hub"), (built.library, plain / "libflexsym_hub.so")):
         assert mine.read_bytes() == theirs.read_bytes(), mine.name
     assert not list(built.build_dir.rglob("linalg.c.o"))  # the model's build compiled no runtime
+    kernels = next(d for d in (tmp_path / "cache" / ".kernels").iterdir() if d.is_dir())
+    assert [Path(o).name for o in (kernels / "objects.txt").read_text().split()] == ["kernels.c.o"]
+    assert not list(built.build_dir.rglob("kernels.c.o"))  # nor its kernels: their own build did

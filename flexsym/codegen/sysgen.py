@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import time
 
 import casadi as ca
@@ -29,9 +30,9 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, derive_system, ef_guided_force,
-                                      length_param, start_of)
-from flexsym.physics.spatial import derive_spatial
+from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, _param_layout, derive_system,
+                                      ef_guided_force, length_param, start_of)
+from flexsym.physics.spatial import _params, derive_spatial
 from flexsym.physics.exact_body import EXACT_VG, exact_energies, exact_residual
 from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
@@ -51,14 +52,36 @@ _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.ro
 
 
 LARGE_KERNELS = 40_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)
+# A beam section's values: run-time parameters p (their names: assemble._param_layout,
+# spatial._params), never numbers of the derivation (derivation_fingerprint)
+RUN_TIME_SECTION = ("rho", "E", "A", "I", "Iy", "J", "G")
 
 
 def fingerprint(system: System) -> str:
+    """The generated folder's: every input of its files (the system with the values of its
+    run-time parameters, the generator's source and templates, the tool versions)."""
+    return _fingerprint(system_to_dict(system))
+
+
+def derivation_fingerprint(system: System) -> str:
+    """The derivation's: the fingerprint's inputs without the values of the beams' sections
+    (RUN_TIME_SECTION), which enter a generated folder only as the run-time parameters'
+    defaults (system.c's param_defaults; tests/test_derivation_reuse.py checks it). Folders
+    that differ in those values alone have the same kernels.c, header and CMakeLists.txt
+    (which carry this fingerprint), share one derivation (toolchain/pipeline.py) and one
+    compilation of their kernels (toolchain/build.py)."""
+    content = system_to_dict(system)
+    for body in content["bodies"]:
+        for key in RUN_TIME_SECTION:
+            (body.get("section") or {}).pop(key, None)
+    return _fingerprint(content)
+
+
+def _fingerprint(content: dict) -> str:
     h = hashlib.sha256(generator_hash().encode())
     for f in [module_file(m) for m in _OWN] + sorted((templates_dir() / "system").glob("*.j2")):
         h.update(f.name.encode() + b"\0" + f.read_bytes().replace(b"\r\n", b"\n"))
-    payload = {"system": system_to_dict(system), "generator": h.hexdigest(),
-               "versions": tool_versions()}
+    payload = {"system": content, "generator": h.hexdigest(), "versions": tool_versions()}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
@@ -568,13 +591,30 @@ def _unbounded(system: System, c) -> bool:
 def generate_system_files(system: System, log=None, ef_free_ad: bool = False) -> dict[str, str]:
     """The generated folder's files; log(msg): a line per stage (derivation, kernels), so a
     long derivation (ef bodies: 10-45 s) is not silent. ef_free_ad: derive_spatial's (a check)."""
+    return folder_files(system, derive_folder(system, log, ef_free_ad))
+
+
+def runtime_parameters(system: System) -> list[tuple[str, float]]:
+    """(name, value) of the run-time parameters p that the beams' lengths and sections give,
+    p's first entries (a derivation may add its own after them: a free spatial ef beam's
+    bending_inertia, whose default is the derivation's)."""
+    return [(n, v) for n, _, v in (_params if system.dimension == 3 else _param_layout)(system)[0]]
+
+
+# Placeholders of what a derivation leaves open (derive_folder), filled by folder_files
+_TOKEN = re.compile(r"@flexsym-(fingerprint|derivation|p[0-9]+)@")
+
+
+def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
+    """The derivation of a generated folder: its files and manifest with the fingerprints and
+    the run-time parameters' values left as placeholders, for folder_files to fill. JSON, so
+    that pipeline.prepare_system keeps it for every system of the same derivation_fingerprint."""
     log = log or (lambda msg: None)
     start = time.perf_counter()
     der = derive_spatial(system, ef_free_ad) if system.dimension == 3 else derive_system(system)
     log(f"derived ({len(der.q)} coordinates, {len(der.constraints)} constraint rows) in "
         f"{time.perf_counter() - start:.1f} s; building the C kernels (casadi)")
     start = time.perf_counter()
-    fp = fingerprint(system)
     kernels = build_system_kernels(der)
     emitted = [emit(k, c_prefix(system.name)) for k in kernels]
     log(f"kernels emitted ({sum(k.total_ops for k in emitted)} operations) in {time.perf_counter() - start:.1f} s")
@@ -585,6 +625,7 @@ def generate_system_files(system: System, log=None, ef_free_ad: bool = False) ->
         b["kinetic_in_c"] or b.get("free_c") for b in getattr(der, "rod_bodies", ()))  # rod elements: M_e(e) in C
     scale = length_scale(system)
     initial = [tuple(c_double(v) for v in start_of(system, c)) for c in der.coords]
+    sections = len(runtime_parameters(system))  # p's first: the beams' (a derivation may add its own)
     outputs_fn = next(k.function for k in kernels if k.name == "outputs")
 
     def placeholders_read(name: str) -> bool:
@@ -597,14 +638,16 @@ def generate_system_files(system: System, log=None, ef_free_ad: bool = False) ->
     ctx = {
         "name": system.name, "NAME": system.name.upper(), "header": f"fsm_{system.name}.h",
         "prefix": c_prefix(system.name), "accessor": model_accessor(system.name),
-        "generator": f"flexsym {versions['flexsym']}", "versions": versions, "fingerprint": fp,
+        "generator": f"flexsym {versions['flexsym']}", "versions": versions,
+        "fingerprint": "@flexsym-fingerprint@",
         "summary": f"{len(system.bodies)} bodies, {len(der.q)} coordinates, "
                    f"{len(der.guided)} guided joints, {len(der.constraints)} constraint equations.",
         "constraints": [n for n, _ in der.constraints],
         "banner": "system/banner.j2", "kernels": emitted,
         "guided": [g.joint for g in der.guided], "coords": [c.name for c in der.coords],
         "outputs": list(der.outputs), "nd": len(der.drive_symbols),
-        "params": [{"name": n, "c_default": c_double(v)} for n, _, v in der.params],
+        "params": [{"name": n, "c_default": f"@flexsym-p{i}@" if i < sections else c_double(v)}
+                   for i, (n, _, v) in enumerate(der.params)],
         "drive_params": [{"name": p.name, "c_default": c_double(p.default)}
                          for p in der.drive_params],
         "length_scale": c_double(scale), "length_param": length_param(der),
@@ -618,30 +661,35 @@ def generate_system_files(system: System, log=None, ef_free_ad: bool = False) ->
         "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
         "kernel_ops": sum(k.total_ops for k in emitted),
-        "has_residual": any(k.kernel.name == "residual" for k in emitted),
+        "has_residual": any(k.kernel.name == "residual" for k in emitted), "of_derivation": False,
     }
     ctx["bandwidth"], ctx["band_first"], ctx["band_end"] = _band(der, kernels)
     ctx["large_kernels"] = ctx["kernel_ops"] > LARGE_KERNELS
     if ctx["static_start"]:
         ctx["static_free"], ctx["static_rows"] = _static_unknowns(system, der, kernels)
     env = _environment()
+    # the kernels, their header and how they compile carry the derivation's fingerprint only:
+    # byte for byte the same in every folder of the derivation (build.py compiles them once)
+    shared = ctx | {"fingerprint": "@flexsym-derivation@", "of_derivation": True}
+    header = f"fsm_{system.name}.h"
     files = {
-        f"fsm_{system.name}.h": env.get_template("system/system.h.j2").render(ctx),
-        "kernels.c": env.get_template("kernels.c.j2").render(ctx),
+        header: env.get_template("system/system.h.j2").render(shared),
+        "kernels.c": env.get_template("kernels.c.j2").render(shared),
         "system.c": env.get_template("system/system.c.j2").render(ctx),
-        "CMakeLists.txt": env.get_template("system/CMakeLists.txt.j2").render(ctx),
+        "CMakeLists.txt": env.get_template("system/CMakeLists.txt.j2").render(shared),
     }
     manifest = {
-        "kind": "system", "generator": ctx["generator"], "versions": versions, "fingerprint": fp,
+        "kind": "system", "generator": ctx["generator"], "versions": versions,
+        "fingerprint": "@flexsym-fingerprint@", "derivation": "@flexsym-derivation@",
         "model": ctx["accessor"],
-        "spec": {"name": system.name} | system_to_dict(system),
+        "spec": None,
         "tree": {"order": list(der.tree.order), "tree_joints": dict(der.tree.parent_joint),
                  "cut_joints": list(der.tree.cut)},
         "coordinates": [{"name": c.name, "group": c.group, "body": c.body} for c in der.coords],
         "drive": ["t"] + [f"{g.joint}{s}" for g in der.guided for s in ("", "'", "''")],
         "drive_params": [{"name": p.name, "default": p.default, "unit": p.unit}
                          for p in der.drive_params],
-        "params": [{"name": n, "default": v} for n, _, v in der.params],
+        "params": [{"name": n, "default": None if i < sections else v} for i, (n, _, v) in enumerate(der.params)],
         "constraints": [{"name": n, "phi": str(e)} for n, e in der.constraints],
         "energy_terms": [{"body": b, "term": term, "differentiated_wrt": list(wrt)}
                          for b, term, wrt, _, _ in der.terms],
@@ -655,8 +703,31 @@ def generate_system_files(system: System, log=None, ef_free_ad: bool = False) ->
         "left_out": der.dropped,
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
                     for k in emitted},
-        "files": {n: hashlib.sha256(tx.encode()).hexdigest() for n, tx in sorted(files.items())},
+        # what the compiled kernels depend on: folders with the same files share them (build.py)
+        "kernels_inputs": sorted(("CMakeLists.txt", header, "kernels.c")),
+        "files": None,
     }
+    return {"files": files, "manifest": manifest}
+
+
+def folder_files(system: System, derived: dict) -> dict[str, str]:
+    """The generated folder of system from its derivation (derive_folder's, of a system with
+    the same derivation_fingerprint): the fingerprints and the run-time parameters' values put
+    in."""
+    values = runtime_parameters(system)
+    manifest = json.loads(json.dumps(derived["manifest"]))
+    if [p["name"] for p in manifest["params"][:len(values)]] != [n for n, _ in values]:
+        raise ValueError(f"system '{system.name}': derived parameters {manifest['params']} "
+                             f"are not the system's {values}")
+    fill = {"fingerprint": fingerprint(system), "derivation": derivation_fingerprint(system)}
+    fill |= {f"p{i}": c_double(v) for i, (_, v) in enumerate(values)}
+    files = {name: _TOKEN.sub(lambda m: fill[m.group(1)], text)
+             for name, text in derived["files"].items()}
+    manifest["fingerprint"], manifest["derivation"] = fill["fingerprint"], fill["derivation"]
+    manifest["spec"] = {"name": system.name} | system_to_dict(system)
+    for p, (_, v) in zip(manifest["params"], values):
+        p["default"] = v
+    manifest["files"] = {n: hashlib.sha256(tx.encode()).hexdigest() for n, tx in sorted(files.items())}
     files[MANIFEST] = json.dumps(manifest, indent=2) + "\n"
     return files
 

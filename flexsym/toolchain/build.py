@@ -5,7 +5,9 @@ unchanged variant is never rebuilt. Builds happen in a private temporary directo
 renamed into place when complete: two runs building the same variant at once both end with
 a complete build and neither sees a half-built one. The runtime is compiled once per compiler
 and flags (build/.runtime/) and its objects are linked into every model, which then compiles
-its own sources alone: the binaries are byte for byte those of a plain CMake build.
+its own sources alone: the binaries are byte for byte those of a plain CMake build. A system's
+kernels are compiled once per derivation (build/.kernels/): folders that differ in the values of
+run-time parameters alone (a density edited in a scene) compile only their system.c.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from flexsym.codegen.generate import folder_hash, read_manifest
 from flexsym.core.paths import cache_dir, file_lock, runtime_dir
 
 COMPLETE = ".complete"
-OBJECTS = "objects.txt"  # the runtime's objects, listed by runtime_c/CMakeLists.txt
+OBJECTS = "objects.txt"  # the objects of a build made once for many (the runtime, a system's kernels)
 # A checking build (tests/test_sanitizers.py): every generated variant and the runtime under
 # AddressSanitizer and UndefinedBehaviorSanitizer, float-to-integer overflow included; the
 # first error aborts the run.
@@ -110,14 +112,54 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
     if not _complete(built):
         objects = _runtime_objects(root / ".runtime" / f"{tag}{build_key(None, compiler, flags)}",
                                    cmake, compiler, jobs, flags)
+        defines = [f"-DFLEXSYM_RUNTIME_OBJECTS={';'.join(map(str, objects))}"]
+        if manifest.get("kernels_inputs"):  # a system's: its kernels compiled once per derivation
+            kernels = _kernel_objects(gen_dir, root / ".kernels" /
+                                      f"{name}-{tag}{_kernels_key(gen_dir, manifest, compiler, flags)}",
+                                      cmake, compiler, jobs, flags, log)
+            defines.append(f"-DFLEXSYM_KERNELS_OBJECTS={';'.join(map(str, kernels))}")
 
         def make():
             if log:
                 log(f"compiling '{name}' (cmake, {Path(compiler).name})")
-            _cmake_into(gen_dir, final, f"variant '{name}'", cmake, compiler, jobs, flags,
-                        [f"-DFLEXSYM_RUNTIME_OBJECTS={';'.join(map(str, objects))}"])
+            _cmake_into(gen_dir, final, f"variant '{name}'", cmake, compiler, jobs, flags, defines)
         _once(final, lambda: _complete(built), make)
     return built
+
+
+def _kernels_key(gen_dir: Path, manifest: dict, compiler: str, flags: str) -> str:
+    """The key of a system's compiled kernels: the files they are compiled from (its manifest's
+    kernels_inputs: the kernels, their header, the CMakeLists.txt that sets their flags), the
+    runtime, the compiler and the flags."""
+    h = hashlib.sha256()
+    for name in sorted(manifest["kernels_inputs"]):
+        if name not in manifest.get("files", {}):
+            raise ToolchainError(f"{gen_dir}: kernels_inputs names '{name}', not a file of the folder")
+        h.update(name.encode() + b"\0" + (gen_dir / name).read_bytes())
+    h.update(_runtime_hash().encode())
+    h.update(compiler.encode())
+    h.update(flags.encode())
+    return h.hexdigest()[:20]
+
+
+def _kernel_objects(gen_dir: Path, final: Path, cmake: str, compiler: str, jobs: int, flags: str,
+                    log) -> list[Path]:
+    """A system's kernels' objects (flexsym_add_kernels), compiled once into final for every
+    folder with the same kernels_inputs: a system whose sections' values alone differ (a
+    density edited in its scene) compiles only its system.c."""
+    listing = final / OBJECTS
+
+    def complete():
+        return ((final / COMPLETE).is_file() and listing.is_file()
+                and all(p.is_file() for p in _listed(final)))
+
+    def make():
+        if log:
+            log(f"compiling the kernels of '{gen_dir.name}' (cmake, {Path(compiler).name})")
+        _cmake_into(gen_dir, final, f"the kernels of '{gen_dir.name}'", cmake, compiler, jobs, flags,
+                    ["-DFLEXSYM_KERNELS_ONLY=ON"], listing=OBJECTS)
+    _once(final, complete, make)
+    return _listed(final)
 
 
 def _runtime_objects(final: Path, cmake: str, compiler: str, jobs: int, flags: str) -> list[Path]:

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from flexsym.toolchain.build import Built, build
 from flexsym.codegen.generate import MANIFEST, check_folder, fingerprint, generate, write_folder
+from flexsym.codegen.sysgen import derivation_fingerprint, derive_folder, folder_files
 from flexsym.codegen.sysgen import fingerprint as system_fingerprint
-from flexsym.codegen.sysgen import generate_system_files
 from flexsym.core.paths import cache_dir, file_lock, generated_dir
 from flexsym.model.system import System
 from flexsym.physics.assemble import check_derivable
@@ -144,10 +144,31 @@ def prepare_system(system: System, log=None) -> Built:
     if not _current(folder, fp):
         with file_lock(folder.parent / f".{folder.name}.lock"):
             if not _current(folder, fp):
-                if say:
-                    say("deriving the equations (sympy; once per model, then cached)")
-                write_folder(generate_system_files(system, say), folder)
+                write_folder(folder_files(system, _derivation(system, say)), folder)
     return build(folder, log=say)
+
+
+def _derivation(system: System, say) -> dict:
+    """sysgen.derive_folder's for system: kept per derivation_fingerprint, so a system whose
+    sections' values alone changed (a density edited in its scene) is not derived again."""
+    from flexsym.core.files import atomic_write
+
+    path = cache_dir() / "systems" / ".derived" / f"{system.name}-{derivation_fingerprint(system)[:20]}.json"
+    try:
+        derived = json.loads(path.read_text(encoding="utf-8"))
+        folder_files(system, derived)  # a file this code cannot fill is derived again
+        if say:
+            say("derivation reused (the sections' values are run-time parameters)")
+        return derived
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        pass
+    if say:
+        say("deriving the equations (sympy; once per model, then cached)")
+    derived = derive_folder(system, say)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path) as fh:
+        fh.write(json.dumps(derived))
+    return derived
 
 
 def run_system(system: System, out: Path | None = None, **options):
