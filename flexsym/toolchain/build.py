@@ -114,7 +114,7 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
                                    cmake, compiler, jobs, flags)
         defines = [f"-DFLEXSYM_RUNTIME_OBJECTS={';'.join(map(str, objects))}"]
         if manifest.get("kernels_inputs"):  # a system's: its kernels compiled once per derivation
-            kernels = _kernel_objects(gen_dir, root / ".kernels" /
+            kernels = _kernel_objects(gen_dir, name, root / ".kernels" /
                                       f"{name}-{tag}{_kernels_key(gen_dir, manifest, compiler, flags)}",
                                       cmake, compiler, jobs, flags, log)
             defines.append(f"-DFLEXSYM_KERNELS_OBJECTS={';'.join(map(str, kernels))}")
@@ -142,8 +142,8 @@ def _kernels_key(gen_dir: Path, manifest: dict, compiler: str, flags: str) -> st
     return h.hexdigest()[:20]
 
 
-def _kernel_objects(gen_dir: Path, final: Path, cmake: str, compiler: str, jobs: int, flags: str,
-                    log) -> list[Path]:
+def _kernel_objects(gen_dir: Path, name: str, final: Path, cmake: str, compiler: str, jobs: int,
+                    flags: str, log) -> list[Path]:
     """A system's kernels' objects (flexsym_add_kernels), compiled once into final for every
     folder with the same kernels_inputs: a system whose sections' values alone differ (a
     density edited in its scene) compiles only its system.c."""
@@ -155,8 +155,8 @@ def _kernel_objects(gen_dir: Path, final: Path, cmake: str, compiler: str, jobs:
 
     def make():
         if log:
-            log(f"compiling the kernels of '{gen_dir.name}' (cmake, {Path(compiler).name})")
-        _cmake_into(gen_dir, final, f"the kernels of '{gen_dir.name}'", cmake, compiler, jobs, flags,
+            log(f"compiling the kernels of '{name}' (cmake, {Path(compiler).name})")
+        _cmake_into(gen_dir, final, f"the kernels of '{name}'", cmake, compiler, jobs, flags,
                     ["-DFLEXSYM_KERNELS_ONLY=ON"], listing=OBJECTS)
     _once(final, complete, make)
     return _listed(final)
