@@ -27,15 +27,15 @@ GROUND, CRANK, COUPLER, ROCKER = 0.5, 0.1, 0.4, 0.3
 ROUNDED = {"coupler_pin": "initial = 0.7688 ", "rocker_joint": "initial = 1.9552 "}
 
 
-def closing_angles(theta: float, sign: float = 1.0) -> tuple[float, float]:
+def closing_angles(theta: float, sign: float = 1.0, coupler: float = COUPLER) -> tuple[float, float]:
     """(coupler angle relative to the crank, rocker angle) that close the loop at crank angle
     theta, by the triangle crank tip B, coupler tip C, rocker pivot D (sign +1: C to the left of
     B -> D, the branch with C above the ground line at theta = 0)."""
     bx, by = CRANK * math.cos(theta), CRANK * math.sin(theta)
     dx, dy = GROUND - bx, -by
     d = math.hypot(dx, dy)
-    a = (COUPLER**2 - ROCKER**2 + d**2) / (2 * d)  # along B -> D
-    h = sign * math.sqrt(COUPLER**2 - a**2)
+    a = (coupler**2 - ROCKER**2 + d**2) / (2 * d)  # along B -> D
+    h = sign * math.sqrt(coupler**2 - a**2)
     cx, cy = bx + (a * dx - h * dy) / d, by + (a * dy + h * dx) / d
     return math.atan2(cy - by, cx - bx) - theta, math.atan2(cy, cx - GROUND)
 
@@ -102,6 +102,35 @@ def test_four_bar_from_rounded_and_missing_angles_runs_as_from_exact_angles(tmp_
             peak = np.max(np.abs(exact[col]))
             assert np.max(np.abs(rows[col] - exact[col])) <= tol * peak, col
     assert np.max(np.abs(exact["N_mid"])) > 10.0  # N_mid peaks near 70 N: the test sees the force
+
+
+def test_a_length_given_to_the_run_closes_the_loop_by_the_joints_never_by_strain():
+    """The coupler's length is a run-time parameter (in-process runs, sweeps, an FMU): the start
+    flexsym assembled with the scene's 0.4 m is then open, and the runtime's consistent start
+    closes it moving the joints alone (system.h coord_held), at the closed-form angles of the
+    new length, the coupler undeformed; a length that cannot close is refused in one line. (It
+    used to close a 0.1 mm gap by stretching the coupler, and to end at the first step, Newton
+    not converging, for 0.5 m.)"""
+    from flexsym.apps import api
+
+    lengths = [COUPLER, COUPLER + 1e-4, 0.5, 0.8]
+    batch = api.inprocess(str(ROOT / "scenes" / "four_bar.toml")).batch(
+        {"L": lengths}, t_end=0.02, dt=1e-4, integrator="genalpha3", rows=True)
+    elastic = [c for c in batch.result(0).columns if c.startswith("coupler_") and c != "coupler_pin"]
+    assert len(elastic) == 5
+    for i, length in enumerate(lengths[:3]):
+        rows = batch.result(i)
+        assert rows.status == "ok", (length, rows.message)
+        beta, gamma = closing_angles(0.0, coupler=length)
+        # the runtime's Newton stops at |Phi| <= 1e-12 x the size (0.5 m): angles to ~1e-12 rad
+        assert abs(rows["coupler_pin"][0] - beta) < 1e-10 and abs(rows["rocker_joint"][0] - gamma) < 1e-10
+        assert all(rows[c][0] == 0.0 for c in elastic), length  # undeformed: no initial strain
+        assert rows["N_mid"][0] == 0.0 and np.max(np.abs(rows["violation"])) < 1e-12
+    assert abs(batch.result(2)["rocker_joint"][0] - closing_angles(0.0)[1]) > 0.3  # it moved
+    last = batch.result(3)
+    assert last.status == "failed" and "\n" not in last.message
+    assert last.message.startswith("assembly cannot close at t = 0: constraint loop.")
+    assert "moving the joints with the bodies undeformed" in last.message
 
 
 def refused(tmp_path, capsys, text, *fragments):

@@ -75,7 +75,7 @@ class _System(ctypes.Structure):
                 + [(k, ctypes.c_int) for k in ("length_param", "mass_constant", "bandwidth",
                                                "outputs_use_acceleration", "outputs_use_drive")]
                 + [(f"p{k}", ctypes.c_void_p) for k in range(7 + 12 + 2)]
-                + [("band_first", ctypes.c_int), ("band_end", ctypes.c_int)])
+                + [("band_first", ctypes.c_int), ("band_end", ctypes.c_int), ("coord_held", ctypes.c_void_p)])
 
 
 def _bordered_and_dense(data: dict, layout: tuple, runs: list) -> None:

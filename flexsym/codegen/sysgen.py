@@ -652,6 +652,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
                          for p in der.drive_params],
         "length_scale": c_double(scale), "length_param": length_param(der),
         "unbounded": [int(_unbounded(system, c)) for c in der.coords],
+        "held": [_held(system, c) for c in der.coords],
         "mass_constant": mass_constant, "initial": initial,
         "outputs_use_acceleration": der.outputs_use_acceleration or placeholders_read("qdd"),
         "outputs_use_drive": der.outputs_use_drive or placeholders_read("d"),
@@ -730,6 +731,21 @@ def folder_files(system: System, derived: dict) -> dict[str, str]:
     manifest["files"] = {n: hashlib.sha256(tx.encode()).hexdigest() for n, tx in sorted(files.items())}
     files[MANIFEST] = json.dumps(manifest, indent=2) + "\n"
     return files
+
+
+def _held(system: System, c) -> int:
+    """system.h's coord_held flags of a coordinate (1 its value, 2 its rate), as the assembly at
+    t = 0 (scenes/assembly.py) holds them: a flexible body's elastic coordinates (undeformed,
+    at rest; an ef body's nodes move with it), a `fixed` joint's angle, a given rate."""
+    if c.group == "node":
+        return 0
+    if c.group != "joint":
+        return 3
+    j = system.joint(c.joint)
+    jc = next((x for x in j.coordinates if x.name == c.name), None)  # None: Euler parameters
+    if jc is None:
+        return 0
+    return (1 if j.fixed and jc.name == j.name else 0) | (2 if jc.rate is not None else 0)
 
 
 def _static_unknowns(system: System, der: SystemDerivation, kernels: list) -> tuple[list, list]:

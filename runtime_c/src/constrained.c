@@ -175,10 +175,24 @@ static int worst_constraint(const csim* s)
     return w;
 }
 
+/* The columns of Phi_q of the coordinates whose value (bit 1) or rate (bit 2) the model's
+ * coord_held holds, zeroed: a minimum-norm correction through Phi_q then leaves them as they are. */
+static void hold(csim* s, unsigned char bit)
+{
+    const unsigned char* held = s->m->coord_held;
+    if (!held) return;
+    for (int l = 0; l < s->n; ++l)
+        if (held[l] & bit)
+            for (int i = 0; i < s->nc; ++i) s->Pq[i * s->n + l] = 0.0;
+}
+
 /* Positions: Newton on Phi(q, 0) = 0 with minimum-norm corrections (Gauss-Newton; redundant
- * rows dropped), refused after ASSEMBLY_MAX_ITER iterations naming the largest residual of
- * the best iterate; velocities: the minimum-norm change with Phi_q q' = -Phi_t; accelerations and
- * multipliers from [M Phi_q^T; Phi_q 0] [q''; lambda] = [f; gamma]. */
+ * rows dropped) of the coordinates the model does not hold (coord_held: flexible bodies stay
+ * undeformed; flexsym's assembly closed the loop with the scene's values, so this moves only
+ * what a run-time parameter or initial state opened), refused after ASSEMBLY_MAX_ITER
+ * iterations naming the largest residual of the best iterate; velocities: the minimum-norm
+ * change with Phi_q q' = -Phi_t, likewise; accelerations and multipliers from
+ * [M Phi_q^T; Phi_q 0] [q''; lambda] = [f; gamma]. */
 fsr_status cs_consistent_start(csim* s)
 {
     const fsm_system* m = s->m;
@@ -205,9 +219,13 @@ fsr_status cs_consistent_start(csim* s)
             if (it == ASSEMBLY_MAX_ITER || !isfinite(err) || !isfinite(cs_max_abs(q, n)))
                 return cs_fail(s, FSR_ASSEMBLY,
                                "assembly cannot close at t = 0: constraint %s is off by %.3g at "
-                               "best (%.3g x the length scale %g m) after %d Newton iterations",
-                               m->constraint_names[w_best], best, best / s->L, s->L, it);
+                               "best (%.3g x the length scale %g m) after %d Newton iterations%s",
+                               m->constraint_names[w_best], best, best / s->L, s->L, it,
+                               m->coord_held ? ", moving the joints with the bodies undeformed (the "
+                               "start was assembled with the model's defaults: a parameter or initial "
+                               "state given to the run opened the loop)" : "");
             for (int i = 0; i < nc; ++i) s->lam[i] = -s->phi[i];
+            hold(s, 1);
             memset(s->w1, 0, sizeof(double) * (size_t)n);
             cs_kkt(s, NULL, s->w1, s->lam, s->lam1);
             for (int i = 0; i < n; ++i) q[i] += s->w1[i];
@@ -218,9 +236,11 @@ fsr_status cs_consistent_start(csim* s)
             for (int l = 0; l < n; ++l) r += s->Pq[i * n + l] * v[l];
             s->lam[i] = -r;
         }
+        hold(s, 2);
         memset(s->w1, 0, sizeof(double) * (size_t)n);
         cs_kkt(s, NULL, s->w1, s->lam, s->lam1);
         for (int i = 0; i < n; ++i) v[i] += s->w1[i];
+        cs_constraints(s, q);  /* Phi_q whole again, for the accelerations */
     }
     m->mass(q, s->d, s->o->p, s->M);
     memcpy(s->S, s->M, sizeof(double) * (size_t)n * (size_t)n);

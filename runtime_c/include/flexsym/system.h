@@ -92,6 +92,12 @@ typedef struct fsm_system {
      * may couple with every coordinate. After residual, so that a positional initializer that
      * ends before them leaves 0, 0: the band is every coordinate. */
     int band_first, band_end;
-} fsm_system;
+    /* nq flags of the consistent start at t = 0 (cs_consistent_start): 1 holds a coordinate's
+     * value, 2 its rate, as flexsym's assembly holds them: a flexible body's elastic
+     * coordinates (undeformed, at rest), a `fixed` joint's angle, a rate the scene gives. So a
+     * start that a run-time parameter or initial state opened closes by the joints, never by
+     * straining a body; NULL: every coordinate may move (hand-written models). */
+    const unsigned char* coord_held;
+} fsm_system;  /* mirrored field by field in tests/test_bordered_band.py (_System): keep in step */
 
 #endif
