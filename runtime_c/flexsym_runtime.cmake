@@ -74,11 +74,11 @@ function(_flexsym_source_dirs target)
 endfunction()
 
 # flexsym_add_kernels(NAME sources...): a model's kernels, compiled apart from its other sources
-# (flexsym_NAME_kernels), which flexsym_add_model(NAME ...) links before them. Given
-# FLEXSYM_KERNELS_OBJECTS (flexsym's own builds: toolchain/build.py), the objects of a build of
-# this very target, made once for every folder with the same kernels (a system's folders that
-# differ in its run-time parameters' values alone); with FLEXSYM_KERNELS_ONLY, that build: the
-# kernels alone, their objects listed in objects.txt.
+# (flexsym_NAME_kernels, their objects listed in kernels_objects.txt), which
+# flexsym_add_model(NAME ...) links before them. Given FLEXSYM_KERNELS_OBJECTS (flexsym's own
+# builds: toolchain/build.py), the objects of an earlier build of this very target, kept for
+# every folder with the same kernels (a system's folders that differ in its run-time
+# parameters' values alone).
 function(flexsym_add_kernels name)
   set(kernels flexsym_${name}_kernels)
   if(FLEXSYM_KERNELS_OBJECTS)
@@ -88,17 +88,12 @@ function(flexsym_add_kernels name)
     add_library(${kernels} OBJECT ${ARGN})
     _flexsym_objects(${kernels})
     _flexsym_source_dirs(${kernels} ${ARGN})
-  endif()
-  if(FLEXSYM_KERNELS_ONLY)
-    file(GENERATE OUTPUT "${CMAKE_BINARY_DIR}/objects.txt"
+    file(GENERATE OUTPUT "${CMAKE_BINARY_DIR}/kernels_objects.txt"
          CONTENT "$<JOIN:$<TARGET_OBJECTS:${kernels}>,\n>\n")
   endif()
 endfunction()
 
 function(flexsym_add_model name accessor)
-  if(FLEXSYM_KERNELS_ONLY)
-    return()
-  endif()
   flexsym_add_model_objects(${name} ${ARGN})
   set(objs flexsym_${name}_objects)
   if(TARGET flexsym_${name}_kernels)

@@ -128,15 +128,13 @@ def test_a_variant_made_with_generate_name_runs_by_that_name(capsys, tmp_path, m
 
 def test_a_system_build_says_what_it_does(capsys, tmp_path, monkeypatch):
     """Deriving and compiling a system takes 5-45 s: each stage is a line on stderr the first
-    time (its kernels and then the rest compile apart: build.py); a cached model runs without
-    them."""
+    time; a cached model runs without them."""
     monkeypatch.setenv("FLEXSYM_CACHE", str(tmp_path / "cache"))
     argv = ("run", SCENES / "pendulum.toml", "--t-end", "0.01", "--out", tmp_path / "p.csv")
     code, _, err = run_cli(capsys, *argv)
     assert code == 0
     stages = [ln for ln in err.splitlines() if ln.startswith("flexsym: system 'pendulum': ")]
-    assert [s.split(": ", 2)[2].split(" ")[0] for s in stages] == ["deriving", "derived", "kernels", "compiling",
-                                                                     "compiling"]
+    assert [s.split(": ", 2)[2].split(" ")[0] for s in stages] == ["deriving", "derived", "kernels", "compiling"]
     code, _, err = run_cli(capsys, *argv)
     assert code == 0 and "flexsym: system" not in err
 

@@ -6,8 +6,9 @@ renamed into place when complete: two runs building the same variant at once bot
 a complete build and neither sees a half-built one. The runtime is compiled once per compiler
 and flags (build/.runtime/) and its objects are linked into every model, which then compiles
 its own sources alone: the binaries are byte for byte those of a plain CMake build. A system's
-kernels are compiled once per derivation (build/.kernels/): folders that differ in the values of
-run-time parameters alone (a density edited in a scene) compile only their system.c.
+kernels are compiled once per derivation: the first build of a derivation keeps their objects
+(build/.kernels/), and folders that differ in the values of run-time parameters alone (a density
+edited in a scene) link them and compile only their system.c.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ from flexsym.core.paths import cache_dir, file_lock, runtime_dir
 
 COMPLETE = ".complete"
 OBJECTS = "objects.txt"  # the objects of a build made once for many (the runtime, a system's kernels)
+KERNELS = "kernels_objects.txt"  # a system's kernels' objects, listed by its build (flexsym_add_kernels)
 # A checking build (tests/test_sanitizers.py): every generated variant and the runtime under
 # AddressSanitizer and UndefinedBehaviorSanitizer, float-to-integer overflow included; the
 # first error aborts the run.
@@ -113,18 +115,45 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
         objects = _runtime_objects(root / ".runtime" / f"{tag}{build_key(None, compiler, flags)}",
                                    cmake, compiler, jobs, flags)
         defines = [f"-DFLEXSYM_RUNTIME_OBJECTS={';'.join(map(str, objects))}"]
-        if manifest.get("kernels_inputs"):  # a system's: its kernels compiled once per derivation
-            kernels = _kernel_objects(gen_dir, name, root / ".kernels" /
-                                      f"{name}-{tag}{_kernels_key(gen_dir, manifest, compiler, flags)}",
-                                      cmake, compiler, jobs, flags, log)
-            defines.append(f"-DFLEXSYM_KERNELS_OBJECTS={';'.join(map(str, kernels))}")
+        listing = None  # a system's kernels: linked when kept, else compiled here and kept
+        if manifest.get("kernels_inputs"):
+            kept = root / ".kernels" / f"{name}-{tag}{_kernels_key(gen_dir, manifest, compiler, flags)}"
+            if _objects_complete(kept):
+                defines.append(f"-DFLEXSYM_KERNELS_OBJECTS={';'.join(map(str, _listed(kept)))}")
+            else:
+                listing = KERNELS
 
         def make():
             if log:
                 log(f"compiling '{name}' (cmake, {Path(compiler).name})")
-            _cmake_into(gen_dir, final, f"variant '{name}'", cmake, compiler, jobs, flags, defines)
+            _cmake_into(gen_dir, final, f"variant '{name}'", cmake, compiler, jobs, flags, defines,
+                        listing=listing)
         _once(final, lambda: _complete(built), make)
+        if listing and (final / KERNELS).is_file():
+            _keep_kernels(final, kept)
     return built
+
+
+def _keep_kernels(build_dir: Path, kept: Path) -> None:
+    """The kernels' objects that a system's build compiled (its KERNELS listing), copied to
+    kept, for the next folder of the same derivation to link (FLEXSYM_KERNELS_OBJECTS): a
+    system whose sections' values alone differ (a density edited in its scene) then compiles
+    only its system.c."""
+    def make():
+        tmp = Path(tempfile.mkdtemp(prefix=f".{kept.name}-", dir=kept.parent))
+        try:
+            names = []
+            for line in (build_dir / KERNELS).read_text().split():
+                names.append(f"{len(names)}-{Path(line).name}")
+                shutil.copyfile(build_dir / line, tmp / names[-1])
+            (tmp / OBJECTS).write_text("".join(f"{n}\n" for n in names))
+            (tmp / COMPLETE).write_text(str(build_dir) + "\n")
+            os.rename(tmp, kept)
+        finally:
+            if tmp.exists():
+                shutil.rmtree(tmp, ignore_errors=True)
+    kept.parent.mkdir(parents=True, exist_ok=True)
+    _once(kept, lambda: _objects_complete(kept), make)
 
 
 def _kernels_key(gen_dir: Path, manifest: dict, compiler: str, flags: str) -> str:
@@ -142,36 +171,19 @@ def _kernels_key(gen_dir: Path, manifest: dict, compiler: str, flags: str) -> st
     return h.hexdigest()[:20]
 
 
-def _kernel_objects(gen_dir: Path, name: str, final: Path, cmake: str, compiler: str, jobs: int,
-                    flags: str, log) -> list[Path]:
-    """A system's kernels' objects (flexsym_add_kernels), compiled once into final for every
-    folder with the same kernels_inputs: a system whose sections' values alone differ (a
-    density edited in its scene) compiles only its system.c."""
-    listing = final / OBJECTS
-
-    def complete():
-        return ((final / COMPLETE).is_file() and listing.is_file()
-                and all(p.is_file() for p in _listed(final)))
-
-    def make():
-        if log:
-            log(f"compiling the kernels of '{name}' (cmake, {Path(compiler).name})")
-        _cmake_into(gen_dir, final, f"the kernels of '{name}'", cmake, compiler, jobs, flags,
-                    ["-DFLEXSYM_KERNELS_ONLY=ON"], listing=OBJECTS)
-    _once(final, complete, make)
-    return _listed(final)
+def _objects_complete(final: Path) -> bool:
+    """A build made once for many (the runtime, a system's kernels): its marker, its listing
+    and every object listed (one deleted by hand is made again)."""
+    return ((final / COMPLETE).is_file() and (final / OBJECTS).is_file()
+            and all(p.is_file() for p in _listed(final)))
 
 
 def _runtime_objects(final: Path, cmake: str, compiler: str, jobs: int, flags: str) -> list[Path]:
     """The runtime's objects, compiled once per compiler and flags into final (runtime_c's
     CMakeLists.txt: the target and flags every model's build would compile them with)."""
-    listing = final / OBJECTS
-
-    def complete():
-        return ((final / COMPLETE).is_file() and listing.is_file()
-                and all(p.is_file() for p in _listed(final)))
-    _once(final, complete, lambda: _cmake_into(runtime_dir(), final, "the runtime", cmake,
-                                               compiler, jobs, flags, [], listing=OBJECTS))
+    _once(final, lambda: _objects_complete(final),
+          lambda: _cmake_into(runtime_dir(), final, "the runtime", cmake, compiler, jobs, flags, [],
+                              listing=OBJECTS))
     return _listed(final)
 
 
