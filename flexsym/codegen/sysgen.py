@@ -30,9 +30,9 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, _param_layout, derive_system,
+from flexsym.physics.assemble import (EF_D, EF_T, SystemDerivation, param_layout, derive_system,
                                       ef_guided_force, length_param, start_of)
-from flexsym.physics.spatial import _params, derive_spatial
+from flexsym.physics.spatial import derive_spatial, spatial_params
 from flexsym.physics.exact_body import EXACT_VG, exact_energies, exact_residual
 from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
@@ -52,8 +52,8 @@ _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.ro
 
 
 LARGE_KERNELS = 40_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)
-# A beam section's values: run-time parameters p (their names: assemble._param_layout,
-# spatial._params), never numbers of the derivation (derivation_fingerprint)
+# A beam section's values: run-time parameters p (their names: assemble.param_layout,
+# spatial.spatial_params), never numbers of the derivation (derivation_fingerprint)
 RUN_TIME_SECTION = ("rho", "E", "A", "I", "Iy", "J", "G")
 
 
@@ -598,7 +598,7 @@ def runtime_parameters(system: System) -> list[tuple[str, float]]:
     """(name, value) of the run-time parameters p that the beams' lengths and sections give,
     p's first entries (a derivation may add its own after them: a free spatial ef beam's
     bending_inertia, whose default is the derivation's)."""
-    return [(n, v) for n, _, v in (_params if system.dimension == 3 else _param_layout)(system)[0]]
+    return [(n, v) for n, _, v in (spatial_params if system.dimension == 3 else param_layout)(system)[0]]
 
 
 # Placeholders of what a derivation leaves open (derive_folder), filled by folder_files

@@ -221,7 +221,7 @@ def check_derivable(system: System, tree=None) -> None:
             raise SpecError(f"{where}: load {type(load).__name__} is not derived yet")
 
 
-def _param_layout(system: System) -> tuple[list, dict]:
+def param_layout(system: System) -> tuple[list, dict]:
     """p: [rho, E, A, I, L] of each flexible body (plain names for one body, as a one-beam
     variant's p, so that --param L=... keeps working; else body_rho, ...)."""
     beams = [b for b in system.bodies if b.flexible]
@@ -282,7 +282,7 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     check_derivable(system, tree)
     guided = _guided(system)
     guided_by_joint = {g.joint: g for g in guided}
-    params, psyms = _param_layout(system)
+    params, psyms = param_layout(system)
 
     coords: list[Coordinate] = []
     joint_sym: dict[str, tuple] = {}  # joint -> (coordinate, rate) symbols

@@ -91,7 +91,7 @@ from flexsym.model.maneuver import parse_expression, t
 from flexsym.scenes.assembly import joint_motion
 
 
-def _params(system: System):
+def spatial_params(system: System):
     """p: [rho, E, A, I, L, Iy, J, G] of each flexible body (plain names for one body)."""
     beams = [b for b in system.bodies if b.flexible]
     params, by_body = [], {}
@@ -117,7 +117,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
     tree = system.tree()
     guided = _guided(system)
     guided_by_joint = {g.joint: g for g in guided}  # by the guided coordinate's name
-    params, psyms = _params(system)
+    params, psyms = spatial_params(system)
 
     coords: list[Coordinate] = []
     for body in tree.order:

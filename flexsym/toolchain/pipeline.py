@@ -144,22 +144,22 @@ def prepare_system(system: System, log=None) -> Built:
     if not _current(folder, fp):
         with file_lock(folder.parent / f".{folder.name}.lock"):
             if not _current(folder, fp):
-                write_folder(folder_files(system, _derivation(system, say)), folder)
+                write_folder(_system_files(system, say), folder)
     return build(folder, log=say)
 
 
-def _derivation(system: System, say) -> dict:
-    """sysgen.derive_folder's for system: kept per derivation_fingerprint, so a system whose
-    sections' values alone changed (a density edited in its scene) is not derived again."""
+def _system_files(system: System, say) -> dict[str, str]:
+    """The generated folder's files, from the derivation (sysgen.derive_folder) kept per
+    derivation_fingerprint: a system whose sections' values alone changed (a density edited in
+    its scene) is not derived again. A kept file this code cannot fill is derived again."""
     from flexsym.core.files import atomic_write
 
     path = cache_dir() / "systems" / ".derived" / f"{system.name}-{derivation_fingerprint(system)[:20]}.json"
     try:
-        derived = json.loads(path.read_text(encoding="utf-8"))
-        folder_files(system, derived)  # a file this code cannot fill is derived again
+        files = folder_files(system, json.loads(path.read_text(encoding="utf-8")))
         if say:
             say("derivation reused (the sections' values are run-time parameters)")
-        return derived
+        return files
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         pass
     if say:
@@ -168,7 +168,7 @@ def _derivation(system: System, say) -> dict:
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path) as fh:
         fh.write(json.dumps(derived))
-    return derived
+    return folder_files(system, derived)
 
 
 def run_system(system: System, out: Path | None = None, **options):
