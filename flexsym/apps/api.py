@@ -134,13 +134,18 @@ def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,op
 
 def inprocess(target):
     """The built model's library loaded in this process (InProcessModel): model.batch(runs, ...)
-    runs many parameter sets per call and returns arrays (see flexsym.sim.inprocess)."""
+    runs many parameter sets per call and returns arrays (see flexsym.sim.inprocess). Loaded
+    from a scene, a batch runs as the scene says (its run options, its beam and manoeuvre
+    values) where the call does not say otherwise."""
     from flexsym.sim.inprocess import load, load_system
 
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        target = load_scene(target)
     scene = _system_scene(target)
     if scene is not None:  # a mechanism: its p and drive parameters vary (see flexsym.sim.inprocess)
-        return load_system(scene.system)
-    return load(_spec_of(target))
+        return load_system(scene.system).with_scene(scene)
+    model = load(_spec_of(target))
+    return model.with_scene(target) if isinstance(target, Scene) else model
 
 
 def _system_scene(target):

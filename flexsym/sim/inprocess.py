@@ -120,11 +120,29 @@ class BatchResult:
                          self.rows[i], None, self.options | per_run | {"params": params})
 
 
+SHARED_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "max_steps", "newton", "newton_tol",
+                  "rho_inf", "newmark_gamma", "newmark_beta", "blowup")
+
+
+def settings_of(o: RunOptions, keep_interval: bool) -> dict:
+    """The run options every run of a batch or sweep shares, from validated ones. keep_interval
+    (a scene, or an interval given): rows stay every out_every * dt when dt varies per run;
+    else each run gets the table's default rows for its dt."""
+    settings = {k: getattr(o, k) for k in SHARED_OPTIONS if getattr(o, k) is not None}
+    if keep_interval:
+        settings["interval"] = o.out_every * o.dt
+    return settings
+
+
 class InProcessModel:
     """A built variant's shared library, loaded once; batch() runs parameter sets through it."""
 
     def __init__(self, built: Built, gen_dir: Path, spec=None):
         self.built, self.spec = built, spec
+        # what batch() uses where a call gives nothing: a scene's run options and values
+        # (with_scene); else the option table's defaults and the model's
+        self.settings: dict = {}
+        self.base: dict = {}
         self.manifest = read_manifest(gen_dir)
         self.outputs = list(self.manifest["outputs"])
         self.coordinates = [c["name"] for c in self.manifest["coordinates"]]
@@ -150,6 +168,14 @@ class InProcessModel:
         self.lib.fsr_batch_free.argtypes = [ctypes.POINTER(_dptr), ctypes.c_int]
         self._weights = deflection_weights(spec, self.columns) if spec is not None else None
 
+    def with_scene(self, scene) -> InProcessModel:
+        """Run as the scene says where a batch() call does not: its run options (integrator,
+        dt, t_end, rows every interval, ...) and its beam and manoeuvre values (a one-beam
+        scene's are run-time parameters of its variant; a system scene's are its model's)."""
+        self.settings = settings_of(scene.options, keep_interval=True)
+        self.base = {k: v for k, v in scene.options.params.items() if k in self.run_time_names}
+        return self
+
     @property
     def run_time_names(self) -> list[str]:
         """The names batch() varies per run: beam and manoeuvre parameters (a system's p and
@@ -169,6 +195,8 @@ class InProcessModel:
         unknown = [k for k in options if k not in RUN_OPTIONS]
         if unknown:
             raise TypeError(f"batch() got an unknown option '{unknown[0]}'")
+        rows_given = {"interval", "out_every"} & set(options) or {"interval", "out_every"} & set(runs)
+        options = {k: v for k, v in self.settings.items() if not (rows_given and k == "interval")} | options
         runs = dict(runs)
         for name in runs:
             if name not in self.run_time_names and name not in PER_RUN_OPTIONS:
@@ -179,6 +207,7 @@ class InProcessModel:
         n = len(next(iter(cols.values()))) if cols else 1
         if any(len(c) != n for c in cols.values()):
             raise SpecError("every parameter needs the same number of values (one per run)")
+        cols |= {k: np.full(n, float(v)) for k, v in self.base.items() if k not in cols}
         o = self._options(options, cols, n)
         names = list(cols)
         table = np.array(list(cols.values())).T.reshape(n, len(names))

@@ -47,6 +47,7 @@ import numpy as np
 from flexsym.core.errors import FlexsymError, SpecError, ToolchainError
 from flexsym.core.progress import Progress
 from flexsym.model.options import API, BY_NAME, Option, RunOptions, Where, check_params, validate
+from flexsym.sim.inprocess import settings_of  # noqa: F401 (the sweep's shared options; cli, api)
 
 SAMPLINGS = ("random", "lhs")
 MAX_RUNS = 10_000_000
@@ -199,18 +200,6 @@ def sweepable_options(settings: dict) -> list[str]:
     return ["t_end", "dt"] + (["step"] if settings["integrator"] == "radau5" else [])
 
 
-SHARED_OPTIONS = ("integrator", "t_end", "dt", "step", "tol", "max_steps", "newton", "newton_tol",
-                  "rho_inf", "newmark_gamma", "newmark_beta", "blowup")
-
-
-def settings_of(o: RunOptions, keep_interval: bool) -> dict:
-    """A sweep's shared options from validated ones. keep_interval (a scene, or an interval
-    given): rows stay every out_every * dt when dt varies per run; else each run gets the
-    table's default rows for its dt."""
-    settings = {k: getattr(o, k) for k in SHARED_OPTIONS if getattr(o, k) is not None}
-    if keep_interval:
-        settings["interval"] = o.out_every * o.dt
-    return settings
 
 
 def _vary_error(name: str, value: float, exc: SpecError) -> SpecError:
