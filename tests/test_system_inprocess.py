@@ -12,7 +12,8 @@ from flexsym.apps.cli import main
 from flexsym.sim.inprocess import load_system
 from flexsym.toolchain.run import run_built
 from flexsym.scenes.scene import load_scene
-from flexsym.sim.sweep import read_table, settings_of
+from flexsym.sim.inprocess import settings_of
+from flexsym.sim.sweep import read_table
 from flexsym.toolchain.pipeline import prepare_system
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"

@@ -32,7 +32,8 @@ from flexsym.model.options import API, validate
 from flexsym.toolchain.pipeline import prepare
 from flexsym.toolchain.run import run_built
 from flexsym.model.variant import builtin
-from flexsym.sim.sweep import make_plan, prepare_plan, run_sweep, settings_of
+from flexsym.sim.inprocess import settings_of
+from flexsym.sim.sweep import make_plan, prepare_plan, run_sweep
 
 CASE = dict(integrator="radau5", dt=0.01, step=0.25, t_end=20.0)
 

@@ -164,8 +164,8 @@ def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), r
     params={...}, t_end, dt, integrator, tol, step, interval, ...; the option table). dask: a
     scheduler address or a distributed.Client. Writes the table to out and returns it as
     column -> numpy array (see flexsym.sim.sweep)."""
-    from flexsym.sim.sweep import claim_partial, fingerprint_of, make_plan, prepare_plan, read_table, run_sweep, \
-        settings_of
+    from flexsym.sim.inprocess import settings_of
+    from flexsym.sim.sweep import claim_partial, fingerprint_of, make_plan, prepare_plan, read_table, run_sweep
 
     if isinstance(vary, dict):
         vary = [f"{k}={v}" if isinstance(v, str) else f"{k}={','.join(repr(float(x)) for x in v)}"

@@ -612,8 +612,9 @@ def cmd_sweep(args) -> int:
     import numpy as np
 
     from flexsym.toolchain.run import check_output_path
+    from flexsym.sim.inprocess import settings_of
     from flexsym.sim.sweep import (claim_partial, fingerprint_of, make_plan, partial_path, plot, prepare_plan,
-                                   read_table, run_sweep, settings_of)
+                                   read_table, run_sweep)
 
     spec, scene = resolve(args, systems=True)
     o = _run_options(args, spec, scene)

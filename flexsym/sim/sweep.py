@@ -46,8 +46,7 @@ import numpy as np
 
 from flexsym.core.errors import FlexsymError, SpecError, ToolchainError
 from flexsym.core.progress import Progress
-from flexsym.model.options import API, BY_NAME, Option, RunOptions, Where, check_params, validate
-from flexsym.sim.inprocess import settings_of  # noqa: F401 (the sweep's shared options; cli, api)
+from flexsym.model.options import API, BY_NAME, Option, Where, check_params, validate
 
 SAMPLINGS = ("random", "lhs")
 MAX_RUNS = 10_000_000
@@ -116,7 +115,7 @@ class SweepPlan:
     """Everything a sweep runs: the model, the options shared by all runs, and one row of
     inputs per run."""
     spec: object
-    settings: dict  # run options shared by every run (validated; batch() keywords), see settings_of
+    settings: dict  # run options shared by every run (validated; batch() keywords), see inprocess.settings_of
     base_params: dict  # run-time parameters every run starts from
     names: tuple  # varied inputs
     table: np.ndarray  # runs x len(names)

@@ -139,21 +139,13 @@ def _keep_kernels(build_dir: Path, kept: Path) -> None:
     kept, for the next folder of the same derivation to link (FLEXSYM_KERNELS_OBJECTS): a
     system whose sections' values alone differ (a density edited in its scene) then compiles
     only its system.c."""
-    def make():
-        tmp = Path(tempfile.mkdtemp(prefix=f".{kept.name}-", dir=kept.parent))
-        try:
-            names = []
-            for line in (build_dir / KERNELS).read_text().split():
-                names.append(f"{len(names)}-{Path(line).name}")
-                shutil.copyfile(build_dir / line, tmp / names[-1])
-            (tmp / OBJECTS).write_text("".join(f"{n}\n" for n in names))
-            (tmp / COMPLETE).write_text(str(build_dir) + "\n")
-            os.rename(tmp, kept)
-        finally:
-            if tmp.exists():
-                shutil.rmtree(tmp, ignore_errors=True)
-    kept.parent.mkdir(parents=True, exist_ok=True)
-    _once(kept, lambda: _objects_complete(kept), make)
+    def copy(tmp: Path) -> None:
+        names = []
+        for line in (build_dir / KERNELS).read_text().split():
+            names.append(f"{len(names)}-{Path(line).name}")
+            shutil.copyfile(build_dir / line, tmp / names[-1])
+        (tmp / OBJECTS).write_text("".join(f"{n}\n" for n in names))
+    _once(kept, lambda: _objects_complete(kept), lambda: _atomic_dir(kept, copy, build_dir))
 
 
 def _kernels_key(gen_dir: Path, manifest: dict, compiler: str, flags: str) -> str:
@@ -213,10 +205,7 @@ def _cmake_into(source: Path, final: Path, what: str, cmake: str, compiler: str,
     """Configure and build the CMake project source in a private directory renamed to final
     when complete (atomic: final is complete or absent). listing: the name of a file of object
     paths the build wrote, rewritten relative to the build directory (which is renamed)."""
-    root = final.parent
-    root.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}-", dir=root))
-    try:
+    def configure_and_build(tmp: Path) -> None:
         _run([cmake, "-S", str(source), "-B", str(tmp), f"-DFLEXSYM_RUNTIME_DIR={runtime_dir()}",
               f"-DCMAKE_C_COMPILER={compiler}", "-DCMAKE_BUILD_TYPE=Release", *defines]
              + ([f"-DCMAKE_C_FLAGS={flags}", f"-DCMAKE_EXE_LINKER_FLAGS={flags}",
@@ -226,8 +215,18 @@ def _cmake_into(source: Path, final: Path, what: str, cmake: str, compiler: str,
         if listing is not None:
             listed = (tmp / listing).read_text().split()
             (tmp / listing).write_text("".join(f"{Path(p).relative_to(tmp)}\n" for p in listed))
-        (tmp / COMPLETE).write_text(str(source) + "\n")
-        os.rename(tmp, final)  # atomic: a build directory is complete or absent
+    _atomic_dir(final, configure_and_build, source)
+
+
+def _atomic_dir(final: Path, fill, origin: Path) -> None:
+    """fill(tmp) in a private directory beside final, marked complete (naming origin) and
+    renamed to final: final is complete or absent, never half-made."""
+    final.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}-", dir=final.parent))
+    try:
+        fill(tmp)
+        (tmp / COMPLETE).write_text(str(origin) + "\n")
+        os.rename(tmp, final)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
