@@ -3,6 +3,7 @@
     from flexsym.apps import api
     scene = api.load_scene("scenes/paper.toml")
     result = api.run(scene)                 # RunResult: result["v_tip"], result.t, result.columns
+    result.validity                         # () or why the rows are outside the model's range
     result = api.simulate("m3", ws=4.0, t_end=10.0)
     print(api.inspect("m1", sections="energy"))
     hub = api.load_scene("scenes/hub.toml")  # a system scene ([[body]] entries): SystemScene
@@ -17,6 +18,7 @@ from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import compiled, generated_folder, prepare
 from flexsym.model.limits import is_real
 from flexsym.model.options import API, RUNTIME_DEFAULTS, validate
+from flexsym.physics.validity import range_notes, system_range_notes
 from flexsym.toolchain.run import RunResult, check_output_path, run_built
 from flexsym.scenes.scene import Scene, load_scene
 from flexsym.model.variant import builtin
@@ -89,7 +91,9 @@ def system(data, name: str = "system", t_end: float | None = None):
 
 
 def run(scene, out=None) -> RunResult:
-    """Run a scene (a Scene, a SystemScene or a path to a .toml file); results as numpy arrays."""
+    """Run a scene (a Scene, a SystemScene or a path to a .toml file); results as numpy arrays.
+    result.validity says why the rows are outside their model's range (empty: inside), as
+    `flexsym run`'s exit code 4 does."""
     _check_target(scene, "scene")
     if not isinstance(scene, Scene) and not hasattr(scene, "system"):
         if not isinstance(scene, (str, Path)):
@@ -103,9 +107,13 @@ def run(scene, out=None) -> RunResult:
         from flexsym.toolchain.pipeline import prepare_system
 
         moved = scene.assembly.line(scene.options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
-        return run_built(prepare_system(scene.system), scene.options, out=out,
-                         header=[moved] if moved else [])
-    return run_built(prepare(scene.spec), scene.options, out=out)
+        result = run_built(prepare_system(scene.system), scene.options, out=out,
+                           header=[moved] if moved else [])
+        result.validity = tuple(system_range_notes(scene.system, result))
+        return result
+    result = run_built(prepare(scene.spec), scene.options, out=out)
+    result.validity = tuple(range_notes(scene.spec, result, scene.options.params))
+    return result
 
 
 def simulate(target="m3", *, out=None, **options) -> RunResult:
@@ -116,7 +124,9 @@ def simulate(target="m3", *, out=None, **options) -> RunResult:
     o = validate(options, API, spec)
     if out is not None:
         out = check_output_path(out, "out")
-    return run_built(prepare(spec), o, out=out)
+    result = run_built(prepare(spec), o, out=out)
+    result.validity = tuple(range_notes(spec, result, o.params))
+    return result
 
 
 def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,ops", latex=False) -> str:

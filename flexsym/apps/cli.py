@@ -334,9 +334,12 @@ def _run_system(args, scene) -> int:
         print(f"flexsym: {scene.path}: {moved}", file=sys.stderr)
         header.insert(0, moved)
     res = run_built(built, options, out=out, header=header)
-    status = "ok" if res.ok else f"stopped: {res.message}"
-    print(f"{system.name}: {options.integrator}, dt = {options.dt:g} s, t_end = "
-          f"{options.t_end:g} s: {status}")
+    from flexsym.physics.validity import assess_system
+
+    verdict = assess_system(system, res)  # every body inside its model's range
+    status = f"stopped: {res.message}" if not res.ok else verdict.status
+    print(f"{system.name}: {options.integrator}, dt = {options.dt:g} s, t_end = {options.t_end:g} s: "
+          + (status if verdict.valid or not res.ok else "outside its model's range (below)"))
     if len(res.t):
         from flexsym.analysis.spinup import describe
 
@@ -352,7 +355,12 @@ def _run_system(args, scene) -> int:
 
         factor = plot_system(system, geometry, {"t": res.t} | {c: res[c] for c in res.columns}, plot)
         print(f"plot: {plot} (beam deflection from the chord scaled x{factor:g})")
-    return 0 if res.ok else 3
+    for note in verdict.notes:
+        if note != res.message:
+            print(f"flexsym: {note}", file=sys.stderr)
+    if not res.ok:
+        return 3
+    return 0 if verdict.valid else 4
 
 
 FMU_OPTIONS = tuple(n for n in RUN_OPTIONS if n not in ("repeat", "energy"))  # as `run`'s

@@ -546,6 +546,12 @@ class System:
                 return b
         raise SpecError(f"system '{self.name}': unknown body '{name}'")
 
+    def beam_param(self, beam: str, name: str) -> str:
+        """The run-time parameter of a flexible body's length or section value (rho, E, A, I,
+        L; in 3D also Iy, J, G): its plain name for a system's only beam, as a one-beam
+        variant's, else beam_name."""
+        return name if sum(b.flexible for b in self.bodies) == 1 else f"{beam}_{name}"
+
     def joint(self, name: str) -> Joint:
         for j in self.joints:
             if j.name == name:

@@ -231,7 +231,7 @@ def param_layout(system: System) -> tuple[list, dict]:
                   "L": b.length}
         mapping = {}
         for gp in BEAM_PARAMS:
-            name = gp.name if len(beams) == 1 else f"{b.name}_{gp.name}"
+            name = system.beam_param(b.name, gp.name)
             sym = gp.symbol if len(beams) == 1 else sp.Symbol(name, positive=True)
             params.append((name, sym, float(values[gp.name])))
             mapping[gp.symbol] = sym

@@ -102,7 +102,7 @@ def spatial_params(system: System):
                   "Iy": sec.Iy, "J": sec.J, "G": sec.G}
         mapping = {}
         for name, sym in generic:
-            pname = name if len(beams) == 1 else f"{b.name}_{name}"
+            pname = system.beam_param(b.name, name)
             psym = sym if len(beams) == 1 else sp.Symbol(pname, positive=True)
             params.append((pname, psym, float(values[name])))
             mapping[name] = psym

@@ -6,6 +6,16 @@ spin-up beam against `ef` it is 0.4 % of the peak deflection at v/L = 0.057 (ome
 1 % at 0.087 (omega_s = 10) and 3 % at 0.137 (omega_s = 20) (tests/test_hard_cases.py).
 `ef` is geometrically exact and has no such limit (only its mesh and step).
 
+Every flexible body of a system is held to its model's range in the same way
+(assess_system): its kind gives the gauges read off the run's coordinate columns (body_kinds,
+`gauges`): a modal beam's bound on |v| against 0.1 L (both bending planes in 3D) and on its
+axial strain; an `ef` beam's axial strain at its nodes (planar) or over its elements (3D); an
+exact-kinematics beam's truncation share. The axial strain is held to STRAIN_LIMIT in every
+model: the sections' law is linear elastic (sigma = E eps), which no metal is beyond a few
+tenths of a per cent, and the modal strain measures drop terms of order eps^2. A driven
+motion beyond the reach of a linkage is absorbed by stretching its bodies: this is where it
+shows.
+
 The exact-kinematics model (strain model `exact`) truncates no strain, only modes: its
 criterion is the share of the last bending mode in the curvature field,
 ||xi_n Phi_n''|| / ||sum_k xi_k Phi_k''|| (L2 norms along the beam), over the rows where the
@@ -14,6 +24,7 @@ set does not resolve the deformation: add modes.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -23,6 +34,10 @@ import sympy as sp
 VALIDITY_LIMIT = 0.1  # |v| / L
 TRUNCATION_LIMIT = 0.25  # share of the last mode in the curvature (exact kinematics; exact_study)
 SIGNIFICANT = 0.1  # rows with curvature norm >= this fraction of its peak are judged
+STRAIN_LIMIT = 0.01  # |axial strain| of a system's flexible body, in every model
+DEFLECTION_ADVICE = "second-order strains: errors grow like (v/L)^2, use ef"
+STRAIN_ADVICE = ("the sections' law is linear elastic and small-strain; a driven motion beyond the "
+                 "reach of a linkage stretches its bodies: check its lengths and drives")
 
 
 @dataclass
@@ -35,19 +50,123 @@ class Assessment:
         return "ok" if self.valid and not self.notes else "; ".join(self.notes)
 
 
+@dataclass(frozen=True)
+class Gauge:
+    """One measure of a body's deformation along a run, read off its coordinate columns, and
+    the limit of what its model is derived for (assess_system). weights: ((column, w), ...)
+    when the measure is sum_j w_j |y_j| (a bound); else measure(columns) -> its history."""
+
+    body: str
+    what: str
+    limit: float
+    advice: str
+    weights: tuple = ()
+    measure: Callable | None = None
+
+    def history(self, columns) -> np.ndarray:
+        if self.measure is not None:
+            return self.measure(columns)
+        return sum(w * np.abs(columns[c]) for c, w in self.weights)
+
+
+def mode_peak(spec, ref, derivative: int = 0) -> float:
+    """max over the beam (s in [0, 1], 2001 points) of |d^k phi / ds^k| of a mode of the spec:
+    its library's (sympy), or its finite-element data's (their interpolation)."""
+    if spec.body is None:
+        return _library_peak(ref, derivative)
+    from flexsym.model.fedata import evaluate
+
+    m = spec.mode(ref)
+    return float(np.max(np.abs(evaluate(m.body, m.shape, derivative, np.linspace(0.0, 1.0, 2001)))))
+
+
 @lru_cache(maxsize=None)
-def _mode_peak(ref) -> float:
+def _library_peak(ref, derivative: int) -> float:
     from flexsym.model.modes import mode, s
 
-    fn = sp.lambdify(s, mode(ref).expr, "numpy")
-    return float(np.max(np.abs(fn(np.linspace(0.0, 1.0, 2001)))))
+    x = np.linspace(0.0, 1.0, 2001)
+    return float(np.max(np.abs(np.broadcast_to(sp.lambdify(s, mode(ref).derivative(derivative), "numpy")(x), x.shape))))
+
+
+def modal_gauges(beam, L: float, columns_of) -> list[Gauge]:
+    """A modal beam's gauges: its axial strain (sum_j |q_j| max|psi_j'| / L, a bound) and, but
+    for the exact kinematics, the deflection. columns_of(group) -> [(column, mode), ...] of
+    its axial coordinates and of each bending plane's."""
+    spec, out = beam.model, []
+    axial = columns_of("axial")
+    if axial:
+        out.append(Gauge(beam.name, "a bound on |axial strain|", STRAIN_LIMIT, STRAIN_ADVICE,
+                         tuple((c, mode_peak(spec, r, 1) / L) for c, r in axial)))
+    planes = [[(c, mode_peak(spec, r)) for c, r in plane] for plane in columns_of("bending")]
+    planes = [p for p in planes if p]
+    if not planes or spec.strain == "exact":
+        return out
+    if len(planes) == 1:
+        return out + [Gauge(beam.name, "a bound on |v|", VALIDITY_LIMIT * L, DEFLECTION_ADVICE, tuple(planes[0]))]
+    def magnitude(cols):
+        return np.sqrt(sum(sum(w * np.abs(cols[c]) for c, w in p) ** 2 for p in planes))
+    return out + [Gauge(beam.name, "a bound on |(v, w)|", VALIDITY_LIMIT * L, DEFLECTION_ADVICE,
+                        measure=magnitude)]
+
+
+class Prefixed:
+    """A body's columns by its own coordinate names (its body's prefix added)."""
+
+    def __init__(self, columns, body: str):
+        self.columns, self.body = columns, body
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[f"{self.body}_{name}"]
+
+
+def truncation_gauge(beam) -> list[Gauge]:
+    """An exact-kinematics beam's: the last bending mode's share of its curvature."""
+    spec = beam.model
+    if len(spec.bending) < 2 or spec.body is not None:  # the library modes' curvature norm
+        return []
+    return [Gauge(beam.name, f"the last bending mode's ({spec.bending[-1].token}) share of the curvature",
+                  TRUNCATION_LIMIT, "modal truncation: add modes",
+                  measure=lambda cols: truncation_share(spec, Prefixed(cols, beam.name)))]
+
+
+def strain_gauge(beam, measure) -> Gauge:
+    """An ef beam's: measure(columns) -> max over the beam of its axial strain's magnitude."""
+    return Gauge(beam.name, "|axial strain|", STRAIN_LIMIT, STRAIN_ADVICE, measure=measure)
+
+
+def system_range_notes(system, result, params: dict | None = None) -> list[str]:
+    """Why a system's result is outside its models' range: every flexible body's gauges (its
+    kind's) over the rows, at the run's lengths (params: the run-time values given, else the
+    run's own, result.options["params"]); empty when inside."""
+    given = (result.options.get("params") or {}) if params is None else params
+    from flexsym.physics.body_kinds import kind_of
+    from flexsym.physics.body_kinds.spatial import kind_of as spatial_kind_of
+
+    notes = []
+    kind = spatial_kind_of if system.dimension == 3 else kind_of
+    for b in [b for b in system.bodies if b.flexible] if len(result.t) else ():
+        for g in kind(b).gauges(b, float(given.get(system.beam_param(b.name, "L"), b.length))):
+            h = np.asarray(g.history(result), dtype=float)
+            over = h > g.limit
+            if np.any(over):
+                i = int(np.argmax(over))
+                notes.append(f"body '{g.body}' left the range of validity of its model at t = "
+                             f"{result.t[i]:.3g} s: {g.what} = {h[i]:.3g} > {g.limit:.3g} "
+                             f"(peak {np.nanmax(h):.3g}); {g.advice}")
+    return notes
+
+
+def assess_system(system, result) -> Assessment:
+    """What `flexsym run` says of a system's run: its range notes, then why it stopped."""
+    notes = system_range_notes(system, result)
+    return Assessment(not notes and result.ok, notes + ([] if result.ok else [result.message]))
 
 
 def deflection_bound(spec, result) -> tuple[np.ndarray, str]:
     """|v| along the run: v_tip when it is an output, else sum_j |q_j| max_s |phi_j(s)|, a bound."""
     if "v_tip" in result.columns:
         return np.abs(result["v_tip"]), "|v_tip|"
-    bound = sum(np.abs(result[m.coordinate]) * _mode_peak(m) for m in spec.bending)
+    bound = sum(np.abs(result[m.coordinate]) * mode_peak(spec, m) for m in spec.bending)
     return bound, "a bound on |v|"
 
 
@@ -85,38 +204,43 @@ def deflection_weights(spec, columns) -> list[float] | None:
         return None
     if "v_tip" in columns:
         return [float(c == "v_tip") for c in columns]
-    peaks = {m.coordinate: _mode_peak(m) for m in spec.bending}
+    peaks = {m.coordinate: mode_peak(spec, m) for m in spec.bending}
     return [peaks.get(c, 0.0) for c in columns]
 
 
-def assess(spec, result, params: dict | None = None) -> Assessment:
+def range_notes(spec, result, params: dict | None = None) -> list[str]:
+    """Why a one-beam result is outside its model's range (|v| <= 0.1 L, or the exact
+    kinematics' truncation share); empty when inside."""
     length = (params or {}).get("L", 10.0)
-    a = Assessment(True)
+    notes = []
     exact = getattr(spec, "strain", None) == "exact"
     if exact and len(result.t) and len(spec.bending) > 1:
         share = truncation_share(spec, result)
         if np.any(share > TRUNCATION_LIMIT):
             i = int(np.nanargmax(share > TRUNCATION_LIMIT))
-            a.valid = False
-            a.notes.append(f"modal truncation: the last bending mode ({spec.bending[-1].token}) carries "
-                           f"{share[i]:.1%} of the curvature at t = {result.t[i]:.3g} s (peak "
-                           f"{np.nanmax(share):.1%}) > {TRUNCATION_LIMIT:.0%}; add modes")
+            notes.append(f"modal truncation: the last bending mode ({spec.bending[-1].token}) carries "
+                         f"{share[i]:.1%} of the curvature at t = {result.t[i]:.3g} s (peak "
+                         f"{np.nanmax(share):.1%}) > {TRUNCATION_LIMIT:.0%}; add modes")
     elif spec.kind == "modal" and len(result.t):
         v, what = deflection_bound(spec, result)
         over = v > VALIDITY_LIMIT * length
         if np.any(over):
             i = int(np.argmax(over))
-            a.valid = False
-            a.notes.append(f"deformation left the range of validity of the modal model at t = "
-                           f"{result.t[i]:.3g} s: {what} = {v[i]:.3g} m > {VALIDITY_LIMIT:g} L "
-                           f"(peak {np.max(v):.3g} m); second-order strains: errors grow like (v/L)^2, "
-                           "use ef")
+            notes.append(f"deformation left the range of validity of the modal model at t = "
+                         f"{result.t[i]:.3g} s: {what} = {v[i]:.3g} m > {VALIDITY_LIMIT:g} L "
+                         f"(peak {np.max(v):.3g} m); second-order strains: errors grow like (v/L)^2, "
+                         "use ef")
+    return notes
+
+
+def assess(spec, result, params: dict | None = None) -> Assessment:
+    """What `flexsym run` says of a one-beam run: its range notes, then why it stopped (with
+    why a known model collapses, for a run that went some way)."""
+    notes = range_notes(spec, result, params)
     if not result.ok:
-        a.valid = False
-        # why a model collapses, for a run that went some way (not for a step refused up front)
         hint = diagnose(spec, result) if len(result.t) > 1 else ""
-        a.notes.append(result.message + (f" -- {hint}" if hint else ""))
-    return a
+        notes.append(result.message + (f" -- {hint}" if hint else ""))
+    return Assessment(not notes, notes)
 
 
 BETA1 = 1.8751040687119611  # first root of 1 + cos(b) cosh(b) = 0 (clamped-free beam)

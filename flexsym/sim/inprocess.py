@@ -39,6 +39,7 @@ STAT_FIELDS = ("t_stop", "steps", "rejected_steps", "newton_iterations", "jacobi
                "force_evaluations", "omega_max", "rows", "ncols", "cpu_s", "bound_peak",
                "bound_t")  # FSR_STAT_*
 MESSAGE = 512  # FSR_BATCH_MESSAGE
+GAUGE_CHUNK = 256  # runs whose rows a system's gauges hold at once (batch)
 PER_RUN_OPTIONS = ("t_end", "dt", "step", "out_every")  # options batch() also takes per run
 # batch() options: the option table's (options.py) but the timing, the energy columns and the
 # manoeuvre values (parameters of a run, given in `runs`), plus out_every
@@ -137,8 +138,8 @@ def settings_of(o: RunOptions, keep_interval: bool) -> dict:
 class InProcessModel:
     """A built variant's shared library, loaded once; batch() runs parameter sets through it."""
 
-    def __init__(self, built: Built, gen_dir: Path, spec=None):
-        self.built, self.spec = built, spec
+    def __init__(self, built: Built, gen_dir: Path, spec=None, system=None):
+        self.built, self.spec, self.system = built, spec, system
         # what batch() uses where a call gives nothing: a scene's run options and values
         # (with_scene); else the option table's defaults and the model's
         self.settings: dict = {}
@@ -215,32 +216,20 @@ class InProcessModel:
         all_names = list(opts) + names
         inputs = np.ascontiguousarray(np.hstack([np.tile(list(opts.values()), (n, 1)), table]))
         at = _values("at", at, finite=True, allow_empty=True)
-        ncs, nf = len(self.columns), len(SUMMARY_FIELDS) + len(at)
-        values = np.zeros((n, ncs, nf))
-        stats = np.zeros((n, len(STAT_FIELDS)))
-        codes = np.zeros(n, dtype=np.intc)
-        messages = ctypes.create_string_buffer(MESSAGE * n)
-        c_names = (ctypes.c_char_p * len(all_names))(*[s.encode() for s in all_names])
-        weights = None if self._weights is None else np.ascontiguousarray(self._weights, dtype=float)
-        row_ptrs = (_dptr * n)() if rows else None
-        ret = self.lib.fsr_batch(self.model, len(all_names), c_names, n, _ptr(inputs), len(at), _ptr(at),
-                                 None if weights is None else _ptr(weights), VALIDITY_LIMIT,
-                                 _ptr(values), _ptr(stats),
-                                 codes.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), messages, row_ptrs)
-        raw = messages.raw
-        msgs = [raw[i * MESSAGE:(i + 1) * MESSAGE].split(b"\0", 1)[0].decode() for i in range(n)]
-        if ret < 0:
-            raise SpecError(f"{self.built.name}: {msgs[0]}")
+        # a system's bodies are gauged on each run's rows (validity.system_range_notes, as
+        # `flexsym run` does): kept for GAUGE_CHUNK runs at a time when the call keeps none
+        gauged = self.system is not None
+        step = n if rows or not gauged else GAUGE_CHUNK
+        parts = [self._call(all_names, inputs[i:i + step], at, rows or gauged) for i in range(0, n, step)]
+        values, stats, codes = (np.concatenate([p[k] for p in parts]) for k in range(3))
+        msgs = [m for p in parts for m in p[3]]
         stat = {k: stats[:, i].copy() for i, k in enumerate(STAT_FIELDS)}
-        kept = None
-        if rows:
-            kept = []
-            for i in range(n):
-                nr, nc = int(stat["rows"][i]), int(stat["ncols"][i])
-                kept.append(np.ctypeslib.as_array(row_ptrs[i], shape=(nr, nc)).copy() if nr else
-                            np.zeros((0, nc)))
-            self.lib.fsr_batch_free(row_ptrs, n)
-        valid, notes = self._validity(codes, msgs, stat)
+        ranges = None
+        if gauged:  # at each run's lengths: L is a run-time parameter
+            given = [{k: float(v[i]) for k, v in cols.items()} for i in range(n)]
+            ranges = [self._range_notes(r, given[i]) for i, r in enumerate(r for p in parts for r in p[5])]
+        kept = [r for p in parts for r in p[4]] if rows else None
+        valid, notes = self._validity(codes, msgs, stat, ranges)
         used = {"t_end": o.t_end, "dt": o.dt, "integrator": o.integrator, "tol": o.tol, "newton": o.newton,
                 "step": o.step}  # as run_built's RunResult.options
         return BatchResult(self.built.name, {k: table[:, j].copy() for j, k in enumerate(names)}, used,
@@ -259,11 +248,47 @@ class InProcessModel:
             cols["out_every"] = np.array([float(checked[c].out_every) for c in combos])
         return checked[combos[0]] if combos else validate(shared, API, self.spec)
 
-    def _validity(self, codes, messages, stat):
-        """Per run: ok and |v| <= 0.1 L over the rows (validity.assess on the summary)."""
+    def _call(self, names: list, inputs: np.ndarray, at: np.ndarray, rows: bool):
+        """fsr_batch on the runs of `inputs`: (summaries, statistics, codes, messages, the rows
+        when kept, each as (t, columns) by name for the gauges)."""
+        n = len(inputs)
+        ncs, nf = len(self.columns), len(SUMMARY_FIELDS) + len(at)
+        values = np.zeros((n, ncs, nf))
+        stats = np.zeros((n, len(STAT_FIELDS)))
+        codes = np.zeros(n, dtype=np.intc)
+        messages = ctypes.create_string_buffer(MESSAGE * n)
+        c_names = (ctypes.c_char_p * len(names))(*[s.encode() for s in names])
+        weights = None if self._weights is None else np.ascontiguousarray(self._weights, dtype=float)
+        row_ptrs = (_dptr * n)() if rows else None
+        ret = self.lib.fsr_batch(self.model, len(names), c_names, n, _ptr(np.ascontiguousarray(inputs)), len(at),
+                                 _ptr(at), None if weights is None else _ptr(weights), VALIDITY_LIMIT,
+                                 _ptr(values), _ptr(stats),
+                                 codes.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), messages, row_ptrs)
+        raw = messages.raw
+        msgs = [raw[i * MESSAGE:(i + 1) * MESSAGE].split(b"\0", 1)[0].decode() for i in range(n)]
+        if ret < 0:
+            raise SpecError(f"{self.built.name}: {msgs[0]}")
+        kept = []
+        if rows:
+            for i in range(n):
+                nr, nc = int(stats[i, STAT_FIELDS.index("rows")]), int(stats[i, STAT_FIELDS.index("ncols")])
+                kept.append(np.ctypeslib.as_array(row_ptrs[i], shape=(nr, nc)).copy() if nr else
+                            np.zeros((0, nc)))
+            self.lib.fsr_batch_free(row_ptrs, n)
+        return values, stats, codes, msgs, kept, [_Rows(r, ["t"] + self.columns) for r in kept]
+
+    def _range_notes(self, rows, params: dict) -> str:
+        from flexsym.physics.validity import system_range_notes
+
+        return "; ".join(system_range_notes(self.system, rows, params))
+
+    def _validity(self, codes, messages, stat, ranges=None):
+        """Per run: ok and inside its model's range: a one-beam model's |v| <= 0.1 L from the
+        summary (validity.assess's criterion), a system's bodies' gauges from its rows (ranges:
+        per run, why not, or "")."""
         valid, notes = [], []
         for i, code in enumerate(codes):
-            note = []
+            note = [ranges[i]] if ranges and ranges[i] else []
             t_over = stat["bound_t"][i]
             if not np.isnan(t_over):
                 what = "|v_tip|" if "v_tip" in self.columns else "a bound on |v|"
@@ -274,6 +299,20 @@ class InProcessModel:
             valid.append(not note)
             notes.append("; ".join(note))
         return np.array(valid, dtype=bool), notes
+
+
+class _Rows:
+    """A run's rows by column name (t, outputs, coordinates): what the gauges read."""
+
+    def __init__(self, data: np.ndarray, columns: list):
+        self.data, self.index = data, {c: j for j, c in enumerate(columns)}
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.data[:, 0]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.data[:, self.index[name]]
 
 
 def _values(name: str, given, finite: bool = False, allow_empty: bool = False) -> np.ndarray:
@@ -308,4 +347,4 @@ def load_system(system) -> InProcessModel:
     batch() then takes its p and drive parameter names (e.g. E, or BEAM_E with several beams)."""
     from flexsym.toolchain.pipeline import prepare_system, system_folder
 
-    return InProcessModel(prepare_system(system), system_folder(system))
+    return InProcessModel(prepare_system(system), system_folder(system), system=system)

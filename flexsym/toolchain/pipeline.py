@@ -174,5 +174,9 @@ def _system_files(system: System, say) -> dict[str, str]:
 def run_system(system: System, out: Path | None = None, **options):
     """Generate, build and run a system: run.run_built's options (t_end, dt, integrator,
     params, ...), checked against the option table before any work."""
+    from flexsym.physics.validity import system_range_notes
+
     opts = check_options(**options)
-    return run_built(prepare_system(system), opts, out=out)
+    result = run_built(prepare_system(system), opts, out=out)
+    result.validity = tuple(system_range_notes(system, result))
+    return result

@@ -36,6 +36,10 @@ class RunResult:
     options: dict = field(default_factory=dict)
     written: str = "none"  # what happened to the output file: complete | truncated | none
     header: tuple = ()  # the CSV's comment lines (what set up the run)
+    # why the rows are outside their model's range (physics/validity: a system's bodies' gauges,
+    # a one-beam model's |v| or truncation share); empty: inside. Set by whoever knows the model
+    # (pipeline.run_system, api.run, api.simulate; `flexsym run` prints it and exits with 4).
+    validity: tuple = ()
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:

@@ -8,7 +8,8 @@ pose and motion (`BodyFrame`), its share of T, V, the momentum, the body's mass 
 moment and the strain forces (`contribute`, the body of derive_system's loop). On a beam it
 also gives the fields at a station (`fields_at`: u, v and the slope in its frame), from which
 a marker's pose follows (`marker_pose`), and N and M at a station (`own_stress`, or from
-equilibrium with its `inertial_stress`). The interface and what the kinds share are in
+equilibrium with its `inertial_stress`). After a run, its `gauges` read how far it deformed
+against its model's range (physics/validity.py). The interface and what the kinds share are in
 base.py. A new kind is one module here (its KIND) plus its tests; `KINDS` lists them. The
 spatial kinds (physics/spatial.py's) are the subpackage spatial/, with its own interface and
 registry.

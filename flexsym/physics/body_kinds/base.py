@@ -90,6 +90,11 @@ class BodyKind:
     def check(self, system, tree, body) -> None:
         """Refuse, before any work, what is not derived for it (SpecError, one line)."""
 
+    def gauges(self, body, length: float) -> list:
+        """How far it deforms along a run against its model's range (validity.Gauge); length:
+        the run's (a run-time parameter)."""
+        return []
+
     def origin(self, point: sp.Matrix, angle: sp.Expr, marker) -> sp.Matrix:
         """Its frame's origin R, its tree joint's child marker at `point`, the frame turned by
         `angle`."""

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import sympy as sp
 
 from flexsym.physics.body_kinds.base import BeamKind, exact_number, record_body, station
 from flexsym.physics.efbody import ef_part
+from flexsym.physics.validity import Prefixed, strain_gauge
 
 
 @dataclass
@@ -29,6 +31,15 @@ class Ef(BeamKind):
 
     def coordinates(self, b) -> list[tuple[str, str]]:
         return [(f"{b.name}_{c}", "node") for c in b.model.coordinates]
+
+    def gauges(self, b, length: float) -> list:
+        """The axial strain |r'| - 1 at its nodes, r' = (1 + dx_k, dy_k) in its frame (the
+        root's slope 1 + dx0 along the frame's axis)."""
+        def strain(cols):
+            c = Prefixed(cols, b.name)
+            return np.max([np.abs(c["dx0"])] + [np.abs(np.hypot(1 + c[f"dx{k}"], c[f"dy{k}"]) - 1)
+                                                 for k in range(1, b.model.elements + 1)], axis=0)
+        return [strain_gauge(b, strain)]
 
     def part(self, b, psyms: dict, qnames: list[str]):
         return ef_part(b, psyms)

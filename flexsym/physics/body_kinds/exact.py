@@ -14,6 +14,7 @@ from flexsym.physics.body_kinds.modal import FlexPart, Modal, field_reader, load
 from flexsym.physics.energy import BEAM_PARAMS
 from flexsym.physics.exact_body import body_quadrature, inertial_section_load, position_symbols
 from flexsym.physics.exact_kinematics import ExactKinematics, Quadrature
+from flexsym.physics.validity import truncation_gauge
 
 
 @dataclass
@@ -42,6 +43,11 @@ def differentiated(system, tree, beam: str) -> bool:
 
 class Exact(Modal):
     name = "exact"
+
+    def gauges(self, b, length: float) -> list:
+        """Its axial strain (modal_gauges keeps no deflection limit: its kinematics is exact)
+        and its truncation share."""
+        return super().gauges(b, length) + truncation_gauge(b)
 
     def applies(self, body) -> bool:
         return body.flexible and body.model.kind == "modal" and body.model.exact_kinematics

@@ -26,6 +26,7 @@ from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, buil
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import generalized_force
 from flexsym.physics.outputs import field_at, output_expression
+from flexsym.physics.validity import modal_gauges
 
 
 @dataclass
@@ -84,6 +85,12 @@ class Modal(BeamKind):
 
     def coordinates(self, b) -> list[tuple[str, str]]:
         return [(f"{b.name}_{r.coordinate}", r.axis) for r in b.model.modes]
+
+    def gauges(self, b, length: float) -> list:
+        spec = b.model
+        refs = {"axial": spec.axial, "bending": spec.bending}
+        return modal_gauges(b, length, lambda group: [(f"{b.name}_{r.coordinate}", r) for r in refs[group]]
+                            if group == "axial" else [[(f"{b.name}_{r.coordinate}", r) for r in refs[group]]])
 
     def check(self, system, tree, b) -> None:
         if b.model.strain == "prestress":

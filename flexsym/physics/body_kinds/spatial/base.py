@@ -75,6 +75,11 @@ class SpatialKind:
     def part(self, der, body, P: dict) -> None:
         """What it builds once, before the frames (der.spatial[name]); P: its parameters' symbols."""
 
+    def gauges(self, body, length: float) -> list:
+        """How far it deforms along a run against its model's range (validity.Gauge); length:
+        the run's (a run-time parameter)."""
+        return []
+
     def spin_inertia(self, body, P: dict) -> sp.Expr:
         """A moment of inertia of it (a ball joint's regularisation's size)."""
         raise NotImplementedError

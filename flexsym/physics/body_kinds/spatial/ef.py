@@ -3,6 +3,7 @@ body: its nodes' coordinates; gravity in sympy, the elements' T and elastic ener
 (der.rod_bodies, der.casadi_T); its axis points, section axes at a node and section forces."""
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 from flexsym.model.exact_numbers import exact
@@ -10,6 +11,7 @@ from flexsym.physics.assemble import Coordinate
 from flexsym.physics.body_kinds import ef as planar
 from flexsym.physics.body_kinds.spatial.base import SpatialBeam
 from flexsym.physics.spatial_ef import ef_at, ef_body, ef_coordinates, ef_rotation, ef_section
+from flexsym.physics.validity import Prefixed, strain_gauge
 
 
 class Ef(SpatialBeam):
@@ -20,6 +22,20 @@ class Ef(SpatialBeam):
     def coordinates(self, b) -> list:
         """Per free node, the displacement and the rotation vector."""
         return [Coordinate(f"{b.name}_{n}", "node", b.name, start=(0.0, 0.0)) for n in ef_coordinates(b)]
+
+    def gauges(self, b, length: float) -> list:
+        """The axial strain of each element's chord, |X_k - X_k-1| / (L / n) - 1, X_k the node's
+        position in its frame (k L / n, 0, 0) + (ux, uy, uz)_k, the root's X_0 = 0."""
+        n = b.model.elements
+
+        def strain(cols):
+            c = Prefixed(cols, b.name)
+            X = [np.zeros((len(c["ux1"]), 3))] + [
+                np.column_stack([k * length / n + c[f"ux{k}"], c[f"uy{k}"], c[f"uz{k}"]])
+                for k in range(1, n + 1)]
+            return np.max([np.abs(np.linalg.norm(X[k] - X[k - 1], axis=1) * n / length - 1)
+                           for k in range(1, n + 1)], axis=0)
+        return [strain_gauge(b, strain)]
 
     def contribute(self, der, b, P, fr, motion, gvec) -> None:
         der.V_grav += ef_body(der, b, P, fr, motion.om, motion.vf, motion.actual, gvec)

@@ -26,6 +26,7 @@ from flexsym.physics.body_kinds.spatial.base import Frame, SpatialBeam, cross, r
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import generalized_force
 from flexsym.physics.outputs import field_at
+from flexsym.physics.validity import modal_gauges
 
 
 class Modal(SpatialBeam):
@@ -34,6 +35,13 @@ class Modal(SpatialBeam):
 
     def coordinates(self, b) -> list:
         return [Coordinate(f"{b.name}_{n}", g, b.name) for n, g, _ in beam_coordinates(b)]
+
+    def gauges(self, b, length: float) -> list:
+        cols = [(f"{b.name}_{n}", g, r) for n, g, r in beam_coordinates(b)]
+        bending = [(c, r) for c, g, r in cols if g == "bending"]
+        half = len(bending) // 2  # v_* (the frame's x-y plane), then vz_* (x-z)
+        return modal_gauges(b, length, lambda group: [(c, r) for c, g, r in cols if g == "axial"]
+                            if group == "axial" else [bending[:half], bending[half:]])
 
     def part(self, der, b, P: dict) -> None:
         """Its table and fields, before the frames: a body may hang from its marker."""
