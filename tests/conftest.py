@@ -7,19 +7,6 @@ from pathlib import Path
 import pytest
 
 
-@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's, which reads the marks
-def pytest_collection_modifyitems(items):
-    """A module whose tests share a module-scoped fixture (a built scene, a selection, a reference
-    run) runs on one pytest-xdist worker (`--dist loadgroup` in pyproject.toml): spread over two,
-    each worker would compute that fixture again."""
-    for item in items:
-        defs = getattr(item, "_fixtureinfo", None)
-        shared = defs and any(d.scope == "module" and d.baseid == item.parent.nodeid
-                              for ds in defs.name2fixturedefs.values() for d in ds)
-        if shared:
-            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
-
-
 @pytest.fixture(scope="session", autouse=True)
 def isolated_cache(tmp_path_factory):
     """Builds and custom variants go to a fresh cache, as on a new machine; pytest-xdist's

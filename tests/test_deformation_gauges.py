@@ -132,3 +132,17 @@ run-time parameter) says the same. The same scene with its
     own = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(SCENES / "four_bar.toml"),
                           "--t-end", "0.15"], capture_output=True, text=True)
     assert own.returncode == 0 and "range of validity" not in own.stderr, own.stderr
+
+
+@pytest.mark.study  # about a minute: ef on 32 and 16 elements at two steps
+def test_select_refuses_a_mechanism_whose_reference_leaves_its_range(tmp_path):
+    """select scores models against ef; the short four-bar run to 0.135 s completes, but its ef
+    reference's coupler is stretched past 1 %: one line, exit 2, no table."""
+    text = (SCENES / "four_bar.toml").read_text()
+    scene = tmp_path / "short.toml"
+    scene.write_text(text.replace("length = 0.4\n", "length = 0.25\n").replace("mid = 0.2 }", "mid = 0.125 }")
+                     .replace("t_end = 0.3", "t_end = 0.135"))
+    run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "select", str(scene), "--tol", "0.01"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.count("\n") == 1 and "the ef reference body 'coupler' left the range" in run.stderr

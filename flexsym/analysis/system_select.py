@@ -44,6 +44,7 @@ from flexsym.analysis.model_select import NOISE_FLOOR
 from flexsym.analysis.system_bench import column_errors, ef_system, run_rows
 from flexsym.core.errors import SpecError
 from flexsym.model.variant import builtin
+from flexsym.physics.validity import system_range_notes
 from flexsym.scenes.system_scene import checked_system
 from flexsym.codegen.generate import MANIFEST
 from flexsym.toolchain.pipeline import prepare_system, system_folder
@@ -136,6 +137,9 @@ def _reference(scene, columns, log, extrapolate: bool):
     if not ref.ok:
         raise SpecError(f"{scene.path}: the ef reference stopped ({ref.message}); select needs a "
                         "reference: try a smaller [solver] dt")
+    outside = system_range_notes(ef, ref)
+    if outside:  # no model is derived for this motion: nothing to select
+        raise SpecError(f"{scene.path}: the ef reference {outside[0]}")
     # its own error, estimated by halving the step and the elements
     half_step = _run(ef, scene, o.dt)
     half_mesh = _run(ef_system(scene.system, n // 2), scene, o.dt / 2)
@@ -218,8 +222,9 @@ def select_system(scene, tol: float, repeat: int = 3, log=print, exact: bool = F
         for dt in steps:
             c = SystemCandidate(name, dt)
             r = _run(system, scene, dt)
-            if not r.ok:
-                c.status = r.message
+            outside = system_range_notes(system, r) if r.ok else []
+            if not r.ok or outside:  # not scored: a run that stopped, or left its model's range
+                c.status = r.message if not r.ok else outside[0]
             else:
                 timed = _run(system, scene, dt, repeat).summary
                 c.cost, c.spread = timed["cpu_median"], timed["cpu_max"] / max(timed["cpu_min"], 1e-300) - 1
