@@ -18,6 +18,7 @@ from flexsym.model.variant import builtin, customize
 from flexsym.physics.body_kinds import kind_of
 from flexsym.physics.body_kinds.spatial import kind_of as spatial_kind_of
 from flexsym.physics.validity import STRAIN_LIMIT, VALIDITY_LIMIT
+from flexsym.scenes.scene import load_scene
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
 STEEL = Section(rho=7850.0, E=2.1e11, A=5e-5, I=2e-10, Iy=2e-10, J=4e-10, G=8e10)
@@ -105,44 +106,73 @@ def test_exact_kinematics_has_no_deflection_limit_but_its_truncation_share():
     assert not any("|v|" in w for w in whats) and any("cf3" in w and "share" in w for w in whats)
 
 
-def test_a_drive_beyond_the_linkages_reach_is_flagged(tmp_path):
-    """The four-bar with a 0.25 m coupler closes at t = 0 (crank tip 0.4 m from the rocker's
-    pivot, coupler and rocker 0.55 m), but the crank's half turn puts its tip 0.6 m away: the
-    coupler's axial mode absorbs the gap, 20 % strain before Newton gives up at 0.17 s. Run to
-    0.15 s, the run completes: exit 4, the coupler named, its strain and the first time over
-    1 %; the CSV is written. In-process, the scene's own four-bar run with L = 0.25 m (a
-run-time parameter) says the same. The same scene with its
-    own 0.4 m coupler is inside."""
-    text = (SCENES / "four_bar.toml").read_text()
-    scene = tmp_path / "short.toml"
-    scene.write_text(text.replace("length = 0.4\n", "length = 0.25\n").replace("mid = 0.2 }", "mid = 0.125 }"))
-    out = tmp_path / "short.csv"
-    run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(scene), "--t-end", "0.15",
-                          "--out", str(out)], capture_output=True, text=True)
-    assert run.returncode == 4, run.stderr
-    [note] = [line for line in run.stderr.splitlines() if "range of validity" in line]
-    assert "body 'coupler'" in note and "axial strain" in note and "t = 0.13 s" in note
-    assert "outside its model's range" in run.stdout and out.exists()
-    from flexsym.apps import api  # in-process, the same gauges on each run's rows, at its L
-
-    b = api.inprocess(SCENES / "four_bar.toml").batch({"L": [0.4, 0.25]}, t_end=0.15)
-    assert b.status == ["ok", "ok"] and list(b.valid) == [True, False]
-    assert "body 'coupler'" in b.validity_notes[1] and "|axial strain| = 0.0155 > 0.01" in b.validity_notes[1]
-    assert "t = 0.13 s" in b.validity_notes[1] and "|axial strain| = 0.0155 > 0.01" in note
-    own = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(SCENES / "four_bar.toml"),
-                          "--t-end", "0.15"], capture_output=True, text=True)
-    assert own.returncode == 0 and "range of validity" not in own.stderr, own.stderr
-
-
-@pytest.mark.study  # about a minute: ef on 32 and 16 elements at two steps
-def test_select_refuses_a_mechanism_whose_reference_leaves_its_range(tmp_path):
-    """select scores models against ef; the short four-bar run to 0.135 s completes, but its ef
-    reference's coupler is stretched past 1 %: one line, exit 2, no table."""
+def _short_four_bar(tmp_path, t_end: str = "0.3") -> Path:
+    """The four-bar with its coupler shortened from 0.4 m to 0.25 m: it closes at t = 0 (the
+    crank's pin 0.4 m from the rocker's pivot, coupler and rocker 0.55 m), but the crank's half
+    turn puts the pin 0.6 m away."""
     text = (SCENES / "four_bar.toml").read_text()
     scene = tmp_path / "short.toml"
     scene.write_text(text.replace("length = 0.4\n", "length = 0.25\n").replace("mid = 0.2 }", "mid = 0.125 }")
-                     .replace("t_end = 0.3", "t_end = 0.135"))
-    run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "select", str(scene), "--tol", "0.01"],
+                     .replace("t_end = 0.3\n", f"t_end = {t_end}\n"))
+    return scene
+
+
+def test_a_drive_beyond_the_linkages_reach_is_refused_before_any_work(tmp_path):
+    """The rigid linkage followed along the crank's motion cannot close past t = 0.1291 s
+    (crank at 2.01 rad; m3, whose coupler cannot stretch, stops there): one line, exit 2,
+    nothing derived or written. Ended before, the scene loads; a --t-end past it is refused."""
+    out = tmp_path / "short.csv"
+    run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(_short_four_bar(tmp_path)),
+                          "--out", str(out)], capture_output=True, text=True)
+    assert run.returncode == 2 and run.stderr.count("\n") == 1 and not out.exists(), run.stderr
+    assert "beyond its reach at t = 0.1291 s (crank_joint 2.01 rad): joint 'loop'" in run.stderr
+    early = _short_four_bar(tmp_path, "0.12")
+    load_scene(early)
+    run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(early), "--t-end", "0.2"],
                          capture_output=True, text=True)
-    assert run.returncode == 2, run.stderr
-    assert run.stderr.count("\n") == 1 and "the ef reference body 'coupler' left the range" in run.stderr
+    assert run.returncode == 2 and "--t-end 0.2" in run.stderr and "t = 0.1291 s" in run.stderr
+
+
+def test_a_body_stretched_by_a_run_time_length_is_flagged_per_run():
+    """The four-bar's coupler made 0.25 m long at run time (in-process, no reach check): its
+    axial mode takes up the gap, 20 % strain by 0.15 s; the run says so from t = 0.13 s, at
+    the run's L (the scene's 0.4 m would read 0.0097 there). The scene's own L is inside."""
+    from flexsym.apps import api
+
+    b = api.inprocess(SCENES / "four_bar.toml").batch({"L": [0.4, 0.25]}, t_end=0.15)
+    assert b.status == ["ok", "ok"] and list(b.valid) == [True, False]
+    note = b.validity_notes[1]
+    assert "body 'coupler'" in note and "t = 0.13 s" in note and "|axial strain| = 0.01553 > 0.01" in note
+
+
+def test_a_deflection_beyond_a_tenth_of_the_length_exits_4(tmp_path):
+    """S1 (hub.toml, m3) with 2.5 times the motor's torque: the hub spins to about 15 rad/s and
+    the beam's deflection bound passes 0.1 L = 1 m at t = 4.47 s. The run completes: exit 4,
+    the body named on stderr and in the status, the CSV written."""
+    scene = tmp_path / "hub_fast.toml"
+    scene.write_text((SCENES / "hub.toml").read_text().replace('torque = "440.0*', 'torque = "1100.0*'))
+    out = tmp_path / "hub.csv"
+    run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(scene), "--out", str(out)],
+                         capture_output=True, text=True)
+    assert run.returncode == 4, run.stderr
+    [note] = [line for line in run.stderr.splitlines() if "range of validity" in line]
+    assert "body 'beam'" in note and "t = 4.47 s: a bound on |v| = " in note and "> 0.1 L = 1 m" in note
+    assert "outside its model's range" in run.stdout and out.exists()
+
+
+@pytest.mark.study  # minutes: select's ef reference on 32 and 16 elements
+def test_select_scores_no_candidate_outside_its_range(tmp_path):
+    """S1 with 2.5 times the torque, to 6 s: m2's and m3's deflection bounds pass 0.1 L at
+    4.47 s, so they are not scored (their status says why), whatever their error against ef;
+    m1 stays under it and is scored (22 % off ef's peak in v_tip)."""
+    from flexsym.analysis.system_select import select_system
+
+    scene = tmp_path / "hub_fast.toml"
+    scene.write_text((SCENES / "hub.toml").read_text().replace('torque = "440.0*', 'torque = "1100.0*')
+                     .replace("t_end = 20.0", "t_end = 6.0"))
+    results, best, _ = select_system(load_scene(scene), 0.1, repeat=1, log=lambda m: None)
+    flagged = [c for c in results if c.model in ("m2", "m3")]
+    assert flagged and all(c.status.startswith("body 'beam' left the range") and c.error == float("inf")
+                           for c in flagged)
+    assert all(c.status == "ok" and c.error > 0.2 for c in results if c.model == "m1")
+    assert best is None

@@ -304,6 +304,13 @@ def _run_system(args, scene) -> int:
     from flexsym.toolchain.run import check_output_path
 
     options = _run_options(args, None, scene, overrides=True)
+    if options.t_end > scene.options.t_end:  # the linkage's reach, checked to the scene's end
+        from flexsym.scenes.system_scene import check_assembly
+
+        try:
+            check_assembly(scene.system, options.t_end)
+        except SpecError as exc:
+            raise SpecError(f"{scene.path}: --t-end {options.t_end:g}: {exc}") from None
     out = None
     if args.out is not None:
         out = check_output_path(args.out, "--out")

@@ -62,6 +62,8 @@ class Gauge:
     advice: str
     weights: tuple = ()
     measure: Callable | None = None
+    unit: str = ""  # of the measure, in the message
+    limit_text: str = ""  # the limit as the message says it (default: its value)
 
     def history(self, columns) -> np.ndarray:
         if self.measure is not None:
@@ -102,11 +104,12 @@ def modal_gauges(beam, L: float, columns_of) -> list[Gauge]:
     if not planes or spec.strain == "exact":
         return out
     if len(planes) == 1:
-        return out + [Gauge(beam.name, "a bound on |v|", VALIDITY_LIMIT * L, DEFLECTION_ADVICE, tuple(planes[0]))]
+        return out + [Gauge(beam.name, "a bound on |v|", VALIDITY_LIMIT * L, DEFLECTION_ADVICE, tuple(planes[0]),
+                            unit=" m", limit_text=f"{VALIDITY_LIMIT:g} L = {VALIDITY_LIMIT * L:.4g} m")]
     def magnitude(cols):
         return np.sqrt(sum(sum(w * np.abs(cols[c]) for c, w in p) ** 2 for p in planes))
     return out + [Gauge(beam.name, "a bound on |(v, w)|", VALIDITY_LIMIT * L, DEFLECTION_ADVICE,
-                        measure=magnitude)]
+                        measure=magnitude, unit=" m", limit_text=f"{VALIDITY_LIMIT:g} L = {VALIDITY_LIMIT * L:.4g} m")]
 
 
 class Prefixed:
@@ -151,8 +154,8 @@ def system_range_notes(system, result, params: dict | None = None) -> list[str]:
             if np.any(over):
                 i = int(np.argmax(over))
                 notes.append(f"body '{g.body}' left the range of validity of its model at t = "
-                             f"{result.t[i]:.3g} s: {g.what} = {h[i]:.3g} > {g.limit:.3g} "
-                             f"(peak {np.nanmax(h):.3g}); {g.advice}")
+                             f"{result.t[i]:.4g} s: {g.what} = {h[i]:.4g}{g.unit} > "
+                             f"{g.limit_text or format(g.limit, 'g')} (peak {np.nanmax(h):.4g}{g.unit}); {g.advice}")
     return notes
 
 

@@ -44,6 +44,9 @@ CLOSE_TOL = 1e-12  # a loop is closed when max |Phi| <= this x the size (the run
 RANK_TOL = 1e-8    # singular values below this x the largest one count as zero
 NUDGE = 0.5        # rad (or x the size): the restart of a coordinate from a stalled start
 MAX_ITER = 60
+REACH_STEP = 0.1  # rad (x the size for a slide): a guided coordinate's largest change between
+                  # two positions of the reach check (follow); Newton closes from there
+REACH_TOL = 1e-9   # x the size: a loop the rigid linkage closes along the drives' motion
 
 
 @dataclass(frozen=True)
@@ -74,8 +77,8 @@ class Assembly:
         return f"assembly: {', '.join(parts)} (loop residual {self.residual:.2g} m, {strain})"
 
 
-def theta0(system: System) -> dict:
-    """(theta(0), theta'(0)) of each guided coordinate, by its name (System.driven: a joint's
+def guided_laws(system: System) -> dict:
+    """theta(t) of each guided coordinate (sympy, in t), by its name (System.driven: a joint's
     own name, or J_slide, J_angle2)."""
     out = {}
     for d in system.drivers:
@@ -86,8 +89,13 @@ def theta0(system: System) -> dict:
                 {sp.Symbol(k, positive=True): v for k, v in d.params})
         else:
             expr = parse_theta(d.expression)
-        out[system.driven(d)] = (float(expr.subs(t, 0)), float(sp.diff(expr, t).subs(t, 0)))
+        out[system.driven(d)] = expr
     return out
+
+
+def theta0(system: System) -> dict:
+    """(theta(0), theta'(0)) of each guided coordinate, by its name."""
+    return {c: (float(e.subs(t, 0)), float(sp.diff(e, t).subs(t, 0))) for c, e in guided_laws(system).items()}
 
 
 def _rot(phi, v):
@@ -398,10 +406,11 @@ def numeric_rank(a: np.ndarray) -> int:
     return int(np.sum(s > RANK_TOL * s[0])) if s[0] > 0 else 0
 
 
-def assemble(system: System, scale: float) -> tuple[System, Assembly]:
+def assemble(system: System, scale: float, t_end: float | None = None) -> tuple[System, Assembly]:
     """The system with its free joint coordinates and rates at t = 0 solved (see the module
     doc), and what moved; scale: the mechanism's size (m). SpecError when a loop cannot close
-    or is singular at t = 0."""
+    or is singular at t = 0, or (t_end given, a planar system) when the guided drives take it
+    beyond its reach before t_end (follow)."""
     if not system.tree().cut:
         return system, Assembly(scale=scale)
     loops = _Loops(system, scale)
@@ -427,6 +436,8 @@ def assemble(system: System, scale: float) -> tuple[System, Assembly]:
     generic = max(numeric_rank(loops.jac(_random(loops, k))[:, free]) for k in range(4))
     if rank < generic:
         _singular(system, loops, jac, free, rank)
+    if t_end is not None and system.dimension == 2:  # in 3D a ball joint's two tilts (poses3)
+        follow(system, loops, x, free, t_end, scale)  # cannot follow every motion: not checked
 
     moved, rates, joints = [], [], dict((j.name, j) for j in system.joints)
     for j in {j.name: j for j in loops.joints if j.kind == "spherical"}.values():
@@ -590,6 +601,57 @@ def _names(loops: _Loops, mask) -> str:
     """The joints of the masked coordinates, in the file's order."""
     names = {j.name for j, m in zip(loops.joints, mask) if m}
     return ", ".join(n for n in loops.order if n in names) or "none"
+
+
+def follow(system, loops, x0, free, t_end: float, scale: float) -> None:
+    """Follow the rigid linkage (bodies undeformed) along its guided coordinates' motion on
+    [0, t_end], from the assembled x0 by the assembly's Newton, in steps that move no guided
+    coordinate by more than REACH_STEP; refuse a time where no free coordinates close the
+    loop: the drives would take the mechanism beyond its reach, and its flexible bodies be
+    stretched to follow them (what validity's strain gauge would flag after the run)."""
+    laws = guided_laws(system)
+    slots = [k for k, c in enumerate(loops.coords) if c in laws]
+    if not slots or not loops.names:
+        return
+    fns = [sp.lambdify(t, laws[loops.coords[k]], "numpy") for k in slots]
+
+    def at(time):
+        return np.array([float(f(time)) for f in fns]) / loops.unit[slots]
+
+    # one guided turn: its angle mod 2 pi is all the closure depends on, so a full turn covers
+    # every later position
+    turn = len(slots) == 1 and _unit(loops.joints[slots[0]], loops.coords[slots[0]]) == "rad"
+    x, time, h = x0.copy(), 0.0, t_end / 200
+    low = high = x0[slots[0]]
+    while time < t_end and not (turn and high - low >= 2 * math.pi):
+        h = min(h, t_end - time)
+        target = at(time + h)
+        if np.max(np.abs(target - x[slots])) > REACH_STEP and h > t_end * 1e-7:
+            h /= 2
+            continue
+        trial = x.copy()
+        trial[slots] = target
+        trial = _newton(loops, trial, free)
+        gap = np.max(np.abs(loops.phi(trial)), initial=0.0)
+        if gap > REACH_TOL:
+            if h > t_end * 1e-7:  # a smaller step first: Newton may have left the branch
+                h /= 2
+                continue
+            probe = min(time + t_end / 100, t_end)  # how far open it is a little later
+            later = x.copy()
+            later[slots] = at(probe)
+            rows = np.abs(loops.phi(_newton(loops, later, free)))
+            k = int(np.argmax(rows))
+            apart = f"{rows[k] * scale:.3g} m" if loops.lengths[k] else f"{rows[k]:.3g} rad"
+            where = ", ".join(f"{_label(loops.joints[j], loops.coords[j])} {target[i] * loops.unit[j]:.4g} "
+                              f"{_unit(loops.joints[j], loops.coords[j])}" for i, j in enumerate(slots))
+            raise SpecError(f"system '{system.name}': the guided drives take the mechanism beyond its "
+                            f"reach at t = {time + h:.4g} s ({where}): joint '{loops.names[k]}' (cut "
+                            f"joint) cannot close with undeformed bodies (at t = {probe:.4g} s it stays "
+                            f"{apart} open at best); its flexible bodies would be stretched to follow. "
+                            "Fix the lengths or the drives, or end the run before (t_end)")
+        x, time, h = trial, time + h, min(2 * h, t_end / 200)
+        low, high = min(low, x[slots[0]]), max(high, x[slots[0]])
 
 
 def _cannot_close(system, loops, x, fixed, scale):

@@ -594,8 +594,9 @@ def check_system(system: System, t_end: float = 20.0) -> System:
 
 
 def checked_system(system: System, t_end: float = 20.0) -> tuple[System, Assembly]:
-    """check_system, then the assembly at t = 0: (the assembled system, what moved)."""
-    return check_assembly(check_system(system, t_end))
+    """check_system, then the assembly at t = 0 and the linkage's reach until t_end: (the
+    assembled system, what moved)."""
+    return check_assembly(check_system(system, t_end), t_end)
 
 
 def _at_rest(expr, coords: dict, names: dict, t_end: float, text: str, label: str) -> None:
@@ -665,15 +666,16 @@ def initial_poses(system: System) -> dict:
     return {b: tuple(float(c) for c in pose) for b, pose in poses(system, q).items()}
 
 
-def check_assembly(system: System) -> tuple[System, Assembly]:
+def check_assembly(system: System, t_end: float | None = None) -> tuple[System, Assembly]:
     """The system assembled at t = 0 (flexsym/scenes/assembly.py: the free joint coordinates
     and rates moved to close every cut joint with undeformed bodies) and what moved; refuses a
-    loop that cannot close or is singular there."""
+    loop that cannot close or is singular there, and (t_end given) guided drives that take it
+    beyond its reach before t_end."""
     for j in system.joints:
         if j.name in system.tree().cut and (j.fixed or j.rate is not None):
             raise SpecError(f"system '{system.name}': joint '{j.name}' is a cut joint (it closes a "
                             "loop, no coordinate): fixed and rate do not apply")
-    system, report = assemble(system, length_scale(system))
+    system, report = assemble(system, length_scale(system), t_end)
     if system.dimension == 3:
         _check_universal_axes(system)
     return system, report
