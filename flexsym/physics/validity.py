@@ -141,10 +141,10 @@ def system_range_notes(system, result, params: dict | None = None) -> list[str]:
     """Why a system's result is outside its models' range: every flexible body's gauges (its
     kind's) over the rows, at the run's lengths (params: the run-time values given, else the
     run's own, result.options["params"]); empty when inside."""
-    given = (result.options.get("params") or {}) if params is None else params
     from flexsym.physics.body_kinds import kind_of
     from flexsym.physics.body_kinds.spatial import kind_of as spatial_kind_of
 
+    given = (result.options.get("params") or {}) if params is None else params
     notes = []
     kind = spatial_kind_of if system.dimension == 3 else kind_of
     for b in [b for b in system.bodies if b.flexible] if len(result.t) else ():
@@ -231,8 +231,7 @@ def range_notes(spec, result, params: dict | None = None) -> list[str]:
             i = int(np.argmax(over))
             notes.append(f"deformation left the range of validity of the modal model at t = "
                          f"{result.t[i]:.3g} s: {what} = {v[i]:.3g} m > {VALIDITY_LIMIT:g} L "
-                         f"(peak {np.max(v):.3g} m); second-order strains: errors grow like (v/L)^2, "
-                         "use ef")
+                         f"(peak {np.max(v):.3g} m); {DEFLECTION_ADVICE}")
     return notes
 
 
