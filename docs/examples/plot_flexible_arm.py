@@ -11,8 +11,8 @@ import matplotlib.pyplot as plt
 
 from flexsym.model.system import (FlexibleBeam, Gravity, Joint, Marker, Output, RigidBody,
                                  Section, System)
+from flexsym.apps import api
 from flexsym.model.variant import builtin
-from flexsym.toolchain.pipeline import run_system
 
 steel = Section(rho=7850.0, E=2.1e11, A=5.0e-5, I=2.0e-10)  # SI units
 arm = System(
@@ -24,7 +24,7 @@ arm = System(
     loads=(Gravity((0.0, -9.81)),),
     outputs=(Output("y_tip", "y(link.tip)"), Output("w_mid", "w(link, mid)"),
              Output("M_root", "M(link, root)")))
-result = run_system(arm, t_end=1.0, dt=1e-4, integrator="genalpha")
+result = api.run(arm, t_end=1.0, dt=1e-4, integrator="genalpha")
 print(result.status)
 
 # %%

@@ -9,6 +9,8 @@
     hub = api.load_scene("scenes/hub.toml")  # a system scene ([[body]] entries): SystemScene
     result = api.run(hub)                   # columns theta_h, omega_h, v_tip, M_A
     pendulum = api.system({...})            # the same data as a scene, as a dict: a checked System
+    result = api.run(pendulum, t_end=2.0, dt=1e-4)  # a System runs with run options; generate,
+                                            # build, inprocess and sweep take it too
 """
 from __future__ import annotations
 
@@ -39,13 +41,29 @@ def variant(name_or_spec, **overrides):
     return customize(spec, **overrides) if overrides else spec.validate()
 
 
-def _spec_of(target):
+def _spec_of(target, what: str = "", instead: str = ""):
+    """The one-beam spec of a target; a mechanism (a System, its scene) refused in one line by
+    the functions that take none (what: the function's name; instead: what to use)."""
     _check_target(target)
+    if _system_of(target) is not None:
+        raise SpecError(f"{what}(): takes a one-beam variant or scene, not a mechanism (a System or a "
+                        f"system scene){instead}")
     if isinstance(target, Scene):
         return target.spec
     if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
         return load_scene(target).spec
     return variant(target)
+
+
+def _system_of(target):
+    """The System a target is (a System, a system scene or its .toml path), else None."""
+    from flexsym.model.system import System
+
+    if isinstance(target, System):
+        return target
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        target = load_scene(target)
+    return target.system if hasattr(target, "system") else None
 
 
 def _check_target(target, what: str = "target") -> None:
@@ -57,17 +75,29 @@ def _check_target(target, what: str = "target") -> None:
 
 
 def generate(target) -> Path:
-    """The folder with current generated code (generated now if needed)."""
+    """The folder with current generated code (generated now if needed): a variant's, a
+    scene's or a System's."""
+    system = _system_of(target) if _check_target(target) is None else None
+    if system is not None:
+        from flexsym.toolchain.pipeline import generated_system_folder
+
+        return generated_system_folder(system)
     return generated_folder(_spec_of(target))
 
 
 def build(target):
+    """The built model (Built: its driver and library) of a variant, a scene or a System."""
+    system = _system_of(target) if _check_target(target) is None else None
+    if system is not None:
+        from flexsym.toolchain.pipeline import prepare_system
+
+        return prepare_system(system)
     return prepare(_spec_of(target))
 
 
 def kernels(target):
-    """The compiled kernels, callable on numpy arrays (CompiledModel)."""
-    return compiled(_spec_of(target))
+    """A variant's compiled kernels, callable on numpy arrays (CompiledModel)."""
+    return compiled(_spec_of(target, "kernels", "; build() builds a mechanism's model"))
 
 
 def system(data, name: str = "system", t_end: float | None = None):
@@ -90,10 +120,21 @@ def system(data, name: str = "system", t_end: float | None = None):
     return system_from_dict(data, name, t_end)
 
 
-def run(scene, out=None) -> RunResult:
-    """Run a scene (a Scene, a SystemScene or a path to a .toml file); results as numpy arrays.
-    result.validity says why the rows are outside their model's range (empty: inside), as
-    `flexsym run`'s exit code 4 does."""
+def run(scene, out=None, **options) -> RunResult:
+    """Run a scene (a Scene, a SystemScene or a path to a .toml file) as it says, or a System
+    (api.system's, flexsym.model.library's) with run options (t_end, dt, integrator, params,
+    ...: the option table, checked, and the linkage assembled and followed to t_end, before any
+    work); results as numpy arrays. result.validity says why the rows are outside their model's
+    range (empty: inside), as `flexsym run`'s exit code 4 does."""
+    from flexsym.model.system import System
+
+    if isinstance(scene, System):
+        from flexsym.toolchain.pipeline import run_system
+
+        return run_system(scene, out, **options)
+    if options:
+        raise SpecError(f"run(): options ({', '.join(options)}) are for a System: a scene's are "
+                        "set in the scene")
     _check_target(scene, "scene")
     if not isinstance(scene, Scene) and not hasattr(scene, "system"):
         if not isinstance(scene, (str, Path)):
@@ -120,7 +161,7 @@ def simulate(target="m3", *, out=None, **options) -> RunResult:
     """Run a variant on the spin-up (or its own manoeuvre). Options as `flexsym run` and the
     table in flexsym.model.options (t_end, dt, integrator, ws, ts, params={...}, tol, step, ...):
     checked before anything is generated or built; defaults from the table."""
-    spec = _spec_of(target)
+    spec = _spec_of(target, "simulate", "; run(system, t_end=..., dt=...) runs one")
     o = validate(options, API, spec)
     if out is not None:
         out = check_output_path(out, "out")
@@ -139,7 +180,8 @@ def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,op
     for s in chosen:
         if not isinstance(s, str) or s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")
-    return Report(_spec_of(target), latex=latex).render(chosen)
+    return Report(_spec_of(target, "inspect", "; its generated folder (generate()) holds its "
+                                  "equations and manifest"), latex=latex).render(chosen)
 
 
 def inprocess(target):
@@ -149,6 +191,10 @@ def inprocess(target):
     values) where the call does not say otherwise."""
     from flexsym.sim.inprocess import load, load_system
 
+    from flexsym.model.system import System
+
+    if isinstance(target, System):  # as built: batch() gives the run options
+        return load_system(target)
     if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
         target = load_scene(target)
     scene = _system_scene(target)
@@ -170,8 +216,8 @@ def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), r
           workers=None, dask=None, progress=None, on_chunk=None, **run_options) -> dict:
     """`flexsym sweep` from Python: vary is a list of "NAME=START:STOP:COUNT" / "NAME=a,b,c" /
     "NAME=LO:HI" strings, or a dict NAME -> list of values or such a string. Runs a scene with its
-    own settings, or a variant on the spin-up with the run options of simulate() (ws, ts,
-    params={...}, t_end, dt, integrator, tol, step, interval, ...; the option table). dask: a
+    own settings, or a variant on the spin-up or a System with the run options of simulate()
+    (ws, ts, params={...}, t_end, dt, integrator, tol, step, interval, ...; the option table). dask: a
     scheduler address or a distributed.Client. Writes the table to out and returns it as
     column -> numpy array (see flexsym.sim.sweep)."""
     from flexsym.sim.inprocess import settings_of
@@ -194,8 +240,15 @@ def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), r
             spec = scene.spec
         o, keep_interval = scene.options, True
     else:
-        spec = _spec_of(target)
-        o = validate(run_options, API, spec)
+        from flexsym.model.system import System
+
+        if isinstance(target, System):  # as built, with the run options given here
+            from flexsym.sim.sweep import system_target
+
+            spec = system_target(target)
+        else:
+            spec = _spec_of(target)
+        o = validate(run_options, API, None if isinstance(target, System) else spec)
         keep_interval = run_options.get("interval") is not None or run_options.get("out_every") is not None
     plan = make_plan(spec, settings_of(o, keep_interval), o.params, list(vary), samples=samples, seed=seed,
                      sampling=sampling, at=at)

@@ -15,7 +15,7 @@ from flexsym.core.paths import cache_dir, file_lock, generated_dir
 from flexsym.model.system import System
 from flexsym.physics.assemble import check_derivable
 from flexsym.model.variant import BUILTIN, VariantSpec
-from flexsym.toolchain.run import check_options, run_built
+from flexsym.toolchain.run import check_options, check_output_path, run_built
 
 
 def saved_variant_file(name: str) -> Path:
@@ -136,16 +136,21 @@ def _current(folder: Path, fp: str) -> bool:
 def prepare_system(system: System, log=None) -> Built:
     """Generate (when not current) and build a system; returns the build (run with run_built).
     log(msg): a line per stage of work actually done (nothing when cached)."""
+    say = (lambda msg: log(f"flexsym: system '{system.name}': {msg}")) if log else None
+    return build(generated_system_folder(system, say), log=say)
+
+
+def generated_system_folder(system: System, say=None) -> Path:
+    """The system's generated folder, generated now when not current."""
     system.validate()
     check_derivable(system)  # refused in one line before the first progress line
     folder = system_folder(system)
     fp = system_fingerprint(system)
-    say = (lambda msg: log(f"flexsym: system '{system.name}': {msg}")) if log else None
     if not _current(folder, fp):
         with file_lock(folder.parent / f".{folder.name}.lock"):
             if not _current(folder, fp):
                 write_folder(_system_files(system, say), folder)
-    return build(folder, log=say)
+    return folder
 
 
 def _system_files(system: System, say) -> dict[str, str]:
@@ -172,11 +177,20 @@ def _system_files(system: System, say) -> dict[str, str]:
 
 
 def run_system(system: System, out: Path | None = None, **options):
-    """Generate, build and run a system: run.run_built's options (t_end, dt, integrator,
-    params, ...), checked against the option table before any work."""
+    """Check, assemble, generate, build and run a system (api.run's for a System): run.run_built's
+    options (t_end, dt, integrator, params, ...) checked against the option table, the system as
+    a scene is (system_scene.checked_system: its loops closed at t = 0 and followed to t_end),
+    before any work; result.validity: why the rows are outside its models' range (empty:
+    inside). The CSV's header records what the assembly moved."""
+    from flexsym.model.options import RUNTIME_DEFAULTS
     from flexsym.physics.validity import system_range_notes
+    from flexsym.scenes.system_scene import checked_system
 
     opts = check_options(**options)
-    result = run_built(prepare_system(system), opts, out=out)
+    if out is not None:
+        out = check_output_path(out, "out")
+    system, assembly = checked_system(system, opts.t_end)
+    moved = assembly.line(opts.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
+    result = run_built(prepare_system(system), opts, out=out, header=[moved] if moved else [])
     result.validity = tuple(system_range_notes(system, result))
     return result
