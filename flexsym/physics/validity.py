@@ -90,16 +90,15 @@ def _library_peak(ref, derivative: int) -> float:
     return float(np.max(np.abs(np.broadcast_to(sp.lambdify(s, mode(ref).derivative(derivative), "numpy")(x), x.shape))))
 
 
-def modal_gauges(beam, L: float, columns_of) -> list[Gauge]:
+def modal_gauges(beam, L: float, axial: list, planes: list) -> list[Gauge]:
     """A modal beam's gauges: its axial strain (sum_j |q_j| max|psi_j'| / L, a bound) and, but
-    for the exact kinematics, the deflection. columns_of(group) -> [(column, mode), ...] of
-    its axial coordinates and of each bending plane's."""
+    for the exact kinematics, the deflection. axial: [(column, mode), ...] of its axial
+    coordinates; planes: such a list per bending plane (one in 2D, two in 3D)."""
     spec, out = beam.model, []
-    axial = columns_of("axial")
     if axial:
         out.append(Gauge(beam.name, "a bound on |axial strain|", STRAIN_LIMIT, STRAIN_ADVICE,
                          tuple((c, mode_peak(spec, r, 1) / L) for c, r in axial)))
-    planes = [[(c, mode_peak(spec, r)) for c, r in plane] for plane in columns_of("bending")]
+    planes = [[(c, mode_peak(spec, r)) for c, r in plane] for plane in planes]
     planes = [p for p in planes if p]
     if not planes or spec.strain == "exact":
         return out

@@ -87,10 +87,9 @@ class Modal(BeamKind):
         return [(f"{b.name}_{r.coordinate}", r.axis) for r in b.model.modes]
 
     def gauges(self, b, length: float) -> list:
-        spec = b.model
-        refs = {"axial": spec.axial, "bending": spec.bending}
-        return modal_gauges(b, length, lambda group: [(f"{b.name}_{r.coordinate}", r) for r in refs[group]]
-                            if group == "axial" else [[(f"{b.name}_{r.coordinate}", r) for r in refs[group]]])
+        def columns(refs):
+            return [(f"{b.name}_{r.coordinate}", r) for r in refs]
+        return modal_gauges(b, length, columns(b.model.axial), [columns(b.model.bending)])
 
     def check(self, system, tree, b) -> None:
         if b.model.strain == "prestress":

@@ -7,7 +7,8 @@ section loads). A kind says which bodies it is for (`applies`: the planar kind's
 the data being the same), its coordinates, the part it builds once before the frames (`part`),
 the frame a child hangs from at its marker (`hang`), its share of T, V and Q given its frame
 (`contribute`), and its markers' points and axes, angular momentum and first moment, fields and
-section loads, and its `gauges` after a run (physics/validity.py). The interface and the vectors and frames it is written in are in base.py.
+section loads, and its `gauges` after a run (physics/validity.py). The interface and the
+vectors and frames it is written in are in base.py.
 """
 from __future__ import annotations
 

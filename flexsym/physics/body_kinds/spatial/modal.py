@@ -40,8 +40,8 @@ class Modal(SpatialBeam):
         cols = [(f"{b.name}_{n}", g, r) for n, g, r in beam_coordinates(b)]
         bending = [(c, r) for c, g, r in cols if g == "bending"]
         half = len(bending) // 2  # v_* (the frame's x-y plane), then vz_* (x-z)
-        return modal_gauges(b, length, lambda group: [(c, r) for c, g, r in cols if g == "axial"]
-                            if group == "axial" else [bending[:half], bending[half:]])
+        return modal_gauges(b, length, [(c, r) for c, g, r in cols if g == "axial"],
+                            [bending[:half], bending[half:]])
 
     def part(self, der, b, P: dict) -> None:
         """Its table and fields, before the frames: a body may hang from its marker."""
