@@ -9,8 +9,7 @@
     hub = api.load_scene("scenes/hub.toml")  # a system scene ([[body]] entries): SystemScene
     result = api.run(hub)                   # columns theta_h, omega_h, v_tip, M_A
     pendulum = api.system({...})            # the same data as a scene, as a dict: a checked System
-    result = api.run(pendulum, t_end=2.0, dt=1e-4)  # a System runs with run options; generate,
-                                            # build, inprocess and sweep take it too
+    result = api.run(pendulum, t_end=2.0, dt=1e-4)  # a System: with run options
 """
 from __future__ import annotations
 
