@@ -18,8 +18,8 @@ from pathlib import Path
 from flexsym.core.errors import SpecError
 from flexsym.toolchain.pipeline import compiled, generated_folder, prepare
 from flexsym.model.limits import is_real
-from flexsym.model.options import API, RUNTIME_DEFAULTS, validate
-from flexsym.physics.validity import range_notes, system_range_notes
+from flexsym.model.options import API, validate
+from flexsym.physics.validity import range_notes
 from flexsym.toolchain.run import RunResult, check_output_path, run_built
 from flexsym.scenes.scene import Scene, load_scene
 from flexsym.model.variant import builtin
@@ -40,28 +40,30 @@ def variant(name_or_spec, **overrides):
     return customize(spec, **overrides) if overrides else spec.validate()
 
 
+def _loaded(target):
+    """A target checked, and a .toml path loaded (once) as its scene."""
+    _check_target(target)
+    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
+        return load_scene(target)
+    return target
+
+
 def _spec_of(target, what: str = "", instead: str = ""):
     """The one-beam spec of a target; a mechanism (a System, its scene) refused in one line by
     the functions that take none (what: the function's name; instead: what to use)."""
-    _check_target(target)
+    target = _loaded(target)
     if _system_of(target) is not None:
         raise SpecError(f"{what}(): takes a one-beam variant or scene, not a mechanism (a System or a "
                         f"system scene){instead}")
-    if isinstance(target, Scene):
-        return target.spec
-    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
-        return load_scene(target).spec
-    return variant(target)
+    return target.spec if isinstance(target, Scene) else variant(target)
 
 
 def _system_of(target):
-    """The System a target is (a System, a system scene or its .toml path), else None."""
+    """The System a loaded target is (a System, or a system scene's), else None."""
     from flexsym.model.system import System
 
     if isinstance(target, System):
         return target
-    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
-        target = load_scene(target)
     return target.system if hasattr(target, "system") else None
 
 
@@ -76,7 +78,8 @@ def _check_target(target, what: str = "target") -> None:
 def generate(target) -> Path:
     """The folder with current generated code (generated now if needed): a variant's, a
     scene's or a System's."""
-    system = _system_of(target) if _check_target(target) is None else None
+    target = _loaded(target)
+    system = _system_of(target)
     if system is not None:
         from flexsym.toolchain.pipeline import generated_system_folder
 
@@ -86,7 +89,8 @@ def generate(target) -> Path:
 
 def build(target):
     """The built model (Built: its driver and library) of a variant, a scene or a System."""
-    system = _system_of(target) if _check_target(target) is None else None
+    target = _loaded(target)
+    system = _system_of(target)
     if system is not None:
         from flexsym.toolchain.pipeline import prepare_system
 
@@ -144,13 +148,9 @@ def run(scene, out=None, **options) -> RunResult:
     if out is not None:
         out = check_output_path(out, "out")
     if hasattr(scene, "system"):  # a mechanism: flexsym/codegen/sysgen.py generates and builds it
-        from flexsym.toolchain.pipeline import prepare_system
+        from flexsym.toolchain.pipeline import run_assembled
 
-        moved = scene.assembly.line(scene.options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
-        result = run_built(prepare_system(scene.system), scene.options, out=out,
-                           header=[moved] if moved else [])
-        result.validity = tuple(system_range_notes(scene.system, result))
-        return result
+        return run_assembled(scene.system, scene.assembly, scene.options, out)
     result = run_built(prepare(scene.spec), scene.options, out=out)
     result.validity = tuple(range_notes(scene.spec, result, scene.options.params))
     return result
@@ -190,25 +190,14 @@ def inprocess(target):
     values) where the call does not say otherwise."""
     from flexsym.sim.inprocess import load, load_system
 
-    from flexsym.model.system import System
-
-    if isinstance(target, System):  # as built: batch() gives the run options
-        return load_system(target)
-    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
-        target = load_scene(target)
-    scene = _system_scene(target)
-    if scene is not None:  # a mechanism: its p and drive parameters vary (see flexsym.sim.inprocess)
-        return load_system(scene.system).with_scene(scene)
+    target = _loaded(target)
+    system = _system_of(target)
+    if system is target:  # a System as built: batch() gives the run options
+        return load_system(system)
+    if system is not None:  # a mechanism's scene: its p and drive parameters vary (flexsym.sim.inprocess)
+        return load_system(system).with_scene(target)
     model = load(_spec_of(target))
     return model.with_scene(target) if isinstance(target, Scene) else model
-
-
-def _system_scene(target):
-    """The SystemScene target is or names, else None."""
-    _check_target(target)
-    if isinstance(target, (str, Path)) and str(target).endswith(".toml"):
-        target = load_scene(target)
-    return target if hasattr(target, "system") else None
 
 
 def sweep(target, vary, out, *, samples=None, seed=None, sampling=None, at=(), resume=False,

@@ -111,6 +111,13 @@ def modal_gauges(beam, L: float, axial: list, planes: list) -> list[Gauge]:
                         measure=magnitude, unit=" m", limit_text=f"{VALIDITY_LIMIT:g} L = {VALIDITY_LIMIT * L:.4g} m")]
 
 
+def first_over(history, limit: float) -> int | None:
+    """The first row at which a measure's history exceeds its limit (nan never does), or None:
+    the one decision of every note here."""
+    over = np.asarray(history, dtype=float) > limit
+    return int(np.argmax(over)) if np.any(over) else None
+
+
 class Prefixed:
     """A body's columns by its own coordinate names (its body's prefix added)."""
 
@@ -149,9 +156,8 @@ def system_range_notes(system, result, params: dict | None = None) -> list[str]:
     for b in [b for b in system.bodies if b.flexible] if len(result.t) else ():
         for g in kind(b).gauges(b, float(given.get(system.beam_param(b.name, "L"), b.length))):
             h = np.asarray(g.history(result), dtype=float)
-            over = h > g.limit
-            if np.any(over):
-                i = int(np.argmax(over))
+            i = first_over(h, g.limit)
+            if i is not None:
                 notes.append(f"body '{g.body}' left the range of validity of its model at t = "
                              f"{result.t[i]:.4g} s: {g.what} = {h[i]:.4g}{g.unit} > "
                              f"{g.limit_text or format(g.limit, 'g')} (peak {np.nanmax(h):.4g}{g.unit}); {g.advice}")
@@ -218,16 +224,15 @@ def range_notes(spec, result, params: dict | None = None) -> list[str]:
     exact = getattr(spec, "strain", None) == "exact"
     if exact and len(result.t) and len(spec.bending) > 1:
         share = truncation_share(spec, result)
-        if np.any(share > TRUNCATION_LIMIT):
-            i = int(np.nanargmax(share > TRUNCATION_LIMIT))
+        i = first_over(share, TRUNCATION_LIMIT)
+        if i is not None:
             notes.append(f"modal truncation: the last bending mode ({spec.bending[-1].token}) carries "
                          f"{share[i]:.1%} of the curvature at t = {result.t[i]:.3g} s (peak "
                          f"{np.nanmax(share):.1%}) > {TRUNCATION_LIMIT:.0%}; add modes")
     elif spec.kind == "modal" and len(result.t):
         v, what = deflection_bound(spec, result)
-        over = v > VALIDITY_LIMIT * length
-        if np.any(over):
-            i = int(np.argmax(over))
+        i = first_over(v, VALIDITY_LIMIT * length)
+        if i is not None:
             notes.append(f"deformation left the range of validity of the modal model at t = "
                          f"{result.t[i]:.3g} s: {what} = {v[i]:.3g} m > {VALIDITY_LIMIT:g} L "
                          f"(peak {np.max(v):.3g} m); {DEFLECTION_ADVICE}")

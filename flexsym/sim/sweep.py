@@ -199,8 +199,6 @@ def sweepable_options(settings: dict) -> list[str]:
     return ["t_end", "dt"] + (["step"] if settings["integrator"] == "radau5" else [])
 
 
-
-
 def _vary_error(name: str, value: float, exc: SpecError) -> SpecError:
     return SpecError(f"--vary {name}={value:g}: {exc}")
 

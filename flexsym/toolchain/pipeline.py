@@ -182,15 +182,21 @@ def run_system(system: System, out: Path | None = None, **options):
     a scene is (system_scene.checked_system: its loops closed at t = 0 and followed to t_end),
     before any work; result.validity: why the rows are outside its models' range (empty:
     inside). The CSV's header records what the assembly moved."""
-    from flexsym.model.options import RUNTIME_DEFAULTS
-    from flexsym.physics.validity import system_range_notes
     from flexsym.scenes.system_scene import checked_system
 
     opts = check_options(**options)
     if out is not None:
         out = check_output_path(out, "out")
-    system, assembly = checked_system(system, opts.t_end)
-    moved = assembly.line(opts.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
-    result = run_built(prepare_system(system), opts, out=out, header=[moved] if moved else [])
+    return run_assembled(*checked_system(system, opts.t_end), opts, out)
+
+
+def run_assembled(system: System, assembly, options, out: Path | None = None):
+    """Run a checked, assembled system (checked_system's, a system scene's) with validated
+    options: what the assembly moved heads the CSV; result.validity is set."""
+    from flexsym.model.options import RUNTIME_DEFAULTS
+    from flexsym.physics.validity import system_range_notes
+
+    moved = assembly.line(options.newton_tol or RUNTIME_DEFAULTS["newton_tol"])
+    result = run_built(prepare_system(system), options, out=out, header=[moved] if moved else [])
     result.validity = tuple(system_range_notes(system, result))
     return result
