@@ -116,9 +116,16 @@ endfunction()
 # FMU (runtime_c/fmi3, flexsym/sim/fmu.py): the model's sources, this runtime and the fmi3 wrapper,
 # compiled with the flags of flexsym_add_model (so its rows equal the driver's bit for bit);
 # only the fmi3* functions are exported. The model's accessor is FSU_MODEL of CONFIG_DIR's
-# flexsym_fmu_config.h.
+# flexsym_fmu_config.h. Given FLEXSYM_FMU_RUNTIME_OBJECTS (flexsym's own exports:
+# flexsym/sim/fmu.py), the runtime's objects compiled once with these flags
+# (-fvisibility=hidden: build.FMU_FLAGS) instead of its sources.
 function(flexsym_add_fmu id config_dir)
-  add_library(${id} MODULE ${ARGN} ${FLEXSYM_RUNTIME_SOURCES} "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
+  if(FLEXSYM_FMU_RUNTIME_OBJECTS)
+    set(runtime ${FLEXSYM_FMU_RUNTIME_OBJECTS})
+  else()
+    set(runtime ${FLEXSYM_RUNTIME_SOURCES})
+  endif()
+  add_library(${id} MODULE ${ARGN} ${runtime} "${FLEXSYM_RUNTIME_DIR}/fmi3/fmi3_flexsym.c")
   set_target_properties(${id} PROPERTIES PREFIX "" C_STANDARD 99 C_STANDARD_REQUIRED ON
                         C_EXTENSIONS OFF C_VISIBILITY_PRESET hidden)
   target_include_directories(${id} PRIVATE "${FLEXSYM_RUNTIME_DIR}/include" "${FLEXSYM_RUNTIME_DIR}/fmi3"

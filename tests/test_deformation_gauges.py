@@ -17,7 +17,8 @@ from flexsym.model.system import FlexibleBeam, Section
 from flexsym.model.variant import builtin, customize
 from flexsym.physics.body_kinds import kind_of
 from flexsym.physics.body_kinds.spatial import kind_of as spatial_kind_of
-from flexsym.physics.validity import STRAIN_LIMIT, VALIDITY_LIMIT
+from flexsym.model import fedata
+from flexsym.physics.validity import STRAIN_LIMIT, TWIST_LIMIT, VALIDITY_LIMIT
 from flexsym.scenes.scene import load_scene
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
@@ -98,6 +99,50 @@ def test_a_modal_beam_reads_its_axial_strain_and_deflection_bounds(dimension):
     peak = _field_peak(spec.mode(spec.bending[0]).expr, 1.0, L, 0)
     want = peak * (qv if dimension == 2 else np.hypot(qv, qw))
     assert g.history(cols)[0] == pytest.approx(want, rel=1e-9)
+
+
+def test_a_spatial_modal_beam_reads_its_twist_bound():
+    """3D: sum_j |q_j| max|psi_j| of the torsion coordinates (the bar's shapes), in rad,
+    against TWIST_LIMIT; with one mode the twist field's own peak (evaluated numerically)."""
+    L, q = 0.4, np.array([0.0, 0.02, -0.3])
+    spec = customize(builtin("m3"), bending="cf1", name="bar_m3")
+    b = _beam(spec, L)
+    g = _only(spatial_kind_of(b).gauges(b, L), "twist")
+    [ref] = spec.torsion
+    assert g.limit == TWIST_LIMIT and g.unit == " rad"
+    want = np.abs(q) * _field_peak(spec.mode(ref).expr, 1.0, L, 0)
+    assert np.allclose(g.history({f"bar_phi_{ref.token}": q}), want, rtol=1e-9, atol=0)
+    none = replace(spec, torsion=())
+    assert not [g for g in spatial_kind_of(b).gauges(replace(b, model=none), L) if "twist" in g.what]
+
+
+def test_a_body_from_data_is_gauged_on_each_planes_and_its_torsions_own_modes():
+    """A stepped spatial blade with a tip mass (tests/test_spatial_fedata.py): its x-z plane's
+    modes (I_y) and its torsion modes (G J, no spin inertia of the point mass) are not the
+    x-y plane's nor the axial ones; each gauge weight is the peak of its own view's mode."""
+    from test_spatial_fedata import stepped
+
+    body = stepped(20)
+    spec = replace(customize(builtin("m3"), bending="cf1,cf2", name="blade_m3"), body=body)
+    b = FlexibleBeam("blade", 10.0, STEEL, spec)
+    gauges = spatial_kind_of(b).gauges(b, 10.0)
+    x = np.linspace(0.0, 1.0, 2001)
+
+    def peak(view, ref, order=0):
+        return np.max(np.abs(fedata.evaluate(view, view.mode_shape(ref.axis, ref.family, ref.index), order, x)))
+
+    [tw] = spec.torsion
+    twist = _only(gauges, "twist")
+    assert twist.weights == ((f"blade_phi_{tw.token}", pytest.approx(peak(body.view("torsion"), tw))),)
+    assert abs(peak(body.view("torsion"), tw) - peak(body, tw)) > 1e-3 * peak(body, tw)  # not the axial shape
+    plane_w = {f"blade_vz_{r.token}": peak(body.view("z"), r) for r in spec.bending}
+    plane_v = {f"blade_{r.coordinate}": peak(body, r) for r in spec.bending}
+    assert max(abs(plane_w[f"blade_vz_{r.token}"] / plane_v[f"blade_{r.coordinate}"] - 1)
+               for r in spec.bending) > 1e-3  # the planes' shapes differ
+    deflection = _only(gauges, "|(v, w)|")
+    for col, w in plane_w.items():  # each plane alone: its own peak
+        cols = {c: np.zeros(1) for c in [*plane_w, *plane_v]} | {col: np.ones(1)}
+        assert deflection.history(cols)[0] == pytest.approx(w, rel=1e-12)
 
 
 def test_exact_kinematics_has_no_deflection_limit_but_its_truncation_share():

@@ -3,6 +3,7 @@ steps, takes the drive from its inputs step by step, and refuses bad requests an
 from __future__ import annotations
 
 import subprocess
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -68,6 +69,20 @@ def test_fmu_validates(exported, key):
     assert validate_fmu(str(exported[key][0])) == []
     md = read_model_description(str(exported[key][0]))
     assert md.fmiVersion == "3.0" and md.coSimulation is not None and md.modelExchange is None
+
+
+@pytest.mark.parametrize("key", ["m3", "ef", "drive"])
+def test_the_binary_exports_its_fmi3_functions_alone(exported, key, tmp_path):
+    """The runtime is linked from objects compiled once for every FMU with hidden visibility
+    (build.FMU_FLAGS): an importer sees the fmi3* functions, never the runtime's fsr_* nor the
+    model's symbols, which another FMU in the same process also defines."""
+    with zipfile.ZipFile(exported[key][0]) as z:
+        so = next(n for n in z.namelist() if n.startswith("binaries/") and n.endswith(".so"))
+        z.extract(so, tmp_path)
+    out = subprocess.run(["nm", "-D", "--defined-only", str(tmp_path / so)], capture_output=True,
+                         text=True, check=True).stdout
+    names = [line.split()[-1] for line in out.splitlines() if line.strip()]
+    assert "fmi3DoStep" in names and [n for n in names if not n.startswith("fmi3")] == []
 
 
 @pytest.mark.parametrize("key", list(CASES))

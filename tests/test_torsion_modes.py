@@ -156,3 +156,19 @@ def test_a_planar_beam_takes_no_torsion_modes(tmp_path, capsys):
     assert main(["run", str(scene), "--out", str(tmp_path / "p.csv")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "torsion modes apply to spatial beams" in err[0], err
+
+
+def test_a_twist_beyond_the_models_range_is_flagged(tmp_path, capsys):
+    """The shafts with G / 40 (a run-time parameter: the fixture's kernels are reused) twist
+    by T L / (G J) = 0.15 rad in their static start, beyond the 0.1 rad a modal beam's first-
+    order section rotations are held to: `flexsym run` exits with 4, one line per shaft. The
+    linear shape's bound is the tip's twist itself, in closed form."""
+    G = 8.1e10 / 40
+    scene = tmp_path / "soft.toml"
+    scene.write_text(_scene().replace("shear_modulus = 8.1e10", f"shear_modulus = {G:g}"))
+    assert main(["run", str(scene), "--out", str(tmp_path / "soft.csv")]) == 4
+    err = [line for line in capsys.readouterr().err.splitlines() if "left the range" in line]
+    assert len(err) == len(SETS) and all("a bound on |twist|" in line for line in err), err
+    [static] = [line for line in err if "'shaft_s'" in line]
+    twist = TORQUE * 0.5 / (G * 5.0e-9)
+    assert f"peak {twist:.4g} rad" in static and "at t = 0 s" in static, static

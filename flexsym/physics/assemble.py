@@ -166,6 +166,7 @@ class SystemDerivation:
     # applied-function placeholders, name -> value(tr, x): positions on an exact beam that sympy
     # differentiates (a body hangs from it, a load acts on it); sysgen gives their derivatives
     casadi_functions: dict = field(default_factory=dict)
+    memo: dict = field(default_factory=dict)  # once(): what several outputs read
     # the terms of the kinetic energy that read them (a hanging body's): not in T, M, f; sysgen
     # translates it and adds its Lagrange terms by casadi AD, as the exact beams' own T
     T_casadi: sp.Expr = sp.Integer(0)
@@ -192,17 +193,20 @@ class SystemDerivation:
         """Total time derivative along the motion (q, q', theta_k and their rates)."""
         if isinstance(expr, sp.MatrixBase):
             return expr.applyfunc(lambda e: self.ddt(e, order))
+        rates = [*zip(self.q, self.qd), *zip(self.qd, self.qdd)]
+        rates += [r for g in self.guided for r in (g.symbols[:2], g.symbols[1:])]
+        expr = sp.sympify(expr)
         for _ in range(order):
-            out = sp.Integer(0)
-            for x, xd in zip(self.q, self.qd):
-                out += sp.diff(expr, x) * xd
-            for x, xd in zip(self.qd, self.qdd):
-                out += sp.diff(expr, x) * xd
-            for g in self.guided:
-                th, thd, thdd = g.symbols
-                out += sp.diff(expr, th) * thd + sp.diff(expr, thd) * thdd
-            expr = out
+            free = expr.free_symbols  # differentiated by what it holds only (a large sum, once)
+            expr = sp.Add(*[sp.diff(expr, x) * xd for x, xd in rates if x in free])
         return expr
+
+    def once(self, key, make):
+        """make()'s value, made once per derivation (each output column reads one component
+        of a joint's reaction, of a section's loads)."""
+        if key not in self.memo:
+            self.memo[key] = make()
+        return self.memo[key]
 
     def energies(self) -> tuple[sp.Expr, sp.Expr, sp.Expr]:
         """(T, V, h = T2 - T0 + V): h is conserved when nothing is guided or motored and every
@@ -655,6 +659,11 @@ def _external_loads(der: SystemDerivation, bodies: set[str]) -> tuple[sp.Matrix,
 
 
 def joint_reaction(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Matrix]:
+    """_joint_reaction, once per derivation."""
+    return der.once(("reaction", joint.name), lambda: _joint_reaction(der, joint))
+
+
+def _joint_reaction(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, sp.Matrix]:
     """(F, M, P): the force (ground components) and the moment about P (the joint's child
     point) that the joint's parent side exerts on its child side, constraint and drive loads
     together (a guided or motored joint's moment or axial force is its drive's). A cut joint:

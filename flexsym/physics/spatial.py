@@ -440,6 +440,11 @@ def _first_moment(der, bodies) -> tuple[sp.Expr, sp.Matrix]:
 
 
 def joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
+    """_joint_reaction, once per derivation."""
+    return der.once(("reaction", joint.name), lambda: _joint_reaction(der, joint))
+
+
+def _joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
     """(F, M): the force and the moment about the joint's child point P (ground components)
     that the joint's parent side exerts on its child side, constraint and drive loads together
     (as assemble.joint_reaction in the plane). A cut joint: its multipliers (cut_load). A tree

@@ -31,11 +31,18 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 
+from flexsym.model.modes import Mode
+
 VALIDITY_LIMIT = 0.1  # |v| / L
 TRUNCATION_LIMIT = 0.25  # share of the last mode in the curvature (exact kinematics; exact_study)
 SIGNIFICANT = 0.1  # rows with curvature norm >= this fraction of its peak are judged
 STRAIN_LIMIT = 0.01  # |axial strain| of a system's flexible body, in every model
 DEFLECTION_ADVICE = "second-order strains: errors grow like (v/L)^2, use ef"
+# |twist| of a spatial modal beam, rad: its section turns to first order, I + [theta]x, and
+# its twist does not turn the bending planes (a flat section's moments mix between them by sin
+# phi); 0.1 rad is the rotation the deflection limit allows a slope (0.15 at a cantilever's tip)
+TWIST_LIMIT = 0.1
+TWIST_ADVICE = "the sections turn to first order and the twist does not turn the bending planes, use ef"
 STRAIN_ADVICE = ("the sections' law is linear elastic and small-strain; a driven motion beyond the "
                  "reach of a linkage stretches its bodies: check its lengths and drives")
 
@@ -71,14 +78,14 @@ class Gauge:
         return sum(w * np.abs(columns[c]) for c, w in self.weights)
 
 
-def mode_peak(spec, ref, derivative: int = 0) -> float:
-    """max over the beam (s in [0, 1], 2001 points) of |d^k phi / ds^k| of a mode of the spec:
-    its library's (sympy), or its finite-element data's (their interpolation)."""
-    if spec.body is None:
-        return _library_peak(ref, derivative)
+def mode_peak(m, derivative: int = 0) -> float:
+    """max over the beam (s in [0, 1], 2001 points) of |d^k phi / ds^k| of a mode: the
+    library's (modes.Mode: sympy, once per mode), or a body's from finite-element data
+    (fedata.BodyMode, the plane's or the torsion's: their interpolation)."""
+    if isinstance(m, Mode):
+        return _library_peak(m.ref, derivative)
     from flexsym.model.fedata import evaluate
 
-    m = spec.mode(ref)
     return float(np.max(np.abs(evaluate(m.body, m.shape, derivative, np.linspace(0.0, 1.0, 2001)))))
 
 
@@ -90,15 +97,19 @@ def _library_peak(ref, derivative: int) -> float:
     return float(np.max(np.abs(np.broadcast_to(sp.lambdify(s, mode(ref).derivative(derivative), "numpy")(x), x.shape))))
 
 
-def modal_gauges(beam, L: float, axial: list, planes: list) -> list[Gauge]:
-    """A modal beam's gauges: its axial strain (sum_j |q_j| max|psi_j'| / L, a bound) and, but
-    for the exact kinematics, the deflection. axial: [(column, mode), ...] of its axial
-    coordinates; planes: such a list per bending plane (one in 2D, two in 3D)."""
+def modal_gauges(beam, L: float, axial: list, planes: list, torsion: list = ()) -> list[Gauge]:
+    """A modal beam's gauges: its axial strain (sum_j |q_j| max|psi_j'| / L, a bound), but for
+    the exact kinematics its deflection, and in 3D its twist. axial, torsion: [(column, mode),
+    ...] of its axial and torsion coordinates (the modes its derivation uses); planes: such a
+    list per bending plane (one in 2D, two in 3D)."""
     spec, out = beam.model, []
     if axial:
         out.append(Gauge(beam.name, "a bound on |axial strain|", STRAIN_LIMIT, STRAIN_ADVICE,
-                         tuple((c, mode_peak(spec, r, 1) / L) for c, r in axial)))
-    planes = [[(c, mode_peak(spec, r)) for c, r in plane] for plane in planes]
+                         tuple((c, mode_peak(m, 1) / L) for c, m in axial)))
+    if torsion:
+        out.append(Gauge(beam.name, "a bound on |twist|", TWIST_LIMIT, TWIST_ADVICE,
+                         tuple((c, mode_peak(m)) for c, m in torsion), unit=" rad"))
+    planes = [[(c, mode_peak(m)) for c, m in plane] for plane in planes]
     planes = [p for p in planes if p]
     if not planes or spec.strain == "exact":
         return out
@@ -174,7 +185,7 @@ def deflection_bound(spec, result) -> tuple[np.ndarray, str]:
     """|v| along the run: v_tip when it is an output, else sum_j |q_j| max_s |phi_j(s)|, a bound."""
     if "v_tip" in result.columns:
         return np.abs(result["v_tip"]), "|v_tip|"
-    bound = sum(np.abs(result[m.coordinate]) * mode_peak(spec, m) for m in spec.bending)
+    bound = sum(np.abs(result[m.coordinate]) * mode_peak(spec.mode(m)) for m in spec.bending)
     return bound, "a bound on |v|"
 
 
@@ -212,7 +223,7 @@ def deflection_weights(spec, columns) -> list[float] | None:
         return None
     if "v_tip" in columns:
         return [float(c == "v_tip") for c in columns]
-    peaks = {m.coordinate: mode_peak(spec, m) for m in spec.bending}
+    peaks = {m.coordinate: mode_peak(spec.mode(m)) for m in spec.bending}
     return [peaks.get(c, 0.0) for c in columns]
 
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-from flexsym.toolchain.build import _run, find_cmake, find_compiler
+from flexsym.toolchain.build import FMU_FLAGS, _run, find_cmake, find_compiler, runtime_objects
 from flexsym.core.errors import SpecError
 from flexsym.codegen.generate import read_manifest
 from flexsym.core.paths import runtime_dir
@@ -237,9 +237,11 @@ def build_binary(gen_dir: Path, manifest: dict, opts: FmuOptions, work: Path) ->
     cfg.mkdir()
     (cfg / "flexsym_fmu_config.h").write_text(config_header(manifest, opts), encoding="utf-8")
     cmake, compiler, bdir = find_cmake(), find_compiler(), work / "build"
+    runtime = ";".join(map(str, runtime_objects(FMU_FLAGS, "fmu-")))  # compiled once, in the cache
     _run([cmake, "-S", str(runtime_dir() / "fmi3"), "-B", str(bdir), f"-DFLEXSYM_MODEL_DIR={gen_dir}",
           f"-DFLEXSYM_FMU_CONFIG_DIR={cfg}", f"-DFLEXSYM_FMU_ID={ident}", f"-DCMAKE_C_COMPILER={compiler}",
-          "-DCMAKE_BUILD_TYPE=Release"], f"configuring the FMU of '{ident}'")
+          "-DCMAKE_BUILD_TYPE=Release", f"-DFLEXSYM_FMU_RUNTIME_OBJECTS={runtime}"],
+         f"configuring the FMU of '{ident}'")
     _run([cmake, "--build", str(bdir), "-j", "2"], f"compiling the FMU of '{ident}'")
     return bdir / f"{ident}.so"
 

@@ -31,6 +31,8 @@ KERNELS = "kernels_objects.txt"  # a system's kernels' objects, listed by its bu
 # AddressSanitizer and UndefinedBehaviorSanitizer, float-to-integer overflow included; the
 # first error aborts the run.
 SANITIZE_FLAGS = "-fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=all -fno-omit-frame-pointer -g"
+# An FMU's runtime (flexsym_add_fmu: C_VISIBILITY_PRESET hidden): it exports its fmi3* functions alone
+FMU_FLAGS = "-fvisibility=hidden"
 
 
 @dataclass(frozen=True)
@@ -112,8 +114,7 @@ def build(gen_dir: Path, jobs: int = 2, root: Path | None = None, sanitize: bool
     final = root / f"{name}-{tag}{build_key(gen_dir, compiler, flags)}"
     built = Built(name, final, final / f"flexsym_{name}", final / f"libflexsym_{name}.so")
     if not _complete(built):
-        objects = _runtime_objects(root / ".runtime" / f"{tag}{build_key(None, compiler, flags)}",
-                                   cmake, compiler, jobs, flags)
+        objects = runtime_objects(flags, tag, root, jobs)
         defines = [f"-DFLEXSYM_RUNTIME_OBJECTS={';'.join(map(str, objects))}"]
         listing = None  # a system's kernels: linked when kept, else compiled here and kept
         if manifest.get("kernels_inputs"):
@@ -170,9 +171,13 @@ def _objects_complete(final: Path) -> bool:
             and all(p.is_file() for p in _listed(final)))
 
 
-def _runtime_objects(final: Path, cmake: str, compiler: str, jobs: int, flags: str) -> list[Path]:
-    """The runtime's objects, compiled once per compiler and flags into final (runtime_c's
-    CMakeLists.txt: the target and flags every model's build would compile them with)."""
+def runtime_objects(flags: str = "", tag: str = "", root: Path | None = None, jobs: int = 2) -> list[Path]:
+    """The runtime's objects, compiled once per compiler and flags into root/.runtime/ (default
+    root: the cache's build folder; runtime_c's CMakeLists.txt: the target and flags every
+    model's build would compile them with, plus flags)."""
+    compiler, cmake = find_compiler(), find_cmake()
+    root = Path(root) if root is not None else cache_dir() / "build"
+    final = root / ".runtime" / f"{tag}{build_key(None, compiler, flags)}"
     _once(final, lambda: _objects_complete(final),
           lambda: _cmake_into(runtime_dir(), final, "the runtime", cmake, compiler, jobs, flags, [],
                               listing=OBJECTS))

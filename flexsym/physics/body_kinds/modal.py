@@ -88,7 +88,7 @@ class Modal(BeamKind):
 
     def gauges(self, b, length: float) -> list:
         def columns(refs):
-            return [(f"{b.name}_{r.coordinate}", r) for r in refs]
+            return [(f"{b.name}_{r.coordinate}", b.model.mode(r)) for r in refs]
         return modal_gauges(b, length, columns(b.model.axial), [columns(b.model.bending)])
 
     def check(self, system, tree, b) -> None:

@@ -37,11 +37,12 @@ class Modal(SpatialBeam):
         return [Coordinate(f"{b.name}_{n}", g, b.name) for n, g, _ in beam_coordinates(b)]
 
     def gauges(self, b, length: float) -> list:
-        cols = [(f"{b.name}_{n}", g, r) for n, g, r in beam_coordinates(b)]
-        bending = [(c, r) for c, g, r in cols if g == "bending"]
+        keys, modes = _beam_modes(b)  # each coordinate's own mode (a body's: its plane's)
+        cols = [(f"{b.name}_{n}", g, modes[keys[n]]) for n, g, _ in beam_coordinates(b)]
+        bending = [(c, m) for c, g, m in cols if g == "bending"]
         half = len(bending) // 2  # v_* (the frame's x-y plane), then vz_* (x-z)
-        return modal_gauges(b, length, [(c, r) for c, g, r in cols if g == "axial"],
-                            [bending[:half], bending[half:]])
+        return modal_gauges(b, length, [(c, m) for c, g, m in cols if g == "axial"],
+                            [bending[:half], bending[half:]], [(c, m) for c, g, m in cols if g == "torsion"])
 
     def part(self, der, b, P: dict) -> None:
         """Its table and fields, before the frames: a body may hang from its marker."""
