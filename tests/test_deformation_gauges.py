@@ -3,6 +3,8 @@ each body kind's `gauges`): what the gauges read is checked against the fields t
 and a driven motion beyond a linkage's reach, which stretches its coupler, is flagged."""
 from __future__ import annotations
 
+import math
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -19,6 +21,7 @@ from flexsym.physics.body_kinds import kind_of
 from flexsym.physics.body_kinds.spatial import kind_of as spatial_kind_of
 from flexsym.model import fedata
 from flexsym.physics.validity import STRAIN_LIMIT, TWIST_LIMIT, VALIDITY_LIMIT
+from flexsym.core.errors import SpecError
 from flexsym.scenes.scene import load_scene
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
@@ -176,6 +179,40 @@ def test_a_drive_beyond_the_linkages_reach_is_refused_before_any_work(tmp_path):
     run = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "run", str(early), "--t-end", "0.2"],
                          capture_output=True, text=True)
     assert run.returncode == 2 and "--t-end 0.2" in run.stderr and "t = 0.1291 s" in run.stderr
+
+
+def _rsur_reach(L: float) -> float:
+    """The crank angle beyond which scenes/spatial_four_bar.toml's rigid RSUR linkage with a
+    coupler of length L cannot close: the crank pin (0.05 cos th, 0.05 sin th, 0), the rocker's
+    tip (0.2 + 0.12 sin ph, 0.12, 0.12 cos ph); the nearest tip moves beyond L."""
+    from scipy.optimize import brentq, minimize_scalar
+
+    def nearest(th):
+        def dist(ph):
+            return math.dist((0.2 + 0.12 * math.sin(ph), 0.12, 0.12 * math.cos(ph)),
+                             (0.05 * math.cos(th), 0.05 * math.sin(th), 0.0))
+        grid = np.linspace(-math.pi, math.pi, 2001)
+        ph = grid[int(np.argmin([dist(g) for g in grid]))]
+        return minimize_scalar(dist, bracket=(ph - 0.01, ph, ph + 0.01), tol=1e-12).fun
+    return brentq(lambda th: nearest(th) - L, 1.0, math.pi, xtol=1e-10)
+
+
+def test_a_spatial_drive_beyond_reach_is_refused_at_the_closed_form_angle(tmp_path):
+    """3D: the ball joint turns freely along the drive (a turn of its orientation, started
+    again from where it is). S7 and the RSUR four-bar follow their cranks' full turns, though
+    their ball joints' directions sweep a full turn in the cranks' frames (the start's two tilts
+    of the direction could not pass 90 degrees and refused both at a quarter turn). The RSUR
+    with its coupler made 0.15 m long still closes at t = 0 and is refused where the rigid
+    linkage stops closing, at the closed-form crank angle (2.4981 rad)."""
+    load_scene(SCENES / "spatial_slider_crank.toml")
+    load_scene(SCENES / "spatial_four_bar.toml")
+    text = (SCENES / "spatial_four_bar.toml").read_text()
+    scene = tmp_path / "short_rsur.toml"
+    scene.write_text(text.replace("length = 0.2265\n", "length = 0.15\n").replace("mid = 0.113 }", "mid = 0.075 }"))
+    with pytest.raises(SpecError, match="beyond its reach") as refused:
+        load_scene(scene)
+    angle = float(re.search(r"crank_joint ([0-9.]+) rad", str(refused.value)).group(1))
+    assert abs(angle - _rsur_reach(0.15)) < 1e-3 and "joint 'cardan'" in str(refused.value)
 
 
 def test_a_body_stretched_by_a_run_time_length_is_flagged_per_run():

@@ -46,6 +46,8 @@ NUDGE = 0.5        # rad (or x the size): the restart of a coordinate from a sta
 MAX_ITER = 60
 REACH_STEP = 0.1  # rad (x the size for a slide): a guided coordinate's largest change between
                   # two positions of the reach check (follow); Newton closes from there
+RECENTRE = 0.3  # a ball joint's turn in follow (its Gibbs vector: tan of half its angle, about
+                # 33 degrees) beyond which it is turned from where it is
 REACH_TOL = 1e-9   # x the size: a loop the rigid linkage closes along the drives' motion
 
 
@@ -148,7 +150,9 @@ def poses3(system: System, q: dict) -> dict:
         c = q.get(j.name, 0)
         Q, _, shift, _ = joint_motion(j, [(q.get(x.name, 0), 0) for x in j.coordinates], _turn3, _unit3)
         m_p = m_p + shift
-        if j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
+        if j.kind == "spherical" and isinstance(c, tuple) and len(c) == 3:  # follow's turn of its base
+            Q = _gibbs_turn(sp.Matrix(c)) * q[(j.name, "base")]
+        elif j.kind == "spherical" and isinstance(c, tuple):  # the assembly's tilts
             d = sp.Matrix(_tilted(j.direction or (1.0, 0.0, 0.0), *c))
             v, cos = sp.Matrix([0, -d[2], d[1]]), d[0]  # x cross d, x . d (d a unit vector)
             K = sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
@@ -161,6 +165,13 @@ def poses3(system: System, q: dict) -> dict:
         A = A_p * Q
         out[body] = (A, R_p + A_p * m_p - A * _local3(system, j.child))
     return out
+
+
+def _gibbs_turn(c):
+    """The rotation of Gibbs vector c = tan(angle / 2) axis, I + 2 ([c]x + [c]x^2) / (1 + c.c):
+    exact, rational, regular up to a half turn (symbols or numbers)."""
+    K = sp.Matrix([[0, -c[2], c[1]], [c[2], 0, -c[0]], [-c[1], c[0], 0]])
+    return sp.eye(3) + 2 * (K + K * K) / (1 + c.dot(c))
 
 
 def joint_motion(j, coordinates, turn, unit) -> tuple[sp.Matrix, sp.Matrix, sp.Matrix, sp.Matrix]:
@@ -332,19 +343,21 @@ class _Loops:
     """Phi and Phi_q of the cut joints as numeric functions of all tree joint coordinates,
     dimensionless: lengths / size, a prismatic coordinate x size."""
 
-    def __init__(self, system: System, scale: float):
+    def __init__(self, system: System, scale: float, turned: bool = False):
         tree = system.tree()
         self.order = [j.name for j in system.joints]
         tree_joints = [system.joint(tree.joint_of(b)) for b in tree.order]
         # a spherical joint's two coordinates tilt its direction (poses3), unless it points
         # within 25 degrees of -x, where the shortest turn from x is near its singularity (it
-        # stays as given); the others' are their own
-        tilted = [j for j in tree_joints if j.kind == "spherical"
-                  and (j.direction is None or j.direction[0] / math.hypot(*j.direction) > -0.9)]
-        # per coordinate: its joint, its name (Joint.coordinates; None: a tilt), its unit
+        # stays as given); the others' are their own. turned (follow): each spherical joint's
+        # three coordinates are a turn (a Gibbs vector) of its orientation self.base[name]
+        balls = [j for j in tree_joints if j.kind == "spherical"] if turned else []
+        tilted = balls or [j for j in tree_joints if j.kind == "spherical"
+                           and (j.direction is None or j.direction[0] / math.hypot(*j.direction) > -0.9)]
+        # per coordinate: its joint, its name (Joint.coordinates; None: a tilt or turn), its unit
         entries = []
         for j in tree_joints:
-            entries += ([(j, None, 1.0)] * 2 if j in tilted else
+            entries += ([(j, None, 1.0)] * (3 if turned else 2) if j in tilted else
                         [(j, c.name, scale if c.motion == "slide" else 1.0) for c in j.coordinates])
         self.joints = [j for j, _, _ in entries]
         self.coords = [c for _, c, _ in entries]
@@ -356,6 +369,8 @@ class _Loops:
                 q[j.name] = q.get(j.name, ()) + (xi,)
             else:
                 q[c] = xi * u
+        base = {j.name: sp.Matrix(3, 3, sp.symbols(f"b{k}_0:9", real=True)) for k, j in enumerate(balls)}
+        q |= {(name, "base"): B for name, B in base.items()}
         if system.dimension == 3:
             rows = cut_rows3(system, poses3(system, q))
         else:
@@ -363,17 +378,23 @@ class _Loops:
         self.names = [n for n, _, _ in rows]
         self.lengths = [length for _, _, length in rows]
         phi = sp.Matrix([e / scale if length else e for _, e, length in rows])
-        self._phi = sp.lambdify([x], phi, "numpy")
-        self._jac = sp.lambdify([x], phi.jacobian(x), "numpy") if x else None
+        args = [x, [b for B in base.values() for b in B]] if base else [x]
+        self.base = {name: np.eye(3) for name in base}  # follow sets them
+        cse = bool(base)  # the turned bases' products repeat: printed once (4x faster to make)
+        self._phi = sp.lambdify(args, phi, "numpy", cse=cse)
+        self._jac = sp.lambdify(args, phi.jacobian(x), "numpy", cse=cse) if x else None
+
+    def _args(self, x) -> list:
+        return [x, np.concatenate([B.ravel() for B in self.base.values()])] if self.base else [x]
 
     def phi(self, x):
-        return np.asarray(self._phi(x), dtype=float).reshape(-1)
+        return np.asarray(self._phi(*self._args(x)), dtype=float).reshape(-1)
 
     def jac(self, x):
         """(rows x coordinates); no coordinates (a loop through clamps only): rows x 0."""
         if self._jac is None:
             return np.zeros((len(self.names), 0))
-        return np.asarray(self._jac(x), dtype=float).reshape(len(self.names), len(x))
+        return np.asarray(self._jac(*self._args(x)), dtype=float).reshape(len(self.names), len(x))
 
 
 def _newton(loops: _Loops, x0: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -409,8 +430,8 @@ def numeric_rank(a: np.ndarray) -> int:
 def assemble(system: System, scale: float, t_end: float | None = None) -> tuple[System, Assembly]:
     """The system with its free joint coordinates and rates at t = 0 solved (see the module
     doc), and what moved; scale: the mechanism's size (m). SpecError when a loop cannot close
-    or is singular at t = 0, or (t_end given, a planar system) when the guided drives take it
-    beyond its reach before t_end (follow)."""
+    or is singular at t = 0, or (t_end given) when the guided drives take it beyond its reach
+    before t_end (follow)."""
     if not system.tree().cut:
         return system, Assembly(scale=scale)
     loops = _Loops(system, scale)
@@ -436,8 +457,8 @@ def assemble(system: System, scale: float, t_end: float | None = None) -> tuple[
     generic = max(numeric_rank(loops.jac(_random(loops, k))[:, free]) for k in range(4))
     if rank < generic:
         _singular(system, loops, jac, free, rank)
-    if t_end is not None and system.dimension == 2:  # in 3D a ball joint's two tilts (poses3)
-        follow(system, loops, x, free, t_end, scale)  # cannot follow every motion: not checked
+    if t_end is not None:
+        follow(system, loops, x, free, t_end, scale)
 
     moved, rates, joints = [], [], dict((j.name, j) for j in system.joints)
     for j in {j.name: j for j in loops.joints if j.kind == "spherical"}.values():
@@ -608,11 +629,16 @@ def follow(system, loops, x0, free, t_end: float, scale: float) -> None:
     [0, t_end], from the assembled x0 by the assembly's Newton, in steps that move no guided
     coordinate by more than REACH_STEP; refuse a time where no free coordinates close the
     loop: the drives would take the mechanism beyond its reach, and its flexible bodies be
-    stretched to follow them (what validity's strain gauge would flag after the run)."""
+    stretched to follow them (what validity's strain gauge would flag after the run). A
+    spherical joint turns freely there: three coordinates turning its orientation, started
+    again from where it is whenever it has turned by RECENTRE (_turnable)."""
     laws = guided_laws(system)
-    slots = [k for k, c in enumerate(loops.coords) if c in laws]
-    if not slots or not loops.names:
+    if not any(c in laws for c in loops.coords) or not loops.names:
         return
+    if any(j.kind == "spherical" for j in loops.joints):
+        loops, x0, free = _turnable(system, loops, x0, free, scale)
+    turns = _ball_entries(loops)
+    slots = [k for k, c in enumerate(loops.coords) if c in laws]
     fns = [sp.lambdify(t, laws[loops.coords[k]], "numpy") for k in slots]
 
     def at(time):
@@ -652,6 +678,38 @@ def follow(system, loops, x0, free, t_end: float, scale: float) -> None:
                             "Fix the lengths or the drives, or end the run before (t_end)")
         x, time, h = trial, time + h, min(2 * h, t_end / 200)
         low, high = min(low, x[slots[0]]), max(high, x[slots[0]])
+        for name, k in turns.items():  # its turn kept small: turned from where it is
+            if np.linalg.norm(x[k]) > RECENTRE:
+                loops.base[name] = np.asarray(_gibbs_turn(sp.Matrix(x[k])), dtype=float) @ loops.base[name]
+                x[k] = 0.0
+
+
+def _ball_entries(loops) -> dict:
+    """Each spherical joint's entries of x (its tilts, or follow's turn)."""
+    out: dict = {}
+    for k, (j, c) in enumerate(zip(loops.joints, loops.coords)):
+        if c is None:
+            out.setdefault(j.name, []).append(k)
+    return out
+
+
+def _turnable(system, loops, x, free, scale):
+    """The assembled position in follow's coordinates: each spherical joint's orientation (the
+    shortest turn of x to its direction, tilted as x has it: poses3) as its base, its turn 0;
+    a ball joint turns freely along a motion (its spin included) and its direction in its
+    parent's frame may sweep a full turn, which the tilts d0 + a t1 + b t2 cannot follow."""
+    turned = _Loops(system, scale, turned=True)
+    tilts = _ball_entries(loops)
+    value = {(j.name, c): v for j, c, v in zip(loops.joints, loops.coords, x) if c is not None}
+    is_free = {(j.name, c): f for j, c, f in zip(loops.joints, loops.coords, free) if c is not None}
+    for j in {j.name: j for j in turned.joints if j.kind == "spherical"}.values():
+        d = j.direction or (1.0, 0.0, 0.0)
+        if j.name in tilts:
+            d = _tilted(d, *x[tilts[j.name]])
+        turned.base[j.name] = _turn(*shortest_turn(d))
+    new_x = np.array([0.0 if c is None else value[(j.name, c)] for j, c in zip(turned.joints, turned.coords)])
+    new_free = np.array([c is None or is_free[(j.name, c)] for j, c in zip(turned.joints, turned.coords)])
+    return turned, new_x, new_free
 
 
 def _cannot_close(system, loops, x, fixed, scale):
