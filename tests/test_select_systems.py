@@ -98,6 +98,7 @@ def test_exact_is_refused_with_its_reason_where_the_scene_reads_the_beams_moment
         check_derivable(system)
 
 
+@pytest.mark.study  # a minute and a half: the ef-8/16/32 reference besides the select run
 def test_the_exact_reference_on_the_four_bar(four_bar):
     """--exact's reference (after the default's: only ef on 8 elements is built, about 20 s):
     M_mid's changes fall by 4.00 from 8 to 16 to 32 elements, so it is extrapolated; N_mid's by

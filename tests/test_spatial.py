@@ -134,7 +134,6 @@ def tilted():
     return built(_tilted_pendulum())
 
 
-@pytest.mark.xdist_group("tilted")  # with its fixture, whose derivation it reads
 def test_tilted_pendulum_conserves_energy(tilted):
     """Nothing is guided, nothing dissipates and m3's strain model is conservative: T + V
     stays at its start (0: at rest, V = 0 at release) to the integrator's error, falling with
@@ -154,7 +153,6 @@ def test_tilted_pendulum_conserves_energy(tilted):
         assert np.abs(r[col]).max() > 0, col
 
 
-@pytest.mark.xdist_group("tilted")  # with its fixture, whose derivation it reads
 def test_root_section_moments_are_the_pin_reaction(tilted):
     """Two recoveries of one load: the root's section moments from the equilibrium of the whole
     strip (frame axes, the root unturned) are minus the pin's reaction moment on the strip
@@ -173,7 +171,6 @@ def test_root_section_moments_are_the_pin_reaction(tilted):
     assert peak > 1.0 and worst < 1e-12 * peak, (worst, peak)
 
 
-@pytest.mark.xdist_group("tilted")  # with its fixture, whose derivation it reads
 def test_a_beam_markers_orientation_is_a_rotation_along_the_deformed_axis(tilted):
     """R(strip.near, i, j) at x = 0.99 m: orthonormal with determinant 1 to round-off (the
     section's S = R_z R_y R_x; the first-order I + [theta]x was not, by theta^2), and its x
@@ -190,7 +187,6 @@ def test_a_beam_markers_orientation_is_a_rotation_along_the_deformed_axis(tilted
     assert worst_ortho < 1e-13 and worst_axis < 1e-5, (worst_ortho, worst_axis)
 
 
-@pytest.mark.xdist_group("tilted")  # with its fixture, whose derivation it reads
 def test_spatial_kernels_c_casadi_sympy(tilted, system_kernels_agree):
     """The tilted pendulum's generated C kernels against casadi against sympy at a random state
     (its outputs: section moments, a shear force, a stress, joint reactions, an orientation)."""

@@ -88,7 +88,6 @@ def ringing():
     return run_ok(b, t_end=3.0, dt=dt, integrator="newmark", interval=dt), dt, b
 
 
-@pytest.mark.xdist_group("ringing")  # with its fixture, whose derivation it reads
 def test_energy_lost_is_the_damping_power_integrated(ringing):
     """E(0) - E(t) = int 2 D dt over the run, within 1e-4 of what was dissipated (the trapezoidal
     quadrature of the power over the rows; measured 2.6e-5)."""
@@ -96,7 +95,6 @@ def test_energy_lost_is_the_damping_power_integrated(ringing):
     assert energy_balance(r) < 1e-4
 
 
-@pytest.mark.xdist_group("ringing")  # with its fixture, whose derivation it reads
 @pytest.mark.parametrize("coordinate,zeta,I,k", [("beam_v_cf1", 0.02, IZ, 1), ("beam_v_cf2", 0.05, IZ, 2),
                                                  ("beam_vz_cf1", 0.03, IY, 1), ("beam_vz_cf2", 0.04, IY, 2)])
 def test_each_plane_decays_at_its_modal_rate(ringing, coordinate, zeta, I, k):
@@ -110,7 +108,6 @@ def test_each_plane_decays_at_its_modal_rate(ringing, coordinate, zeta, I, k):
     assert abs(rate - want) < 0.01 * want, (coordinate, rate, want)
 
 
-@pytest.mark.xdist_group("ringing")  # with its fixture, whose derivation it reads
 def test_damped_kernels_c_casadi_sympy(ringing, system_kernels_agree):
     """The damped cantilever's generated C kernels (its force holds -dD/dq', its outputs the
     dissipated power) against casadi against sympy at a random state."""

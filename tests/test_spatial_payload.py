@@ -57,7 +57,6 @@ def swinging():
     return data, built(data)
 
 
-@pytest.mark.xdist_group("payload_swing")  # with its fixture, whose derivation it reads
 def test_a_swinging_payload_conserves_energy(swinging):
     """Nothing dissipates: T + V keeps its start to the integrator's error, falling with the step
     (Newmark, Newton to 1e-14; measured 3.7e-8 and 1.1e-8 of (m_strip + m) g L / 2 at 0.2 and
@@ -71,12 +70,12 @@ def test_a_swinging_payload_conserves_energy(swinging):
     assert r["zp"].min() < -0.5
 
 
-@pytest.mark.xdist_group("payload_swing")  # with its fixture, whose derivation it reads
 def test_payload_kernels_c_casadi_sympy(swinging, system_kernels_agree):
     data, b = swinging
     system_kernels_agree(derivation(data), b, t=0.3, seed=7)
 
 
+@pytest.mark.study  # half a minute: two builds; S1 and S3 run as spatial in the default suite
 def test_a_planar_payload_run_as_spatial_reproduces_the_planar_rows():
     """A strip on a pin with a payload clamped to its tip (centre of mass off the marker),
     swinging in the plane under gravity: the spatial twin's section rotation in a plane is the

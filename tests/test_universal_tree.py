@@ -255,7 +255,6 @@ def chain():
     return built(_chain())
 
 
-@pytest.mark.xdist_group("uj_chain")  # with its fixture, whose derivation it reads
 def test_the_chain_conserves_energy_and_momentum_about_the_vertical(chain):
     """Nothing acts about z, nothing dissipates: T + V and Hz within 1e-10 relative over 2 s at
     dt = 1e-3 (measured 2.0e-11, 3.6e-12), the bob exchanging momentum with the arm (the arm's
@@ -267,7 +266,6 @@ def test_the_chain_conserves_energy_and_momentum_about_the_vertical(chain):
     assert np.ptp(r["th1"]) > 0.5 and np.ptp(r["th2"]) > 0.5
 
 
-@pytest.mark.xdist_group("uj_chain")  # with its fixture, whose derivation it reads
 def test_universal_kernels_c_casadi_sympy(chain, system_kernels_agree):
     """The chain's generated C kernels against casadi against sympy at a random state (its
     outputs: both angles and rates, a marker, an orientation, the joint's reaction, Hz)."""
