@@ -462,8 +462,8 @@ def assemble(system: System, scale: float, t_end: float | None = None) -> tuple[
         follow(system, loops, x, free, t_end, scale)
 
     moved, rates, joints = [], [], dict((j.name, j) for j in system.joints)
-    for j in {j.name: j for j in loops.joints if j.kind == "spherical"}.values():
-        a, b = x[[k for k, jk in enumerate(loops.joints) if jk.name == j.name]]
+    for name, k in _ball_entries(loops).items():
+        j, (a, b) = joints[name], x[k]
         if a or b:  # its direction tilted: reported as the angle turned
             d0 = np.asarray(j.direction or (1.0, 0.0, 0.0), float)
             d = np.array(_tilted(d0, a, b), dtype=float) * np.linalg.norm(d0)
