@@ -56,7 +56,7 @@ OUTPUT_FUNCTIONS = {  # name -> what its first argument names
 }
 # H: the angular momentum about the origin; Q: the shear forces
 SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "R", "Hx", "Hy", "Hz")
-PLANAR_ONLY = ("M", "torque", "momentum")  # not in 3D yet
+PLANAR_ONLY = ("M", "momentum")  # not in 3D: Mx, My, Mz and Hx, Hy, Hz
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
 # reaction(joint, c) per dimension: the force's ground components, then the moment about the
@@ -659,23 +659,13 @@ class System:
             given = [k for k, v in (("initial", j.initial), ("slide", j.slide), ("angle2", j.angle2))
                      if v != 0] + [k for k, v in (("rate", j.rate), ("slide_rate", j.slide_rate),
                                                   ("rate2", j.rate2)) if v is not None]
-            ef = next((r for r in (j.parent, j.child) if r != GROUND and getattr(getattr(
-                self.body(r.partition(".")[0]), "model", None), "kind", None) == "fe"), None)
-            if ef and j.kind not in ("spherical", "universal"):
-                raise SpecError(f"{where}: joint '{name}' closes a loop at '{ef}': the orientation of a "
-                                f"spatial ef beam's section is not derived yet, so a {j.kind} joint "
-                                "cannot close a loop there (a spherical or universal joint can)")
             if not KINDS[j.kind].euler and (given or j.fixed):
                 raise SpecError(f"{where}: joint '{name}' closes a loop: {', '.join(given or ['fixed'])} "
                                 "applies to joints in the tree (a joint closing a loop has no "
                                 "coordinate: its rows hold the child's relative motion)")
-        for _, name in tree.parent_joint if n == 3 else ():
-            parent = self.joint(name).parent.partition(".")[0]
-            if parent != GROUND and getattr(getattr(self.body(parent), "model", None), "kind", None) == "fe":
-                raise SpecError(f"{where}: joint '{name}': a body hung from a spatial ef beam's marker "
-                                "is not derived yet (from a modal beam's it is; an ef beam's marker "
-                                "may close a loop: a spherical or universal joint listed after the "
-                                "tree's)")
+        for j in self.joints if n == 3 else ():  # a spatial ef beam's section: at its nodes
+            for ref in (j.parent, j.child):
+                self._check_ef_node(ref, f"{where}: joint '{j.name}'")
         for j in self.joints:
             KINDS[j.kind].check_in_tree(j, j.name in tree.cut, f"{where}: joint '{j.name}'")
         self._check_pinned_roots(tree)
@@ -715,10 +705,13 @@ class System:
                 use = f"for {fn}" if fn != "reaction" else f"beyond joint '{args[0]}'"
                 raise SpecError(f"{where}: output '{o.quantity}': angular momentum is not derived for "
                                 f"a spatial ef beam yet ('{ef}'): use a modal model {use}")
-            marked = self.body(args[0].partition(".")[0]) if fn == "R" else None
-            if n == 3 and getattr(getattr(marked, "model", None), "kind", None) == "fe":
-                raise SpecError(f"{where}: output '{o.quantity}': the orientation of a spatial ef "
-                                "beam's section is not derived yet (a modal beam's or a rigid body's is)")
+            if n == 3 and fn == "R":
+                self._check_ef_node(args[0], f"{where}: output '{o.quantity}'")
+            ef = next((b.name for b in self.bodies if b.flexible and getattr(b.model, "kind", None) == "fe"), None)
+            if n == 3 and fn == "torque" and ef and next(d for d in self.drivers if d.name == args[0]).kind == "guided":
+                raise SpecError(f"{where}: output '{o.quantity}': a guided driver's torque is not derived "
+                                f"yet in a spatial system with an ef beam ('{ef}': its elements' kinetic "
+                                "energy is a per-element kernel); a modal model gives it")
             if n == 3 and fn in PLANAR_ONLY:
                 hint = " (use Mx, My or Mz: the torsion and bending moments)" if fn == "M" else ""
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} is not derived for spatial "
@@ -733,6 +726,22 @@ class System:
                 raise SpecError(f"{where}: start = \"static\" puts the flexible bodies in equilibrium, "
                                 "and there is none")
         return self
+
+    def _check_ef_node(self, ref: str, where: str) -> None:
+        """A spatial ef beam's section is derived at its elements' nodes (its rotation vector
+        coordinates): a marker that a joint or an orientation reads must sit on one."""
+        if ref == GROUND:
+            return
+        body, m = self.marker(ref)
+        b = self.body(body)
+        if getattr(getattr(b, "model", None), "kind", None) != "fe":
+            return
+        n = b.model.elements
+        k = m.x / b.length * n
+        if abs(k - round(k)) > 1e-9:
+            raise SpecError(f"{where}: marker '{ref}' at x = {m.x:g} m is not on a node of the ef "
+                            f"beam's {n} elements (every {b.length / n:g} m): a spatial ef beam's "
+                            "section is derived at its nodes; move the marker or change the elements")
 
     def _check_pinned_roots(self, tree: Tree) -> None:
         """A beam with bending modes whose root slope is free (pp: its frame is the chord's, not

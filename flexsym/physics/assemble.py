@@ -445,22 +445,27 @@ def add_spring(der: SystemDerivation, load, ends: list[sp.Matrix]) -> sp.Matrix:
     return Q
 
 
-def motor_torque(der: SystemDerivation, driver) -> sp.Expr:
+def motor_torque(der: SystemDerivation, driver, applied=None, spring_ends=None) -> sp.Expr:
     """torque(D): a motor's force as given; for a guided joint the generalised force that
     keeps it on theta(t): d/dt dT/dtheta' - dT/dtheta + dV_g/dtheta - Q_theta + Phi_theta^T
     lambda (lambda: the cut joints' multipliers, M q'' = f - Phi_q^T lambda; Q_theta: the
-    motors', forces', torques' and spring-dampers')."""
+    motors', forces', torques' and spring-dampers'). applied(der, wrt) and spring_ends(der,
+    load): the dimension's (the plane's by default; physics/spatial.py passes its own); the part
+    of T that casadi differentiates (ef elements, exact beams, a spatial system's bodies in
+    their frames' motion) is the placeholder ef_guided_force, given its value by sysgen."""
+    applied, spring_ends = applied or _applied_forces, spring_ends or _spring_ends
+    coordinate = der.system.driven(driver)  # its joint's, or a second coordinate's (J_slide)
     if driver.kind == "motor":
-        j = next(c for c in der.coords if c.joint == driver.joint)
-        return _applied_forces(der, [der.q[der.coords.index(j)]])[0]
-    th, thd, _ = next(g for g in der.guided if g.joint == driver.joint).symbols
+        k = next(i for i, c in enumerate(der.coords) if c.name == coordinate)
+        return applied(der, [der.q[k]])[0]
+    th, thd, _ = next(g for g in der.guided if g.joint == coordinate).symbols
     p = sp.diff(der.T, thd)
-    tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - _applied_forces(der, [th])[0]
+    tau = der.ddt(p) - sp.diff(der.T, th) + sp.diff(der.V_grav, th) - applied(der, [th])[0]
     for load in der.system.loads:  # a spring-damper pulls on the guided joint too
         if isinstance(load, SpringDamper):
-            tau -= spring_energy(der, load, _spring_ends(der, load), [th])[1][0]
-    if der.ef_kinetic or der.exact_bodies:  # what casadi differentiates (sysgen)
-        tau += ef_guided_force(driver.joint)
+            tau -= spring_energy(der, load, spring_ends(der, load), [th])[1][0]
+    if der.ef_kinetic or der.exact_bodies or getattr(der, "frame_T", None):  # what casadi differentiates
+        tau += ef_guided_force(coordinate)
     for (_, phi), lam in zip(der.constraints, der.lam):
         tau += sp.diff(phi, th) * lam
     return sp.expand(tau)

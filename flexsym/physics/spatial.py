@@ -82,9 +82,11 @@ from flexsym.model.system import (GROUND, SECOND, FlexibleBeam, Gravity, PointFo
                                   System, Torque, beam_station, length_scale, parse_output,
                                   section_at, section_point)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
-                                      joint_coordinate, spring_force_on_a, start_of, violation)
+                                      joint_coordinate, motor_torque, spring_force_on_a, start_of,
+                                      violation)
 from flexsym.physics.body_kinds.spatial import kind_of
-from flexsym.physics.body_kinds.spatial.base import Frame, Motion, cross, rotation, skew, vec
+from flexsym.physics.body_kinds.spatial.base import (Frame, Motion, cross, euler_G, euler_rotation,
+                                                     rotation, skew, vec)
 from flexsym.physics.lagrange import equations_of_motion
 from flexsym.physics.spatial_ef import ef_elastic_output, ef_kinetic_output
 from flexsym.model.maneuver import parse_expression, t
@@ -184,9 +186,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
         R = fp.R + fp.A * m_p - A_ * m_c
         frames[body] = Frame(A_, R, omega, V, Q.T * fp.g)
     der.spatial["frames"] = frames
-    early = not any(k.markers_after_energies for k in body_kind.values())
-    if early:  # the loops' rows and their checks before the costly work (an ef beam's markers: after it)
-        _cut_rows(der)
+    _cut_rows(der)  # the loops' rows and their checks before the costly work
 
     der.V_grav, der.Q = sp.Integer(0), sp.zeros(len(coords), 1)  # the kinds add to them
     gvec = vec(grav)
@@ -211,8 +211,6 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
     if reads_qdd:
         der.M = (der.M - B).applyfunc(sp.expand)
-    if not early:
-        _cut_rows(der)
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
     return der
@@ -300,7 +298,6 @@ def _cut_rows(der) -> None:
     system = der.system
     scale = exact(length_scale(system))
     der.spatial["cuts"] = {}
-    start = None
     for name in der.tree.cut:
         j = system.joint(name)
         first = len(der.constraints)
@@ -311,11 +308,10 @@ def _cut_rows(der) -> None:
             der.constraints += [(f"{name}.{c}", gap[k]) for k, c in enumerate("xyz")]
             loads += [("gap", None, False)] * 3
         if turn_rows == "cross":
-            start = start or _start_values(der)
             e1 = der.spatial["frames"][system.marker(j.child)[0]].A * vec(j.axis)
             e1 = e1 / sp.sqrt(vec(j.axis).dot(vec(j.axis)))
             Rp = _section_rotation(der, j.parent)
-            start |= getattr(der, "ef_start", {})  # an ef node's section: placeholders
+            start = _start_values(der)  # after the rotations: an ef node's are registered then
             e1_0 = [float(v) for v in e1.xreplace(start).evalf()]
             x_0 = [float(v) for v in (Rp * sp.Matrix([1, 0, 0])).xreplace(start).evalf()]
             e2_0 = vec(_unit(np.cross(e1_0, x_0)))
@@ -324,9 +320,9 @@ def _cut_rows(der) -> None:
             der.constraints.append((f"{name}.cross", scale * e1.dot(e2)))
             loads.append(("turn", e1, e2))
         elif turn_rows:
-            start = start or _start_values(der)
             Ap, Ac = _cut_axes_of(der, j.parent), _cut_axes_of(der, j.child)
             p, c = _cut_point(der, j.parent, j.point), _marker_point(der, j.child)
+            start = _start_values(der)
             A0 = [np.array(A.xreplace(start).evalf(), dtype=float) for A in (Ap, Ac)]
             across, pairs = cut_axes(j, *A0)
             if across is None:
@@ -343,11 +339,11 @@ def _cut_rows(der) -> None:
                 loads.append(("turn", u, w))
         der.spatial["cuts"][name] = (first, loads, scale)
     if der.tree.cut:
-        start = start or _start_values(der)
+        start = _start_values(der)
         for row, phi in der.constraints:
             if row.endswith(".norm"):
                 continue
-            gap = float(phi.xreplace(start).evalf())
+            gap = float(sp.sympify(phi.xreplace(start)).evalf())  # a bare coordinate's row: a float
             if abs(gap) > 1e-9 * float(scale):
                 raise SpecError(f"system '{system.name}': joint '{row.split('.')[0]}' does not close "
                                 f"at t = 0 ({row}: {gap:.3g} m): assemble the system first "
@@ -401,18 +397,6 @@ def cut_load(der, name: str, side: str) -> tuple[sp.Matrix, sp.Matrix]:
             mu = lam * scale
             torque += -mu * (cross(w, u) if parent else cross(u, w))
     return force, torque
-
-
-def euler_rotation(e: sp.Matrix) -> sp.Matrix:
-    """A(e) (ground <- frame) of Euler parameters e = (e0, e1, e2, e3), |e| = 1."""
-    v = e[1:, 0]
-    return (e[0]**2 - v.dot(v)) * sp.eye(3) + 2 * v * v.T + 2 * e[0] * skew(v)
-
-
-def euler_G(e: sp.Matrix) -> sp.Matrix:
-    """G(e): the frame's angular velocity in its own components is 2 G e' (G e = 0)."""
-    e0, e1, e2, e3 = e
-    return sp.Matrix([[-e1, e0, e3, -e2], [-e2, -e3, e0, e1], [-e3, e2, -e1, e0]])
 
 
 def _momentum(der, bodies=None) -> sp.Matrix:
@@ -503,29 +487,32 @@ def _spring_ends(der, load: SpringDamper) -> list[sp.Matrix]:
             for ref, pt in ((load.a, load.point_a), (load.b, load.point_b))]
 
 
-def _applied(der) -> sp.Matrix:
-    """Generalised forces of point forces, motors and torques (virtual power: F . dr/dq,
-    tau . d omega / dq')."""
+def _applied(der, wrt=None) -> sp.Matrix:
+    """Generalised forces of point forces, motors and torques (virtual power: F . dr/dx,
+    tau . d omega / dx') on the coordinates wrt (symbols: the unknowns by default, or a guided
+    coordinate's theta for the torque it needs)."""
     system = der.system
-    Q = sp.zeros(len(der.q), 1)
+    wrt = list(der.q) if wrt is None else list(wrt)
+    rate = dict(zip(der.q, der.qd)) | {g.symbols[0]: g.symbols[1] for g in der.guided}
+    Q = sp.zeros(len(wrt), 1)
     names = _names(der)
     for load in system.loads:
         if isinstance(load, PointForce):
             F = _point_force(der, load)
             p = _marker_point(der, load.marker)
-            Q += sp.Matrix([F.dot(sp.diff(p, x)) for x in der.q])
+            Q += sp.Matrix([F.dot(sp.diff(p, x)) for x in wrt])
         elif isinstance(load, Torque):  # virtual power tau . omega, omega in the body's axes
             fr = der.spatial["frames"][load.body]
             tau = _torque(der, load, names)
             if load.frame == "ground":
                 tau = fr.A.T * tau
-            Q += sp.Matrix([tau.dot(sp.diff(fr.omega, xd)) for xd in der.qd])
+            Q += sp.Matrix([tau.dot(sp.diff(fr.omega, rate[x])) for x in wrt])
     for d in system.drivers:
         if d.kind == "motor":
-            tau = parse_expression(d.expression, tuple(names.items()),
-                                   f"system '{system.name}': driver '{d.name}'")
             k = next(i for i, c in enumerate(der.coords) if c.name == system.driven(d))
-            Q[k] += tau
+            if der.q[k] in wrt:
+                Q[wrt.index(der.q[k])] += parse_expression(d.expression, tuple(names.items()),
+                                                           f"system '{system.name}': driver '{d.name}'")
     return Q
 
 
@@ -565,6 +552,8 @@ def _output(der, quantity: str) -> sp.Expr:
         return _section_rotation(der, args[0])["xyz".index(args[1]), "xyz".index(args[2])]
     if fn in ("x", "y", "z"):
         return _marker_point(der, args[0])["xyz".index(fn)]
+    if fn == "torque":  # a motor's as given; a guided coordinate's by Lagrange's equation of it
+        return motor_torque(der, next(d for d in system.drivers if d.name == args[0]), _applied, _spring_ends)
     if fn == "T":  # EF_T: what casadi adds (the bodies' T in their frame's motion)
         return der.T + EF_T + (ef_kinetic_output(der) if der.casadi_T_out else 0)
     ef = getattr(der, "rod_bodies", [])

@@ -36,14 +36,29 @@ def ef_coordinates(b) -> list[str]:
     return [f"{c}{k}" for k in range(1, b.model.elements + 1) for c in EF_NODE]
 
 
-def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
-    """Registers a spatial ef beam (der.rod_bodies, der.casadi_T, der.spatial) and returns its
-    gravity potential (sympy)."""
+def ef_part(der, b, P: dict) -> None:
+    """Registers a spatial ef beam's nodes (der.spatial[name]) before the frames are posed: a
+    body hung from its marker and a loop closed there read them."""
     n = b.model.elements
     qindex = {c.name: i for i, c in enumerate(der.coords)}
     idx = [[-1] * 6] + [[qindex[f"{b.name}_{c}{k}"] for c in EF_NODE] for k in range(1, n + 1)]
     pindex = {sym: i for i, (_, sym, _) in enumerate(der.params)}
     pidx = {k: pindex[v] for k, v in P.items()}
+    L = P["L"]
+
+    def node(k):  # sympy position of node k in the frame
+        if k == 0:
+            return sp.zeros(3, 1)
+        return sp.Matrix([sp.Rational(k, n) * L + der.q[idx[k][0]], der.q[idx[k][1]], der.q[idx[k][2]]])
+
+    der.spatial[b.name] = dict(kind="ef", n=n, P=P, idx=idx, pidx=pidx, node=node, length=b.length)
+
+
+def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
+    """Registers a spatial ef beam's elements (der.rod_bodies, der.casadi_T) in its frame fr and
+    returns its gravity potential (sympy)."""
+    info = der.spatial[b.name]
+    n, idx, pidx, node = info["n"], info["idx"], info["pidx"], info["node"]
     if not der.system.frame_driven(b.name):
         # a free frame's beam: its sections' bending rotary inertia rho b (I_y, I_z) with the
         # factor b a run-time parameter (rod3d's bending_inertia; 1: physical). A small b is the
@@ -52,14 +67,7 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
         pidx["bending_inertia"] = len(der.params)
         der.params.append((pname, sp.Symbol(pname, positive=True), 1.0))
     L, rho, A = P["L"], P["rho"], P["A"]
-
-    def node(k):  # sympy position of node k in the frame
-        if k == 0:
-            return sp.zeros(3, 1)
-        return sp.Matrix([sp.Rational(k, n) * L + der.q[idx[k][0]], der.q[idx[k][1]], der.q[idx[k][2]]])
-
-    info = dict(kind="ef", n=n, P=P, idx=idx, pidx=pidx, node=node, frame=fr, length=b.length)
-    der.spatial[b.name] = info
+    info["frame"] = fr
     # a frame whose motion is the drive's alone (a guided hub, a clamp chain to ground): the
     # elements' kinetic energy is a second element kernel called per element in C (its Lagrange
     # terms by casadi AD within the element); else it joins the system's AD path (der.casadi_T),
@@ -119,36 +127,42 @@ def ef_at(der, body: str, x: float) -> sp.Matrix:
     return (1 - tt) * info["node"](j) + tt * info["node"](j + 1)
 
 
-def ef_rotation(der, body: str, x: float) -> sp.Matrix:
-    """Frame <- section axes at a node's station x (a marker of a spatial ef beam, e.g. its tip,
-    where a cut universal joint's fixed direction sits): exp(psi) of the node's rotation vector,
-    exact (rod3d's quaternion, its series regular at psi = 0), as nine placeholders given their
-    casadi values by sysgen (der.casadi_outputs; sympy would expand the series), each with its
-    value at the undeformed start (der.ef_start: the identity)."""
+def ef_node(der, body: str, x: float) -> int:
+    """The node at station x of a spatial ef beam (a marker a joint or an orientation reads;
+    System.validate has checked that it is one)."""
     info = der.spatial[body]
-    n = info["n"]
-    k = exact(x) / exact(info["length"]) * n
+    k = exact(x) / exact(info["length"]) * info["n"]
     if k != int(k):
-        raise SpecError(f"system '{der.system.name}': a joint on the ef beam '{body}' at x = {x} "
-                        f"must sit on one of its {n} elements' nodes")
-    k = int(k)
-    if k == 0:
-        return sp.eye(3)
-    rot = info.setdefault("rotations", {})
-    if k not in rot:
-        from flexsym.physics.rod3d import qmatrix, quaternion
+        raise SpecError(f"system '{der.system.name}': the marker at x = {x} of the ef beam '{body}' "
+                        f"must sit on one of its {info['n']} elements' nodes")
+    return int(k)
 
-        syms = sp.Matrix(3, 3, lambda i, j: sp.Symbol(f"rod_{body}_R{k}_{i}{j}", real=True))
-        for i in range(3):
-            for j in range(3):
-                def value(tr, xx, i=i, j=j, idx=info["idx"][k][3:6]):
-                    return qmatrix(quaternion(ca.vertcat(*[xx["q"][c] for c in idx])))[i, j]
-                der.casadi_outputs[syms[i, j]] = value
+
+def ef_quaternion(der, body: str, x: float) -> sp.Matrix:
+    """The unit quaternion e = (cos(t/2), sin(t/2) psi / t), t = |psi|, of a node's section at
+    station x (a marker of a spatial ef beam: a body hung from it, a loop closed at it, its
+    orientation R(...)), psi the node's rotation vector: four applied functions e_k(psi),
+    registered in der.casadi_functions, whose values (and derivatives) casadi computes
+    (rod3d.quaternion, its series regular at psi = 0; sysgen.placeholder_values) while sympy
+    differentiates them as any function; der.ef_start holds their values at the undeformed
+    start (1, 0, 0, 0). The root's is (1, 0, 0, 0)."""
+    from flexsym.physics.rod3d import quaternion
+
+    info = der.spatial[body]
+    k = ef_node(der, body, x)
+    if k == 0:
+        return sp.Matrix([1, 0, 0, 0])
+    quats = info.setdefault("quaternions", {})
+    if k not in quats:
+        idx = info["idx"][k][3:6]
+        names = [f"rod_{body}_e{k}_{c}" for c in range(4)]
+        quats[k] = sp.Matrix([sp.Function(nm, real=True)(*[der.q[c] for c in idx]) for nm in names])
+        for c, nm in enumerate(names):
+            der.casadi_functions[nm] = lambda tr, xx, c=c, idx=idx: quaternion(ca.vertcat(*[xx["q"][i] for i in idx]))[c]
         if not hasattr(der, "ef_start"):
             der.ef_start = {}
-        der.ef_start |= {syms[i, j]: sp.Integer(int(i == j)) for i in range(3) for j in range(3)}
-        rot[k] = syms
-    return rot[k]
+        der.ef_start |= {e: sp.Integer(int(c == 0)) for c, e in enumerate(quats[k])}
+    return quats[k]
 
 
 def ef_section(der, beam, x: float, fn: str) -> sp.Expr:

@@ -30,6 +30,18 @@ def rotation(axis, angle) -> sp.Matrix:
     return sp.eye(3) + sp.sin(angle) * K + (1 - sp.cos(angle)) * K * K
 
 
+def euler_rotation(e: sp.Matrix) -> sp.Matrix:
+    """A(e) (ground <- frame) of Euler parameters e = (e0, e1, e2, e3), |e| = 1."""
+    v = e[1:, 0]
+    return (e[0]**2 - v.dot(v)) * sp.eye(3) + 2 * v * v.T + 2 * e[0] * skew(v)
+
+
+def euler_G(e: sp.Matrix) -> sp.Matrix:
+    """G(e): the frame's angular velocity in its own components is 2 G e' (G e = 0)."""
+    e0, e1, e2, e3 = e
+    return sp.Matrix([[-e1, e0, e3, -e2], [-e2, -e3, e0, e1], [-e3, e2, -e1, e0]])
+
+
 @dataclass
 class Frame:
     """A body frame: A (ground <- frame), origin R (ground), and in the frame's own components
@@ -63,7 +75,6 @@ class SpatialKind:
     none (no coordinates, no part); the frame-level sums (T, V_grav, Q) accumulate in der."""
 
     name = ""
-    markers_after_energies = False  # its marker points exist only once its energies are in
 
     def applies(self, body) -> bool:
         raise NotImplementedError

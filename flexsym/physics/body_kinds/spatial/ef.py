@@ -1,6 +1,7 @@
 """A spatial `ef` beam (physics/spatial_ef.py, rod3d's Simo-Reissner elements in casadi) as a
 body: its nodes' coordinates; gravity in sympy, the elements' T and elastic energy by sysgen
-(der.rod_bodies, der.casadi_T); its axis points, section axes at a node and section forces."""
+(der.rod_bodies, der.casadi_T); its axis points, section axes at a node, the frame of a body
+hung from a node's marker, and section forces."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,15 +10,14 @@ import sympy as sp
 from flexsym.model.exact_numbers import exact
 from flexsym.physics.assemble import Coordinate
 from flexsym.physics.body_kinds import ef as planar
-from flexsym.physics.body_kinds.spatial.base import SpatialBeam
-from flexsym.physics.spatial_ef import ef_at, ef_body, ef_coordinates, ef_rotation, ef_section
+from flexsym.physics.body_kinds.spatial.base import Frame, SpatialBeam, cross, euler_G, euler_rotation
+from flexsym.physics.spatial_ef import ef_at, ef_body, ef_coordinates, ef_part, ef_quaternion, ef_section
 from flexsym.physics.validity import Prefixed, strain_gauge
 
 
 class Ef(SpatialBeam):
     name = "ef"
     applies = staticmethod(planar.KIND.applies)  # the same data in both dimensions
-    markers_after_energies = True  # ef_body registers its nodes (der.spatial) in the loop
 
     def coordinates(self, b) -> list:
         """Per free node, the displacement and the rotation vector."""
@@ -37,6 +37,20 @@ class Ef(SpatialBeam):
                            for k in range(1, n + 1)], axis=0)
         return [strain_gauge(b, strain)]
 
+    def part(self, der, b, P) -> None:
+        ef_part(der, b, P)
+
+    def hang(self, der, fr: Frame, body: str, m):
+        """The section's frame at a node: origin at the node r, axes Lambda(e) from the beam's
+        frame, e the node's quaternion (functions of its rotation vector psi that sympy
+        differentiates: spatial_ef.ef_quaternion); its angular velocity in its own axes
+        Lambda^T omega + 2 G(e) e', as a ball joint's, its origin's velocity
+        Lambda^T (V + omega x r + r')."""
+        r, e = ef_at(der, body, m.x), ef_quaternion(der, body, m.x)
+        Lam = euler_rotation(e)
+        return Frame(fr.A * Lam, fr.R + fr.A * r, Lam.T * fr.omega + 2 * euler_G(e) * der.ddt(e),
+                     Lam.T * (fr.V + cross(fr.omega, r) + der.ddt(r)), Lam.T * fr.g), sp.zeros(3, 1)
+
     def contribute(self, der, b, P, fr, motion, gvec) -> None:
         der.V_grav += ef_body(der, b, P, fr, motion.om, motion.vf, motion.actual, gvec)
 
@@ -44,8 +58,8 @@ class Ef(SpatialBeam):
         return ef_at(der, body, x)
 
     def section_rotation(self, der, body: str, m) -> sp.Matrix:
-        """A node's section: exp(psi), exact (spatial_ef.ef_rotation)."""
-        return der.spatial["frames"][body].A * ef_rotation(der, body, m.x)
+        """A node's section: exp(psi), exact (the rotation of its quaternion: spatial_ef.ef_quaternion)."""
+        return der.spatial["frames"][body].A * euler_rotation(ef_quaternion(der, body, m.x))
 
     def displacement(self, der, beam, x: float, fn: str) -> sp.Expr:
         r = ef_at(der, beam.name, x)
