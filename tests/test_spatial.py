@@ -225,9 +225,9 @@ BAD = [  # (what, scene, edits of its text, what the one line says)
     ("a guided driver's torque with an ef beam", FLAP,
      [('model = "m3"', 'model = { variant = "ef", elements = 4 }'), ('v_tip = "v(blade, tip)"', 'v_tip = "torque(spin)"')],
      "output 'torque(spin)': a guided driver's torque is not derived yet in a spatial system with an ef beam ('blade'"),
-    ("damping on a spatial ef beam", FLAP,
-     [('model = "m3"', 'model = { variant = "ef", elements = 4 }\ndamping = { beta = 1e-3 }')],
-     "structural damping of a spatial ef beam is not derived yet"),
+    ("mass-proportional damping on a spatial ef beam", FLAP,
+     [('model = "m3"', 'model = { variant = "ef", elements = 4 }\ndamping = { alpha = 0.5 }')],
+     "damping alpha (mass-proportional) of a spatial ef beam is not derived yet: give beta"),
     ("a zeta per planar coordinate", FLAP, [('model = "m3"', 'model = "m3"\ndamping = { zeta = [0.01, 0.02, 0.03] }')],
      "damping zeta has 3 values, model 'foreshortening' has 7 coordinates (v_static, v_cp1, v_cp2, vz_static, vz_cp1, "
      "vz_cp2, phi_ff1)"),

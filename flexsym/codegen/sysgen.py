@@ -201,7 +201,7 @@ def build_system_kernels(der: SystemDerivation) -> list:
         if r_exact is not None and not ef_elements(der) and not rod_elements(der) else []
     return make_kernels(constraint_kernels + one_pass + _ef_element_kernel(der) + _rod_element_kernel(der)
                         + _rod_kinetic_kernels(der, tr, x, ddot) + _rod_free_kernels(der, tr, x, ddot)
-                        + _ef_damping_kernel(der) + [
+                        + _ef_damping_kernel(der) + _rod_damping_kernel(der) + [
         ("mass", "mass matrix M(q, d)", [("q", q), ("d", d), ("p", p)], [("M", M)]),
         ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("d", d), ("p", p)],
          [("f", f)]),
@@ -271,6 +271,22 @@ def _rod_element_kernel(der: SystemDerivation) -> list:
              [("e", e), ("pe", pe)], [("V", V), ("g", g), ("H", H)]),
             ("rod_elastic_grad", "one rod3d element: elastic energy and its gradient (no Hessian)",
              [("e", e), ("pe", pe)], [("V", V), ("g", g)])]
+
+
+def _rod_damping_kernel(der: SystemDerivation) -> list:
+    """One rod3d element's Kelvin-Voigt damping force g = dD/de' and its Jacobians (casadi AD),
+    D = c rod3d.strain_rate_energy(e, e'; pe) with c = beta; generated once when a spatial ef
+    beam is damped, called per element by system.c (rod_damping_add: f gets -g)."""
+    if not any(b["beta"] for b in getattr(der, "rod_bodies", ())):
+        return []
+    from flexsym.physics.rod3d import strain_rate_energy
+    e, ed, pe, c = ca.SX.sym("e", 12), ca.SX.sym("ed", 12), ca.SX.sym("pe", 8), ca.SX.sym("c")
+    g = ca.gradient(c * strain_rate_energy(e, ed, pe[0], pe[1:8]), ed)
+    return [("rod_damping", "one rod3d element: damping force g = dD/de' and its Jacobians",
+             [("e", e), ("ed", ed), ("pe", pe), ("c", c)],
+             [("g", g), ("g_e", ca.jacobian(g, e)), ("g_ed", ca.jacobian(g, ed))]),
+            ("rod_damping_force", "one rod3d element: damping force g = dD/de' (no Jacobians)",
+             [("e", e), ("ed", ed), ("pe", pe), ("c", c)], [("g", g)])]
 
 
 def _rod_kinetic_kernels(der: SystemDerivation, tr, x: dict, ddot) -> list:
@@ -393,7 +409,7 @@ def rod_elements(der: SystemDerivation) -> list[dict]:
         node = [[(i, float(k) / n if c == 0 else 0.0) for c, i in enumerate(idx[k])] for k in range(n + 1)]
         out.append({"name": body["name"], "n": n, "kinetic_in_c": body["kinetic_in_c"],
                     "free_c": bool(body.get("free_c")), "fidx": body.get("fidx", []),
-                    "rotary": body["pidx"].get("bending_inertia"),
+                    "rotary": body["pidx"].get("bending_inertia"), "beta": body["beta"],
                     "params": [body["pidx"][k] for k in ("L", "E", "G", "rho", "A", "Iy", "I", "J")],
                     "elements": [[(i, c_double(a)) for i, a in node[k] + node[k + 1]] for k in range(n)]})
     return out
@@ -660,6 +676,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "rod_bodies": rod_elements(der),
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
         "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
+        "rod_damped": any(b["beta"] for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
         "kernel_ops": sum(k.total_ops for k in emitted),
         "has_residual": any(k.kernel.name == "residual" for k in emitted), "of_derivation": False,

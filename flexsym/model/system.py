@@ -707,11 +707,12 @@ class System:
                                 f"a spatial ef beam yet ('{ef}'): use a modal model {use}")
             if n == 3 and fn == "R":
                 self._check_ef_node(args[0], f"{where}: output '{o.quantity}'")
-            ef = next((b.name for b in self.bodies if b.flexible and getattr(b.model, "kind", None) == "fe"), None)
-            if n == 3 and fn == "torque" and ef and next(d for d in self.drivers if d.name == args[0]).kind == "guided":
-                raise SpecError(f"{where}: output '{o.quantity}': a guided driver's torque is not derived "
-                                f"yet in a spatial system with an ef beam ('{ef}': its elements' kinetic "
-                                "energy is a per-element kernel); a modal model gives it")
+            if n == 3 and fn == "torque" and next(d for d in self.drivers if d.name == args[0]).kind == "guided":
+                rod = next((b.name for b in self.bodies if getattr(getattr(b, "model", None), "kind", None) == "fe"), None)
+                if rod:
+                    raise SpecError(f"{where}: output '{o.quantity}': a guided driver's torque is not derived "
+                                    f"yet in a spatial system with an ef beam ('{rod}': its elements' kinetic "
+                                    "energy is a per-element kernel); a modal model gives it")
             if n == 3 and fn in PLANAR_ONLY:
                 hint = " (use Mx, My or Mz: the torsion and bending moments)" if fn == "M" else ""
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} is not derived for spatial "
@@ -783,7 +784,7 @@ class System:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
         before any work: revolute, prismatic, cylindrical, universal, spherical and clamp joints
         in a tree, modal beams (uniform, or from finite-element data with spatial sections) or
-        the geometrically exact ef (rod3d: uniform, undamped)."""
+        the geometrically exact ef (rod3d: uniform, damped by beta only)."""
         where = f"system '{self.name}'"
         for j in self.joints:
             if j.kind not in SPATIAL_JOINT_KINDS:
@@ -802,9 +803,10 @@ class System:
                     raise SpecError(f"{where}: body '{b.name}': the spatial ef is a uniform rod; "
                                     "this body's sections vary or carry point masses (run a modal "
                                     "model, or give the uniform section)")
-                if b.damped:
-                    raise SpecError(f"{where}: body '{b.name}': structural damping of a spatial ef "
-                                    "beam is not derived yet (a modal beam's is)")
+                if b.damped and b.damping.alpha:
+                    raise SpecError(f"{where}: body '{b.name}': damping alpha (mass-proportional) of a "
+                                    "spatial ef beam is not derived yet: give beta (strain-rate), as "
+                                    "its modal models take")
                 continue  # the geometrically exact rod (physics/rod3d.py), uniform
             if b.model.strain not in SPATIAL_STRAINS:
                 raise SpecError(f"{where}: body '{b.name}': strain model '{b.model.strain}' is not "

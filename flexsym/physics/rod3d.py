@@ -162,6 +162,21 @@ def elastic_energy(e, le, sec):
     return le / 2 * (ca.dot(cG, Gamma**2) + ca.dot(cK, K**2))
 
 
+def strain_rate_energy(e, ed, le, sec):
+    """The elastic energy's quadratic form in the strain rates, le/2 [cG . Gamma'^2 + cK . K'^2]
+    (Gamma' = dGamma/de e', K' likewise): beta times it is the element's Kelvin-Voigt
+    dissipation, as beta/2 q'^T K q' is a modal beam's. Any expressions for e, e' (casadi's
+    directional derivative needs symbols: element_functions' "strain_rate" is built on them)."""
+    return element_functions()["strain_rate"](e, ed, le, sec)
+
+
+def _strain_rate_energy(e, ed, le, sec):
+    Gamma, K, _ = element_kinematics(e, le)
+    cG, cK = _stiffness(sec)
+    Gd, Kd = ca.jtimes(Gamma, e, ed), ca.jtimes(K, e, ed)
+    return le / 2 * (ca.dot(cG, Gd**2) + ca.dot(cK, Kd**2))
+
+
 def section_forces(e, le, sec):
     """(N, Q_y, Q_z, M_t, M_y, M_z) of the element, in its midpoint section's frame."""
     Gamma, K, _ = element_kinematics(e, le)
@@ -205,7 +220,8 @@ def element_functions() -> dict[str, ca.Function]:
     """The element as casadi Functions of SX symbols, for instantiation per element:
     elastic(e, le, sec) -> V_e; kinetic(e, ed, omega, V, le, sec, bending_inertia) -> T_e;
     gravity(e, g, le, sec) -> V_g; strains(e, le) -> (Gamma, K); forces(e, le, sec) ->
-    (N, Q_y, Q_z, M_t, M_y, M_z); midframe(e, le) -> Lambda_m."""
+    (N, Q_y, Q_z, M_t, M_y, M_z); midframe(e, le) -> Lambda_m; strain_rate(e, ed, le, sec) ->
+    the elastic energy's form in the strain rates (strain_rate_energy)."""
     e, ed = ca.SX.sym("e", 12), ca.SX.sym("ed", 12)
     om, V, g = ca.SX.sym("omega", 3), ca.SX.sym("V", 3), ca.SX.sym("g", 3)
     le, sec, b = ca.SX.sym("le"), ca.SX.sym("sec", 7), ca.SX.sym("bending_inertia")
@@ -216,6 +232,7 @@ def element_functions() -> dict[str, ca.Function]:
                                [kinetic_energy(e, ed, om, V, le, sec, b)]),
         "gravity": ca.Function("rod3d_gravity", [e, g, le, sec], [gravity_potential(e, g, le, sec)]),
         "strains": ca.Function("rod3d_strains", [e, le], [Gamma, K]),
+        "strain_rate": ca.Function("rod3d_strain_rate", [e, ed, le, sec], [_strain_rate_energy(e, ed, le, sec)]),
         "forces": ca.Function("rod3d_forces", [e, le, sec], [section_forces(e, le, sec)]),
         "midframe": ca.Function("rod3d_midframe", [e, le], [Lm]),
     }

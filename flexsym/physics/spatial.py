@@ -10,9 +10,9 @@ about axes fixed in the frame they move; axis_motion), spherical joints (Euler p
 |e| = 1, a constraint row) and clamps, with loops closed by spherical, universal, revolute,
 prismatic, cylindrical joints and clamps (_cut_rows: one mechanism, the kinds as data,
 SPATIAL_CUT_ROWS), guided or motor-driven, under gravity, point forces, torques and
-spring-dampers, modal beams with structural damping; a body may hang from a rigid body or from
-a modal beam's marker (the deformed section's frame, body_kinds/spatial/modal._section_frame).
-What is not (an ef beam's damping, ...) is refused up front by System.validate.
+spring-dampers, beams with structural damping; a body may hang from a rigid body, from a
+modal beam's marker or from an ef beam's node (the deformed section's frame: the kind's hang).
+What is not (an ef beam's mass-proportional damping, ...) is refused up front by System.validate.
 
 Each body's kinetic energy is written in placeholders of its frame's motion (omega, V) and
 left to casadi (der.frame_T, sysgen.frame_kinetic_energy), which substitutes the actual motion
@@ -88,7 +88,7 @@ from flexsym.physics.body_kinds.spatial import kind_of
 from flexsym.physics.body_kinds.spatial.base import (Frame, Motion, cross, euler_G, euler_rotation,
                                                      rotation, skew, vec)
 from flexsym.physics.lagrange import equations_of_motion
-from flexsym.physics.spatial_ef import ef_elastic_output, ef_kinetic_output
+from flexsym.physics.spatial_ef import ef_elastic_output, ef_kinetic_output, rod_dissipation_output
 from flexsym.model.maneuver import parse_expression, t
 from flexsym.scenes.assembly import joint_motion
 
@@ -561,8 +561,9 @@ def _output(der, quantity: str) -> sp.Expr:
         return der.V + (ef_elastic_output(der) if ef else 0)
     if fn == "violation":
         return violation(der)
-    if fn == "dissipation":  # 2 D: the power of the damped modal beams
-        return 2 * sp.Add(*der.dissipation.values())
+    if fn == "dissipation":  # 2 D: the power of the damped beams (an ef beam's: casadi)
+        damped_rods = any(r["beta"] for r in getattr(der, "rod_bodies", ()))
+        return 2 * (sp.Add(*der.dissipation.values()) + (rod_dissipation_output(der) if damped_rods else 0))
     if fn in ("Hx", "Hy", "Hz"):  # modal beams only (System.validate)
         return _momentum(der)["xyz".index(fn[1])]
     if fn == "reaction":  # x, y, z: the force; mx, my, mz: the moment (REACTION_COMPONENTS)

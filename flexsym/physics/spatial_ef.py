@@ -78,7 +78,8 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
     # derivation asks for the whole-system AD path (der.ef_free_ad: a check of the C path)
     free_c = not in_c and not getattr(der, "ef_free_ad", False)
     der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c,
-                               free_c=free_c, frame=fr))
+                               free_c=free_c, frame=fr,
+                               beta=float(b.damping.beta) if b.damped else None))  # Kelvin-Voigt
     info["kinetic_in_c"], info["free_c"] = in_c, free_c
     der.terms.append((b.name, "rod3d_elastic", ("node",), None, None))
 
@@ -216,3 +217,27 @@ def ef_kinetic_output(der) -> sp.Expr:
         der.casadi_outputs[EF_TK] = lambda tr, xx: sum((c(tr, xx) for c in der.casadi_T_out),
                                                        ca.SX(0.0))
     return EF_TK
+
+
+ROD_D = sp.Symbol("D_rod_", real=True)  # the damped rods' dissipation (casadi)
+
+
+def rod_dissipation_output(der) -> sp.Expr:
+    """The damped spatial ef beams' dissipation D = sum of beta D_e (rod3d.strain_rate_energy
+    per element) in the `dissipation` output (a placeholder, casadi)."""
+    if ROD_D not in der.casadi_outputs:
+        def value(tr, xx):
+            from flexsym.physics.rod3d import strain_rate_energy
+            total = ca.SX(0.0)
+            for body in der.rod_bodies:
+                if not body["beta"]:
+                    continue
+                info = der.spatial[body["name"]]
+                nodes, rates = rod_nodes(info, xx["q"], xx["p"]), rod_nodes(info, xx["qd"], None)
+                le, sec = xx["p"][info["pidx"]["L"]] / info["n"], rod_section(info, xx["p"])
+                total += body["beta"] * sum((strain_rate_energy(ca.vertcat(nodes[k], nodes[k + 1]),
+                                                                ca.vertcat(rates[k], rates[k + 1]), le, sec)
+                                             for k in range(info["n"])), ca.SX(0.0))
+            return total
+        der.casadi_outputs[ROD_D] = value
+    return ROD_D
