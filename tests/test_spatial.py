@@ -298,9 +298,6 @@ BAD = [  # (what, scene, edits of its text, what the one line says)
      "[gravity] g: must be three finite numbers [x, y, z] (got [0.0, -9.81])"),
     ("dimension 3.0", FLAP, [("dimension = 3", "dimension = 3.0")],
      "[system] dimension: must be 2 (planar) or 3 (spatial) (got 3.0)"),
-    ("angular momentum of an ef beam", S6, [('model = "m3"', 'model = "ef"'),
-                                            ('T_mid = "Mx(strip, mid)" }', 'T_mid = "Mx(strip, mid)", H = "Hz" }')],
-     "output 'Hz': angular momentum is not derived for a spatial ef beam yet ('strip')"),
 ]
 
 

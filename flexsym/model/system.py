@@ -694,17 +694,6 @@ class System:
             if n == 2 and fn in SPATIAL_ONLY:
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} applies to spatial systems "
                                 "(dimension = 3) only")
-            # Hx/Hy/Hz and a tree joint's reaction (the momentum balance of the bodies beyond
-            # it) need the angular momentum, not derived for a spatial ef beam
-            moving = ({b.name for b in self.bodies} if fn in ("Hx", "Hy", "Hz") else
-                      tree.subtree(self, args[0]) if fn == "reaction" and args[0] not in tree.cut
-                      else set()) if n == 3 else set()
-            ef = next((b.name for b in self.bodies if b.name in moving and b.flexible
-                       and getattr(b.model, "kind", None) == "fe"), None)
-            if ef:
-                use = f"for {fn}" if fn != "reaction" else f"beyond joint '{args[0]}'"
-                raise SpecError(f"{where}: output '{o.quantity}': angular momentum is not derived for "
-                                f"a spatial ef beam yet ('{ef}'): use a modal model {use}")
             if n == 3 and fn == "R":
                 self._check_ef_node(args[0], f"{where}: output '{o.quantity}'")
             if n == 3 and fn == "torque" and next(d for d in self.drivers if d.name == args[0]).kind == "guided":

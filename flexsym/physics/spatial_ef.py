@@ -147,10 +147,14 @@ def ef_quaternion(der, body: str, x: float) -> sp.Matrix:
     (rod3d.quaternion, its series regular at psi = 0; sysgen.placeholder_values) while sympy
     differentiates them as any function; der.ef_start holds their values at the undeformed
     start (1, 0, 0, 0). The root's is (1, 0, 0, 0)."""
+    return ef_node_quaternion(der, body, ef_node(der, body, x))
+
+
+def ef_node_quaternion(der, body: str, k: int) -> sp.Matrix:
+    """ef_quaternion of node k (0: the root)."""
     from flexsym.physics.rod3d import quaternion
 
     info = der.spatial[body]
-    k = ef_node(der, body, x)
     if k == 0:
         return sp.Matrix([1, 0, 0, 0])
     quats = info.setdefault("quaternions", {})

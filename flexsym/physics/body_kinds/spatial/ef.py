@@ -11,7 +11,8 @@ from flexsym.model.exact_numbers import exact
 from flexsym.physics.assemble import Coordinate
 from flexsym.physics.body_kinds import ef as planar
 from flexsym.physics.body_kinds.spatial.base import Frame, SpatialBeam, cross, euler_G, euler_rotation
-from flexsym.physics.spatial_ef import ef_at, ef_body, ef_coordinates, ef_part, ef_quaternion, ef_section
+from flexsym.physics.spatial_ef import (ef_at, ef_body, ef_coordinates, ef_node_quaternion, ef_part,
+                                        ef_quaternion, ef_section)
 from flexsym.physics.validity import Prefixed, strain_gauge
 
 
@@ -53,6 +54,41 @@ class Ef(SpatialBeam):
 
     def contribute(self, der, b, P, fr, motion, gvec) -> None:
         der.V_grav += ef_body(der, b, P, fr, motion.om, motion.vf, motion.actual, gvec)
+
+    def first_moment(self, der, b, fr):
+        """m R + A int rho A r dx: the linear elements' rho A (L/n) (r_k + r_k+1)/2 each."""
+        info = der.spatial[b.name]
+        n, node, P = info["n"], info["node"], info["P"]
+        m = P["rho"] * P["A"] * P["L"]
+        local = sum((node(k) + node(k + 1) for k in range(n)), sp.zeros(3, 1)) * m / (2 * n)
+        return m, m * fr.R + fr.A * local
+
+    def momentum(self, der, b, fr) -> sp.Matrix:
+        """Angular momentum about the ground origin (ground components), conjugate to rod3d's T
+        (spatial_ef.ef_body): per element rho A le/6 (2 p1 x v1 + p1 x v2 + p2 x v1 + 2 p2 x v2)
+        with p_k = A^T R + r_k and v_k = V + r_k' + omega x r_k (frame components: the linear
+        element's consistent mass, exact), and at each node its lumped rotary inertia (le/2 per
+        element, the root's too) Lambda_k J W_k, J = rho diag(I_y + I_z, b I_y, b I_z),
+        W_k = Lambda_k^T omega + 2 G(e_k) e_k' (the node's quaternion e_k, as a hung body's
+        frame: hang)."""
+        info = der.spatial[b.name]
+        n, node, P, pidx = info["n"], info["node"], info["P"], info["pidx"]
+        le = P["L"] / n
+        bi = der.params[pidx["bending_inertia"]][1] if "bending_inertia" in pidx else 1
+        J = sp.diag(P["rho"] * (P["Iy"] + P["I"]), bi * P["rho"] * P["Iy"], bi * P["rho"] * P["I"])
+        Rl = fr.A.T * fr.R
+        pos = [Rl + node(k) for k in range(n + 1)]
+        vel = [fr.V + der.ddt(node(k)) + cross(fr.omega, node(k)) for k in range(n + 1)]
+        H = sp.zeros(3, 1)
+        for k in range(n):
+            (p1, v1), (p2, v2) = (pos[k], vel[k]), (pos[k + 1], vel[k + 1])
+            H += P["rho"] * P["A"] * le / 6 * (2 * cross(p1, v1) + cross(p1, v2) + cross(p2, v1) + 2 * cross(p2, v2))
+        for k in range(n + 1):
+            e = ef_node_quaternion(der, b.name, k)
+            Lam = euler_rotation(e)
+            W = Lam.T * fr.omega + 2 * euler_G(e) * der.ddt(e)
+            H += (le / 2 if k in (0, n) else le) * Lam * J * W
+        return fr.A * H
 
     def axis_point(self, der, body: str, x: float) -> sp.Matrix:
         return ef_at(der, body, x)
