@@ -696,12 +696,6 @@ class System:
                                 "(dimension = 3) only")
             if n == 3 and fn == "R":
                 self._check_ef_node(args[0], f"{where}: output '{o.quantity}'")
-            if n == 3 and fn == "torque" and next(d for d in self.drivers if d.name == args[0]).kind == "guided":
-                rod = next((b.name for b in self.bodies if getattr(getattr(b, "model", None), "kind", None) == "fe"), None)
-                if rod:
-                    raise SpecError(f"{where}: output '{o.quantity}': a guided driver's torque is not derived "
-                                    f"yet in a spatial system with an ef beam ('{rod}': its elements' kinetic "
-                                    "energy is a per-element kernel); a modal model gives it")
             if n == 3 and fn in PLANAR_ONLY:
                 hint = " (use Mx, My or Mz: the torsion and bending moments)" if fn == "M" else ""
                 raise SpecError(f"{where}: output '{o.quantity}': {fn} is not derived for spatial "

@@ -412,6 +412,25 @@ def _momentum(der, bodies=None) -> sp.Matrix:
     return H
 
 
+def _drive_load(der, driver) -> sp.Expr:
+    """What a guided coordinate's drive applies, from its joint's reaction (joint_reaction: the
+    momentum balance of the bodies beyond it): an ideal joint's constraint loads do no work
+    along its own motions, so the reaction's moment along a turn's axis (its force along a
+    slide's) is the drive's. The axis in ground components: the first coordinate's in the
+    parent marker's axes, the second's (a universal joint's, the child's; a cylindrical joint's
+    slide, the same axis) in the child's. For systems whose kinetic energy casadi does not hold
+    whole (spatial ef beams: per-element kernels); equal to motor_torque's Lagrange equation
+    where both apply."""
+    system = der.system
+    j = system.joint(driver.joint)
+    F, M = joint_reaction(der, j)
+    k = [c.name for c in j.coordinates].index(system.driven(driver))
+    c = j.coordinates[k]
+    A = _cut_axes_of(der, j.parent) if k == 0 else der.spatial["frames"][system.marker(j.child)[0]].A
+    a = A * _unit_vec(c.axis)
+    return (M if c.motion == "turn" else F).dot(a)
+
+
 def _first_moment(der, bodies) -> tuple[sp.Expr, sp.Matrix]:
     """(mass, first moment about the ground origin, ground components) of `bodies`: per rigid
     body m (R + A c), per modal beam m R + A int rho A r dx."""
@@ -553,7 +572,10 @@ def _output(der, quantity: str) -> sp.Expr:
     if fn in ("x", "y", "z"):
         return _marker_point(der, args[0])["xyz".index(fn)]
     if fn == "torque":  # a motor's as given; a guided coordinate's by Lagrange's equation of it
-        return motor_torque(der, next(d for d in system.drivers if d.name == args[0]), _applied, _spring_ends)
+        driver = next(d for d in system.drivers if d.name == args[0])
+        if driver.kind == "guided" and getattr(der, "rod_bodies", None):
+            return _drive_load(der, driver)  # ef beams' T is per-element C: not in Lagrange's here
+        return motor_torque(der, driver, _applied, _spring_ends)
     if fn == "T":  # EF_T: what casadi adds (the bodies' T in their frame's motion)
         return der.T + EF_T + (ef_kinetic_output(der) if der.casadi_T_out else 0)
     ef = getattr(der, "rod_bodies", [])
