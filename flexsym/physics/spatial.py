@@ -150,6 +150,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
     der.ef_free_ad = ef_free_ad
     der.spatial = {}
     der.rod_bodies, der.casadi_T, der.casadi_outputs = [], [], {}  # spatial ef beams (casadi)
+    der.along = {}  # placeholder -> (expression, order) of _along_motion
     der.casadi_T_out = []
 
     for b in system.bodies:  # what the kinds build once (a body may hang from a beam's marker)
@@ -491,8 +492,32 @@ def _joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
             add(Fc, _marker_point(der, ref))
             Mo += tc
     P = _marker_point(der, joint.child)
-    Fr = der.ddt(S, 2) - F
-    return Fr, der.ddt(_momentum(der, bodies)) - Mo - cross(P, Fr)
+    Fr = _along_motion(der, S, 2) - F
+    return Fr, _along_motion(der, _momentum(der, bodies), 1) - Mo - cross(P, Fr)
+
+
+def _along_motion(der, X: sp.Matrix, order: int) -> sp.Matrix:
+    """d^order X / dt^order along the motion, as placeholders whose values casadi computes:
+    forward AD of X's casadi translation along (q, q', d) -> (q', q'', d') (the drive's d' =
+    [1, theta', theta'', 0]: X holds no theta''). Its cost grows with X's size; sympy's
+    derivative of a beam's momentum by each coordinate in turn took 9-16 s on a 4-element arm
+    and 11 minutes on 16 elements (spatial_arm's slew reaction)."""
+    import casadi as ca
+
+    out = []
+    for e in X:
+        sym = sp.Symbol(f"ddt{order}_{len(der.casadi_outputs)}_", real=True)
+
+        def value(tr, xx, e=e):
+            z, zd = ca.vertcat(xx["q"], xx["qd"], xx["d"]), ca.vertcat(xx["qd"], xx["qdd"], xx["ddot"])
+            v = tr(e)
+            for _ in range(order):
+                v = ca.jtimes(v, z, zd)
+            return v
+        der.casadi_outputs[sym] = value
+        der.along[sym] = (e, order)  # what it stands for: der.ddt(e, order) (tests compare)
+        out.append(sym)
+    return sp.Matrix(out)
 
 
 def _marker_point(der, ref: str) -> sp.Matrix:
