@@ -71,6 +71,7 @@ from __future__ import annotations
 
 import math
 
+import casadi as ca
 import numpy as np
 import sympy as sp
 
@@ -502,8 +503,6 @@ def _along_motion(der, X: sp.Matrix, order: int) -> sp.Matrix:
     [1, theta', theta'', 0]: X holds no theta''). Its cost grows with X's size; sympy's
     derivative of a beam's momentum by each coordinate in turn took 9-16 s on a 4-element arm
     and 11 minutes on 16 elements (spatial_arm's slew reaction)."""
-    import casadi as ca
-
     out = []
     for e in X:
         sym = sp.Symbol(f"ddt{order}_{len(der.casadi_outputs)}_", real=True)

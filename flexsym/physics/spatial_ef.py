@@ -25,7 +25,7 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.model.exact_numbers import exact
-from flexsym.physics.rod3d import element_functions
+from flexsym.physics.rod3d import element_functions, quaternion, strain_rate_energy
 
 EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
 EF_V = sp.Symbol("V_rod_", real=True)  # the rod elements' elastic energy (casadi)
@@ -152,8 +152,6 @@ def ef_quaternion(der, body: str, x: float) -> sp.Matrix:
 
 def ef_node_quaternion(der, body: str, k: int) -> sp.Matrix:
     """ef_quaternion of node k (0: the root)."""
-    from flexsym.physics.rod3d import quaternion
-
     info = der.spatial[body]
     if k == 0:
         return sp.Matrix([1, 0, 0, 0])
@@ -231,7 +229,6 @@ def rod_dissipation_output(der) -> sp.Expr:
     per element) in the `dissipation` output (a placeholder, casadi)."""
     if ROD_D not in der.casadi_outputs:
         def value(tr, xx):
-            from flexsym.physics.rod3d import strain_rate_energy
             total = ca.SX(0.0)
             for body in der.rod_bodies:
                 if not body["beta"]:
