@@ -5,6 +5,14 @@ from flexsym.scenes.system_scene import system_from_dict
 _derived: dict = {}  # fingerprint -> the derivation built() generated a folder from
 
 
+def with_model(data: dict, model) -> dict:
+    """Scene data with every beam given `model` (in place; returned)."""
+    for b in data["body"]:
+        if b["kind"] == "beam":
+            b["model"] = model
+    return data
+
+
 def built(data: dict, model: str | None = None):
     """The built system of scene data (every beam given `model` when one is named). A folder
     generated here keeps its derivation for derivation(data)."""
@@ -12,9 +20,7 @@ def built(data: dict, model: str | None = None):
     from flexsym.toolchain.pipeline import prepare_system
 
     if model is not None:
-        for b in data["body"]:
-            if b["kind"] == "beam":
-                b["model"] = model
+        with_model(data, model)
     system = system_from_dict(data, name=data["system"]["name"])
     originals = sysgen.derive_spatial, sysgen.derive_system
 

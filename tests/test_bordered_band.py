@@ -15,7 +15,8 @@ import pytest
 from flexsym.scenes.system_scene import system_from_dict
 from flexsym.sim.inprocess import load_system
 from flexsym.toolchain.build import SANITIZE_FLAGS, find_compiler
-from test_spatial_ef_free import _s6_ef  # its build (the module's fixture s6ef) serves both
+from system_data import with_model
+from test_spatial_ef_free import _s6_ef
 
 ROOT = Path(__file__).resolve().parent.parent
 FSR_DIVERGED, FSR_SINGULAR = 1, 3  # runtime_c/include/flexsym/runtime.h
@@ -111,10 +112,7 @@ def _bordered_and_dense(data: dict, layout: tuple, runs: list) -> None:
 
 
 def _ef(data: dict, n: int) -> dict:
-    for b in data["body"]:
-        if b["kind"] == "beam":
-            b["model"] = {"variant": "ef", "elements": n}
-    return data
+    return with_model(data, {"variant": "ef", "elements": n})
 
 
 def test_s6_ef_bordered_runs_equal_the_dense_ones():

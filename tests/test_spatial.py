@@ -11,7 +11,7 @@ import pytest
 import sympy as sp
 
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, derivation, edited_scene, refused_in_one_line, run_ok
+from system_data import built, derivation, edited_scene, refused_in_one_line, run_ok, with_model
 
 ROOT = Path(__file__).resolve().parent.parent
 FLAP = ROOT / "scenes" / "flap.toml"
@@ -341,10 +341,7 @@ def test_frame_driven_is_the_derivations_decision():
     from flexsym.physics.spatial import derive_spatial
 
     for path, model in ((FLAP, {"variant": "ef", "elements": 2}), (S6, {"variant": "ef", "elements": 1})):
-        data = tomllib.loads(path.read_text())
-        for b in data["body"]:
-            if b["kind"] == "beam":
-                b["model"] = model
+        data = with_model(tomllib.loads(path.read_text()), model)
         system = system_from_dict(data, name=data["system"]["name"])
         der = derive_spatial(system)
         for body in der.rod_bodies:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from flexsym.scenes.system_scene import system_from_dict
-from system_data import built, run_ok
+from system_data import built, run_ok, with_model
 
 ROOT = Path(__file__).resolve().parent.parent
 S6 = ROOT / "scenes" / "spherical_pendulum.toml"
@@ -20,19 +20,20 @@ N = 4  # elements in the default suite's build (one build shared by every test h
 RHO, A, L, IY, IZ, J_ = 2700.0, 1.0e-4, 1.0, 2.0833e-10, 3.3333e-9, 7.021e-10
 
 
+# the fixture's outputs: energies, the loop, the angular momentum and the ball joint's loads
+S6EF_COLUMNS = {"T": "T", "V": "V", "viol": "violation", "Hz": "Hz",
+                **{f"B{c}": f"reaction(ball, m{c})" for c in "xyz"}, "Fz": "reaction(ball, z)"}
+
+
 def _s6_ef(n: int, **columns) -> dict:
     data = tomllib.loads(S6.read_text())
     data["output"]["columns"] |= columns
-    for b in data["body"]:
-        if b["kind"] == "beam":
-            b["model"] = {"variant": "ef", "elements": n}
-    return data
+    return with_model(data, {"variant": "ef", "elements": n})
 
 
 @pytest.fixture(scope="module")
 def s6ef():
-    return built(_s6_ef(N, T="T", V="V", viol="violation", Hz="Hz",
-                        **{f"B{c}": f"reaction(ball, m{c})" for c in "xyz"}, Fz="reaction(ball, z)"))
+    return built(_s6_ef(N, **S6EF_COLUMNS))
 
 
 def _system_struct():
@@ -104,7 +105,7 @@ def test_s6_ef_c_path_against_the_whole_system_ad_path(s6ef):
 
     from flexsym.codegen.generate import model_accessor
 
-    system = system_from_dict(_s6_ef(N, T="T", V="V", viol="violation"), name="spherical_pendulum")
+    system = system_from_dict(_s6_ef(N, **S6EF_COLUMNS), name="spherical_pendulum")
     der, ad = _ad_path(system, "strip", N)
     assert not der.rod_bodies[0]["free_c"] and len(der.casadi_T) == 1
     nq, npar = len(der.q), len(der.params)
@@ -223,10 +224,8 @@ def test_s7_ef_c_path_against_the_whole_system_ad_path():
     from flexsym.codegen.generate import model_accessor
 
     n = 2
-    data = tomllib.loads((ROOT / "scenes" / "spatial_slider_crank.toml").read_text())
-    for b in data["body"]:
-        if b["kind"] == "beam":
-            b["model"] = {"variant": "ef", "elements": n}
+    data = with_model(tomllib.loads((ROOT / "scenes" / "spatial_slider_crank.toml").read_text()),
+                      {"variant": "ef", "elements": n})
     system = system_from_dict(data, name=data["system"]["name"])
     der, ref = _ad_path(system, "rod", n)
     nq, nd = len(der.q), len(der.drive_symbols)

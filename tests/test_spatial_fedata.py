@@ -17,7 +17,7 @@ import pytest
 
 from flexsym.model import fedata
 from flexsym.model.fedata import LOAD_CASES, BeamBody, PointMass, Section
-from system_data import built, edited_scene, refused_in_one_line, run_ok
+from system_data import built, edited_scene, refused_in_one_line, run_ok, with_model
 from test_planar_as_spatial import spatial_twin
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -137,10 +137,7 @@ def test_stepped_system_run_as_spatial_reproduces_the_planar_rows(model, tol):
     sections and masses through the 3D invariants; measured 2.4e-15); with prestress within
     1e-5 (measured v_tip 1.4e-6, the rest 1e-7 and below: the plane's continuous centrifugal
     N against the unit load cases' elementwise N_e on 100 elements)."""
-    data = tomllib.loads((ROOT / "scenes" / "stepped_hub.toml").read_text())
-    for b in data["body"]:
-        if b["kind"] == "beam":
-            b["model"] = model
+    data = with_model(tomllib.loads((ROOT / "scenes" / "stepped_hub.toml").read_text()), model)
     twin = spatial_twin(data)
     kw = dict(t_end=4.0, dt=1e-3)
     planar, spatial = run_ok(built(data), **kw), run_ok(built(twin), **kw)

@@ -5,16 +5,12 @@ independent casadi assembly. A file of its own so that its build runs beside tes
 import numpy as np
 import pytest
 
-from system_data import built, run_ok
+from system_data import built, run_ok, with_model
 from test_spatial import A, E, G_, IY, L, RHO, _flap_data
 
 # ----- the spatial geometrically exact reference ef (physics/rod3d.py elements)
 def _flap_ef(n: int, **changes) -> dict:
-    data = _flap_data(**changes)
-    for b in data["body"]:
-        if b["kind"] == "beam":
-            b["model"] = {"variant": "ef", "elements": n}
-    return data
+    return with_model(_flap_data(**changes), {"variant": "ef", "elements": n})
 
 
 @pytest.fixture(scope="module")

@@ -260,8 +260,7 @@ def _start_values(der) -> dict:
     for g in der.guided:
         th, thd = drive0[g.joint]
         vals[g.symbols[0]], vals[g.symbols[1]] = th, thd
-    vals |= {sym: v for _, sym, v in der.params}
-    return vals | getattr(der, "ef_start", {})  # an ef node's section rotation: I
+    return vals | {sym: v for _, sym, v in der.params}
 
 
 def _section_rotation(der, ref: str) -> sp.Matrix:
@@ -300,6 +299,11 @@ def _cut_rows(der) -> None:
     system = der.system
     scale = exact(length_scale(system))
     der.spatial["cuts"] = {}
+    base = _start_values(der) if der.tree.cut else {}
+
+    def at_start() -> dict:  # with the ef nodes' quaternions the rows have registered so far
+        return base | getattr(der, "ef_start", {})
+
     for name in der.tree.cut:
         j = system.joint(name)
         first = len(der.constraints)
@@ -313,7 +317,7 @@ def _cut_rows(der) -> None:
             e1 = der.spatial["frames"][system.marker(j.child)[0]].A * vec(j.axis)
             e1 = e1 / sp.sqrt(vec(j.axis).dot(vec(j.axis)))
             Rp = _section_rotation(der, j.parent)
-            start = _start_values(der)  # after the rotations: an ef node's are registered then
+            start = at_start()  # after the rotations: an ef node's are registered then
             e1_0 = [float(v) for v in e1.xreplace(start).evalf()]
             x_0 = [float(v) for v in (Rp * sp.Matrix([1, 0, 0])).xreplace(start).evalf()]
             e2_0 = vec(_unit(np.cross(e1_0, x_0)))
@@ -324,7 +328,7 @@ def _cut_rows(der) -> None:
         elif turn_rows:
             Ap, Ac = _cut_axes_of(der, j.parent), _cut_axes_of(der, j.child)
             p, c = _cut_point(der, j.parent, j.point), _marker_point(der, j.child)
-            start = _start_values(der)
+            start = at_start()
             A0 = [np.array(A.xreplace(start).evalf(), dtype=float) for A in (Ap, Ac)]
             across, pairs = cut_axes(j, *A0)
             if across is None:
@@ -341,7 +345,7 @@ def _cut_rows(der) -> None:
                 loads.append(("turn", u, w))
         der.spatial["cuts"][name] = (first, loads, scale)
     if der.tree.cut:
-        start = _start_values(der)
+        start = at_start()
         for row, phi in der.constraints:
             if row.endswith(".norm"):
                 continue
