@@ -1,12 +1,13 @@
-"""The runtime's bordered band solve (linalg.c: fsr_bordered_*): a spatial ef beam's nodes form
-a band block of the Newton and mass matrices, a joint's or frame's coordinates a dense border
-(sysgen._band gives the layout, system.h's bandwidth, band_first and band_end). The linear
-algebra against the dense LU on random matrices (a C program, also under the sanitizers), and
+"""The runtime's bordered band solve (linalg.c: fsr_bordered_*): the nodes of ef beams (spatial
+rods or planar ANCF elements) form a band block of the Newton and mass matrices, a joint's or
+frame's coordinates a dense border (sysgen._band gives the layout, system.h's bandwidth,
+band_first and band_end). The linear algebra against the dense LU on random matrices (a C program, also under the sanitizers), and
 whole runs: the same model with its band declaration removed (a copy of its struct with
 bandwidth = -1: the dense LU, as before the bordered solve) gives the same rows to round-off,
 for every integrator that factors a matrix of the model."""
 import ctypes
 import subprocess
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -150,4 +151,36 @@ def test_revolute_ef_bordered_runs_equal_the_dense_ones():
     _bordered_and_dense(data, (11, 1, 25), [
         {"integrator": "genalpha", "t_end": 0.05, "dt": 1e-4, "out_every": 10, "newton": "full"},
         {"integrator": "radau5", "t_end": 0.05, "dt": 1e-3, "out_every": 1},
+    ])
+
+
+def _scene(name: str, n: int) -> dict:
+    with open(ROOT / "scenes" / f"{name}.toml", "rb") as f:
+        return _ef(tomllib.load(f), n)
+
+
+def test_planar_ef_pendulum_bordered_runs_equal_the_dense_ones():
+    """S3 with a 4-element planar ef beam (ANCF: 4 coordinates per node, an element spans 8, so
+    the half-bandwidth is 7): the pin's angle a border of one coordinate, the 17 node
+    coordinates the band. genalpha (full Newton to 1e-14: modified Newton stops anywhere within
+    its tolerance, differently when the round-off differs) and radau5: measured 6e-15 and 4e-14 m,
+    outputs 4e-13 and 1.1e-11 of their peaks."""
+    _bordered_and_dense(_scene("pendulum", 4), (7, 1, 18), [
+        {"integrator": "genalpha", "t_end": 0.2, "dt": 1e-4, "out_every": 10, "newton": "full",
+         "newton_tol": 1e-14},
+        {"integrator": "radau5", "t_end": 0.2, "dt": 1e-3, "out_every": 1},
+    ])
+
+
+def test_planar_ef_slider_crank_bordered_runs_equal_the_dense_ones():
+    """S2 with a 4-element planar ef rod: the loop's cut joint at the rod's tip node, its rows
+    on the slider's coordinate (a border) and the tip node. The constrained integrators'
+    matrices (genalpha3, ali3p at full Newton to 1e-14, rk4p's mass matrix): measured 3e-15,
+    7e-15 and 2e-22 m; N_mid, the axial stiffness times the nodes' round-off, 7e-9 and 1.1e-8 of
+    its peak, the other outputs 2e-12 at most."""
+    _bordered_and_dense(_scene("slider_crank", 4), (7, 2, 19), [
+        {"integrator": "genalpha3", "t_end": 0.02, "dt": 1e-4, "out_every": 10},
+        {"integrator": "ali3p", "t_end": 0.02, "dt": 1e-4, "out_every": 10, "newton": "full",
+         "newton_tol": 1e-14},
+        {"integrator": "rk4p", "t_end": 2e-4, "dt": 1e-7, "out_every": 100},
     ])

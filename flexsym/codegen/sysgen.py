@@ -417,21 +417,23 @@ def rod_elements(der: SystemDerivation) -> list[dict]:
 
 def _band(der: SystemDerivation, kernels: list) -> tuple[int, int, int]:
     """(half-bandwidth, band_first, band_end) of M and the Jacobians (system.h): the nodes of a
-    system's one spatial ef beam, contiguous coordinates [band_first, band_end), form a band (a
-    node couples to its neighbours only: half-bandwidth 6 + 5 = 11, the largest spread of an
-    element's coordinates); the others (a joint's, the beam's floating frame's) are a dense border
-    for the runtime's bordered band solve. band_first = band_end = 0 when every coordinate is a
-    node (no border). (-1, 0, 0): dense, when there is no such beam, its block is not wider than
-    twice its band, or a generated kernel couples two nodes farther apart than the band (M, the
-    Jacobians, d(Phi_q^T lambda)/dq, a constraint row through Phi_q^T Phi_q: its structural
-    nonzeros; the elements' parts, which system.c adds, are within it by construction)."""
-    rods = getattr(der, "rod_bodies", ())
+    system's ef beams (planar ANCF or spatial rod elements), contiguous coordinates
+    [band_first, band_end), form a band (a node couples to its neighbours only: the largest
+    spread of an element's coordinates, 7 planar, 11 spatial); the others (a joint's, a beam's
+    floating frame's) are a dense border for the runtime's bordered band solve. band_first =
+    band_end = 0 when every coordinate is a node (no border). (-1, 0, 0): dense, when there is
+    no ef beam, the node block is not wider than twice its band, or a generated kernel couples
+    two nodes farther apart than the band (M, the Jacobians, d(Phi_q^T lambda)/dq, a
+    constraint row through Phi_q^T Phi_q: its structural nonzeros, e.g. a loop closed between
+    two beams' nodes; the elements' parts, which system.c adds, are within it by
+    construction)."""
+    elements = [el for body in rod_elements(der) + ef_elements(der) for el in body["elements"]]
     nodes = [i for i, c in enumerate(der.coords) if c.group == "node"]
-    if len(rods) != 1 or not nodes or nodes != list(range(nodes[0], nodes[-1] + 1)):
+    if not elements or nodes != list(range(nodes[0], nodes[-1] + 1)):
         return -1, 0, 0
     lo, hi = nodes[0], nodes[-1] + 1
-    bw = max(max(i for i, _ in el if i >= 0) - min(i for i, _ in el if i >= 0)
-             for el in rod_elements(der)[0]["elements"])
+    bw = max(max(e[0] for e in el if e[0] >= 0) - min(e[0] for e in el if e[0] >= 0)
+             for el in elements)
     if hi - lo <= 2 * bw + 1:
         return -1, 0, 0
     fn = {k.name: k.function for k in kernels}
