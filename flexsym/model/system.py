@@ -786,6 +786,10 @@ class System:
                     raise SpecError(f"{where}: body '{b.name}': the spatial ef is a uniform rod; "
                                     "this body's sections vary or carry point masses (run a modal "
                                     "model, or give the uniform section)")
+                if "equilibrium" in (b.model.axial_force, b.model.moment):
+                    raise SpecError(f"{where}: body '{b.name}': N and the moments from equilibrium "
+                                    "are derived for planar ef beams only (a spatial ef beam's come "
+                                    "from its strains; its joints' reactions from equilibrium)")
                 if b.damped and b.damping.alpha:
                     raise SpecError(f"{where}: body '{b.name}': damping alpha (mass-proportional) of a "
                                     "spatial ef beam is not derived yet: give beta (strain-rate), as "

@@ -155,6 +155,10 @@ class FESpec:
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
     body: object = None  # fedata.BeamBody: per-element sections and point masses
+    # N and M in a system: the elements' own strain and curvature ("constitutive"), or the
+    # equilibrium of the part of the beam beyond the station ("equilibrium", systems only)
+    axial_force: str = "constitutive"
+    moment: str = "constitutive"
     kind = "fe"
 
     @property
@@ -168,7 +172,9 @@ class FESpec:
                 "elements": self.elements, "quadrature": QUAD_POINTS, "maneuver": self.maneuver,
                 "outputs": list(self.outputs), "points": [list(p) for p in self.points],
                 "left_out": [list(x) for x in self.left_out]} | (
-                    {"body": self.body.to_dict()} if self.body is not None else {})
+                    {"body": self.body.to_dict()} if self.body is not None else {}) | {
+                    k: v for k, v in (("axial_force", self.axial_force), ("moment", self.moment))
+                    if v != "constitutive"}
 
     def validate(self) -> "FESpec":
         if not NAME_RE.match(self.name):

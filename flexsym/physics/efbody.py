@@ -38,6 +38,7 @@ from flexsym.physics.fe import elastic_element, hermite, le, xi
 _E = sp.Matrix(sp.symbols("x1 y1 dx1 dy1 x2 y2 dx2 dy2", real=True))
 _ED = sp.Matrix([sp.Symbol(str(c) + "_d", real=True) for c in _E])
 OM, VX, VY, RX, RY, GX, GY = sp.symbols("Om_ Vx_ Vy_ Rx_ Ry_ gx_ gy_", real=True)
+AL, A0X, A0Y = sp.symbols("Al_ A0x_ A0y_", real=True)  # the frame's angular, origin's acceleration
 # an element's section in its damping: rho A, E A, E I (a body's elements scale them apart)
 RA, EA, EI = sp.symbols("rhoA_ EA_ EI_", positive=True)
 
@@ -47,6 +48,12 @@ def _shape(e):
     rx = sum(Ni * e[j] for Ni, j in zip(N, (0, 2, 4, 6)))
     ry = sum(Ni * e[j] for Ni, j in zip(N, (1, 3, 5, 7)))
     return rx, ry
+
+
+def _integral_from(expr, lo):
+    """int_lo^1 expr dxi of a polynomial in xi, term by term (exact)."""
+    poly = sp.Poly(sp.expand(expr), xi)
+    return sp.Add(*[c * (1 - lo**(k + 1)) / (k + 1) for (k,), c in poly.terms()])
 
 
 def _integral01(expr):
@@ -225,6 +232,47 @@ class EfPart:
         rx, ry = (c.xreplace({xi: at}).xreplace(sub).xreplace(self.psyms) for c in _shape(_E))
         dx, dy = (sp.diff(c, xi).xreplace({xi: at}).xreplace(sub).xreplace(self.psyms) for c in _shape(_E))
         return rx, ry, sp.atan2(dy, dx)
+
+    def inertial(self, fn: str, x: float, qdd: dict):
+        """(N or M of the inertial loads and gravity on the part beyond station x, the section
+        point, the section's unit tangent), in frame components and the placeholders OM, AL,
+        A0X, A0Y, GX, GY of the frame's motion and gravity (their actual values: the body kind).
+        The loads are -rho A (a - g) per unit length, a = A0 + r'' + 2 OM k x r' + AL k x r
+        - OM^2 r (r of the elements' shapes: a polynomial in xi, integrated exactly), and
+        -m (a - g) of the point masses at nodes beyond x; N is their component along the
+        tangent, M their moment about the section point. qdd: coordinate name -> q''."""
+        at = exact(x) / exact(self.beam.length)
+        f, nodes, rates = self.fractions, self.nodes(self.q), self.rates()
+        accel = [[0, 0, qdd["dx0"], 0]] + [[qdd[f"{c}{k}"] for c in ("ux", "uy", "dx", "dy")]
+                                           for k in range(1, self.n + 1)]
+        e0 = min(max(k for k in range(self.n) if f[k] <= at), self.n - 1)
+        lo = (at - f[e0]) / (f[e0 + 1] - f[e0])
+        rx0, ry0 = (c.xreplace({xi: lo}) for c in _shape(_E))
+        dx0, dy0 = (sp.diff(c, xi).xreplace({xi: lo}) for c in _shape(_E))
+        sub0 = self._element_subs(e0)
+        sx, sy, tx, ty = (c.xreplace(sub0) for c in (rx0, ry0, dx0, dy0))
+        norm = sp.sqrt(tx**2 + ty**2)
+        tx, ty = tx / norm, ty / norm
+
+        def load(m, r, v, a):
+            ax = A0X - GX + a[0] - 2 * OM * v[1] - AL * r[1] - OM**2 * r[0]
+            ay = A0Y - GY + a[1] + 2 * OM * v[0] + AL * r[0] - OM**2 * r[1]
+            return -m * (ax * tx + ay * ty if fn == "N" else (r[0] - sx) * ay - (r[1] - sy) * ax)
+
+        out = sp.Integer(0)
+        for e in range(e0, self.n):
+            sub = dict(zip(_E, nodes[e] + nodes[e + 1])) | {le: L * (f[e + 1] - f[e])}
+            r = [c.xreplace(sub) for c in _shape(_E)]
+            v = [c.xreplace(dict(zip(_E, rates[e] + rates[e + 1]))) for c in _shape(_E)]
+            a = [c.xreplace(dict(zip(_E, accel[e] + accel[e + 1]))) for c in _shape(_E)]
+            v, a = ([c.xreplace({le: sub[le]}) for c in w] for w in (v, a))
+            dens = load(rho * A * self.ratios[e][0] * sub[le], r, v, a)
+            out += _integral_from(dens, lo if e == e0 else 0)
+        for k, m in self.point_masses:
+            if f[k] > at:
+                out += load(m, nodes[k][:2], rates[k][:2], accel[k][:2])
+        section = sp.Matrix([sx, sy]).xreplace(self.psyms)
+        return out.xreplace(self.psyms), section, sp.Matrix([tx, ty]).xreplace(self.psyms)
 
     def stress(self, fn: str, x: float):
         """N = EA eps |r_x| or M = EI kappa at x (the mean of the two ends at a node)."""

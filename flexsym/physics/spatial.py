@@ -87,7 +87,7 @@ from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guide
                                       violation)
 from flexsym.physics.body_kinds.spatial import kind_of
 from flexsym.physics.body_kinds.spatial.base import (Frame, Motion, cross, euler_G, euler_rotation,
-                                                     rotation, skew, vec)
+                                                     rotation, vec)
 from flexsym.physics.lagrange import equations_of_motion
 from flexsym.physics.spatial_ef import ef_elastic_output, ef_kinetic_output, rod_dissipation_output
 from flexsym.model.maneuver import parse_expression, t

@@ -398,8 +398,9 @@ def _model(r: _Items, where: str, given, flag: str | None):
         if recovery:
             base = _model(r, where, given if len(given) > 1 or "strain" in given
                           else given.get("variant"), flag)
-            if base.kind != "modal":
-                r.fail(where, "axial_force / moment / torsion apply to modal variants only")
+            if base.kind != "modal" and (base.kind != "fe" or "torsion" in recovery):
+                r.fail(where, "axial_force / moment apply to modal and ef variants, torsion to "
+                       "modal variants only")
             return replace(base, **recovery).validate()
         if "variant" in given:
             base = builtin(r.string(where, given, "variant"))

@@ -8,8 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from flexsym.physics.body_kinds.base import BeamKind, exact_number, record_body, station
-from flexsym.physics.efbody import ef_part
+from flexsym.model.exact_numbers import exact
+from flexsym.model.system import Gravity
+from flexsym.physics.body_kinds.base import BeamKind, exact_number, record_body, rot, station
+from flexsym.physics.efbody import A0X, A0Y, AL, GX, GY, OM, ef_part
 from flexsym.physics.validity import Prefixed, strain_gauge
 
 
@@ -68,6 +70,25 @@ class Ef(BeamKind):
 
     def own_stress(self, der, beam, x: float, fn: str, where: str) -> sp.Expr:
         return der.flex[beam.name].stress(fn, x)
+
+    def from_equilibrium(self, beam, fn: str) -> bool:
+        return (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium"
+
+    def inertial_stress(self, der, beam, x: float, fn: str):
+        """The elements' and point masses' inertial loads and gravity beyond x (efbody's
+        EfPart.inertial) with the frame's actual motion; N along the section's tangent."""
+        part = der.flex[beam.name]
+        index = {sym: i for i, sym in enumerate(der.q)}
+        qdd = {c: der.qdd[index[sym]] for c, sym in part.q.items()}
+        out, section, axis = part.inertial(fn, x, qdd)
+        pose = der.poses[beam.name]
+        Arot = rot(pose.angle)
+        omega = der.ddt(pose.angle)
+        a0 = Arot.T * der.ddt(pose.R, 2)
+        g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
+        gl = Arot.T * sp.Matrix([exact(c) for c in g])
+        actual = {OM: omega, AL: der.ddt(omega), A0X: a0[0], A0Y: a0[1], GX: gl[0], GY: gl[1]}
+        return out.xreplace(actual), pose.R + Arot * section, axis
 
 
 KIND = Ef()
