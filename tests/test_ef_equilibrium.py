@@ -1,5 +1,5 @@
-"""N and M of a planar ef beam from equilibrium (opt-in: a body's model
-{ variant = "ef", moment = "equilibrium", axial_force = "equilibrium" }): the inertial loads
+"""N and M of a planar ef beam in a system from equilibrium (the default, as for a modal beam;
+the elements' strain and curvature with moment / axial_force = "constitutive"): the inertial loads
 and gravity on the elements beyond the station (efbody's EfPart.inertial: the elements' shapes
 integrated exactly) with the frame's actual motion, and the loads on the markers beyond it.
 Against an independent path (the clamp's reaction: the momentum balance of the whole beam

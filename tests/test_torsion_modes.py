@@ -124,7 +124,7 @@ def test_the_default_is_one_mode_and_leaves_fingerprints_alone():
     ('{ variant = "m2", torsion = ["cf1"] }', "unknown torsion mode 'cf1'"),
     ('{ variant = "m2", torsion = ["ff1", "ff1"] }', "duplicate torsion mode 'ff1'"),
     ('{ variant = "m2", torsion = "ff1" }', "model torsion: must be a list of mode names"),
-    ('{ variant = "ef", torsion = [] }', "axial_force / moment / torsion apply to modal variants only"),
+    ('{ variant = "ef", torsion = [] }', "torsion to modal variants only"),
     ('{ variant = "m2", moment = "constitutive", torsion = [] }', "has no torsion modes (torsion = [])"),
 ])
 def test_bad_torsion_sets_are_refused_in_one_line(tmp_path, capsys, model, expected):

@@ -28,9 +28,10 @@ def history_error(a, b, column):
 
 
 def test_offset_slider_crank_ef_at_defaults_and_modal_within_targets(tmp_path, capsys):
-    """Measured: m2 against ef (16 elements, ali3p at the scene's 0.1 ms): x_s 5.6e-5, w_mid
-    3.5e-3, N_mid 6.2e-4, M_mid 2.6e-3 (ef's own: 8.7e-5, 6.4e-5, 2.0e-3 against 32 elements at
-    a quarter step, the moment's being the element curvature's O(h^2))."""
+    """Measured: m2 against ef (16 elements, ali3p at the scene's 0.1 ms, N and M from
+    equilibrium): x_s 5.6e-5, w_mid 3.5e-3, N_mid 6.2e-4, M_mid 5.0e-4 (ef's own: 3.0e-9,
+    8.7e-5, 3.2e-5, 1.4e-4 against 32 elements at a quarter step; from the elements' curvature
+    its M_mid was 2.0e-3 off, O(h^2), and m2 2.6e-3 from it)."""
     modal, err = run(tmp_path, capsys, "offset_slider_crank")
     assert "assembly: joint crank_pin moved" in err and "joint slide moved" in err
     ef, _ = run(tmp_path, capsys, "offset_slider_crank", "--model", "ef")
@@ -43,8 +44,10 @@ def test_double_pendulum_ef_at_defaults_and_modal_within_targets(tmp_path, capsy
     """A flexible strip hanging from a rigid link, released from horizontal, with structural
     damping beta = 1e-4 (undamped, its high modes ring for ever and the moment converges in the
     step only below 50 us): ef runs at the scene's step and the modal run (m3) stays within the
-    targets. Measured m3 against ef-16: phi1 1.1e-6, phi2 9.4e-6, w_mid 7.5e-3, N_mid 1.3e-3,
-    M_mid 1.0e-2 (`flexsym select` against ef-32: m2 and m3 at 8.6e-3 to 1.1e-2, M_mid)."""
+    targets. Measured m3 against ef-16 (N and M from equilibrium): phi1 1.1e-6, phi2 9.4e-6,
+    w_mid 7.5e-3, N_mid 1.9e-4, M_mid 5.5e-3 (against its curvature moment: N_mid 1.3e-3,
+    M_mid 1.0e-2; `flexsym select` against ef-32's curvature: m2 and m3 at 8.6e-3 to 1.1e-2,
+    M_mid)."""
     modal, _ = run(tmp_path, capsys, "double_pendulum")
     ef, _ = run(tmp_path, capsys, "double_pendulum", "--model", "ef")
     errors = {c: history_error(modal, ef, c) for c in ("phi1", "phi2", "w_mid", "N_mid", "M_mid")}

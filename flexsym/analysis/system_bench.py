@@ -110,8 +110,12 @@ def run_rows(built, scene, integrator, dt, repeat=1, options=()):
 
 
 def ef_system(system, elements: int):
-    """The system with every flexible body replaced by `elements` ANCF elements."""
-    ef = customize(builtin("ef"), elements=elements)
+    """The system with every flexible body replaced by `elements` ANCF elements, N and M from
+    the elements' strain and curvature: the references of the studies, bench-systems and select
+    (docs/validation/ef-systems.md, their Richardson extrapolation) are measured so; a scene's
+    ef beam gives them from equilibrium (docs/theory/stress-recovery.md)."""
+    ef = replace(customize(builtin("ef"), elements=elements), axial_force="constitutive",
+                 moment="constitutive")
     return replace(system, bodies=tuple(replace(b, model=ef) if b.flexible else b
                                         for b in system.bodies))
 

@@ -14,8 +14,9 @@ its own error is estimated by halving its step and its elements, and printed (it
 well under TOL). With --exact it must judge errors of 1e-5 to 1e-4 of the peaks, which ef-32
 does not: its section moment comes from the element curvature and converges at order 2 in
 the elements, 6.5e-4 of the peak off on the four-bar's M_mid (and 1.6e-4 at 64 elements, for
-a build of about 4 minutes). Section N and M from equilibrium are not derived for ef bodies.
-So --exact adds one cheap run, ef on REFERENCE_ELEMENTS / 4 elements (a build of about 20 s),
+a build of about 4 minutes). (A scene's ef beam now gives N and M from equilibrium, which
+converges at order 4: 4 elements are 1.4e-5 off on the four-bar; select's reference keeps the
+curvature, system_bench.ef_system, until its study is redone with it.) So --exact adds one cheap run, ef on REFERENCE_ELEMENTS / 4 elements (a build of about 20 s),
 and per column (mesh_extrapolated) extrapolates ef-32 by Richardson, R = F32 + (F32 - F16) / 3,
 only where the third mesh shows order 2 (the changes 8->16 and 16->32 falling by a ratio
 within ORDER_2); the other columns keep ef-32. Measured on scenes/four_bar.toml and

@@ -155,10 +155,12 @@ class FESpec:
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
     body: object = None  # fedata.BeamBody: per-element sections and point masses
-    # N and M in a system: the elements' own strain and curvature ("constitutive"), or the
-    # equilibrium of the part of the beam beyond the station ("equilibrium", systems only)
-    axial_force: str = "constitutive"
-    moment: str = "constitutive"
+    # N and M of a planar ef beam in a system: the equilibrium of the part of the beam beyond
+    # the station ("auto", as a modal beam's in a mechanism, or "equilibrium") or the elements'
+    # own strain and curvature ("constitutive"); a spatial ef beam's and the one-beam ef's are
+    # their elements' own
+    axial_force: str = "auto"
+    moment: str = "auto"
     kind = "fe"
 
     @property
@@ -174,7 +176,7 @@ class FESpec:
                 "left_out": [list(x) for x in self.left_out]} | (
                     {"body": self.body.to_dict()} if self.body is not None else {}) | {
                     k: v for k, v in (("axial_force", self.axial_force), ("moment", self.moment))
-                    if v != "constitutive"}
+                    if v != "auto"}
 
     def validate(self) -> "FESpec":
         if not NAME_RE.match(self.name):

@@ -233,14 +233,17 @@ class EfPart:
         dx, dy = (sp.diff(c, xi).xreplace({xi: at}).xreplace(sub).xreplace(self.psyms) for c in _shape(_E))
         return rx, ry, sp.atan2(dy, dx)
 
-    def inertial(self, fn: str, x: float, qdd: dict):
+    def inertial(self, fn: str, x: float, qdd: dict, alpha=0):
         """(N or M of the inertial loads and gravity on the part beyond station x, the section
         point, the section's unit tangent), in frame components and the placeholders OM, AL,
         A0X, A0Y, GX, GY of the frame's motion and gravity (their actual values: the body kind).
         The loads are -rho A (a - g) per unit length, a = A0 + r'' + 2 OM k x r' + AL k x r
         - OM^2 r (r of the elements' shapes: a polynomial in xi, integrated exactly), and
-        -m (a - g) of the point masses at nodes beyond x; N is their component along the
-        tangent, M their moment about the section point. qdd: coordinate name -> q''."""
+        -m (a - g) of the point masses at nodes beyond x, and the mass-proportional damping's
+        -alpha rho A r' (r' relative to the frame; -alpha m r'_k): the dissipation function's
+        force, external to the section (the strain-rate damping is internal: no load). N is
+        their component along the tangent, M their moment about the section point.
+        qdd: coordinate name -> q''."""
         at = exact(x) / exact(self.beam.length)
         f, nodes, rates = self.fractions, self.nodes(self.q), self.rates()
         accel = [[0, 0, qdd["dx0"], 0]] + [[qdd[f"{c}{k}"] for c in ("ux", "uy", "dx", "dy")]
@@ -255,8 +258,8 @@ class EfPart:
         tx, ty = tx / norm, ty / norm
 
         def load(m, r, v, a):
-            ax = A0X - GX + a[0] - 2 * OM * v[1] - AL * r[1] - OM**2 * r[0]
-            ay = A0Y - GY + a[1] + 2 * OM * v[0] + AL * r[0] - OM**2 * r[1]
+            ax = A0X - GX + a[0] + alpha * v[0] - 2 * OM * v[1] - AL * r[1] - OM**2 * r[0]
+            ay = A0Y - GY + a[1] + alpha * v[1] + 2 * OM * v[0] + AL * r[0] - OM**2 * r[1]
             return -m * (ax * tx + ay * ty if fn == "N" else (r[0] - sx) * ay - (r[1] - sy) * ax)
 
         out = sp.Integer(0)

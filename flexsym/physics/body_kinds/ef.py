@@ -72,7 +72,7 @@ class Ef(BeamKind):
         return der.flex[beam.name].stress(fn, x)
 
     def from_equilibrium(self, beam, fn: str) -> bool:
-        return (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium"
+        return (beam.model.axial_force if fn == "N" else beam.model.moment) != "constitutive"
 
     def inertial_stress(self, der, beam, x: float, fn: str):
         """The elements' and point masses' inertial loads and gravity beyond x (efbody's
@@ -80,7 +80,8 @@ class Ef(BeamKind):
         part = der.flex[beam.name]
         index = {sym: i for i, sym in enumerate(der.q)}
         qdd = {c: der.qdd[index[sym]] for c, sym in part.q.items()}
-        out, section, axis = part.inertial(fn, x, qdd)
+        alpha = der.ef_damping.get(beam.name, (0, 0))[0]
+        out, section, axis = part.inertial(fn, x, qdd, alpha)
         pose = der.poses[beam.name]
         Arot = rot(pose.angle)
         omega = der.ddt(pose.angle)
