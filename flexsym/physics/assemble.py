@@ -628,6 +628,13 @@ def _external_loads(der: SystemDerivation, bodies: set[str]) -> tuple[sp.Matrix,
         for b in bodies:
             F += der.mass[b] * gvec
             Mo += cross(der.first_moment[b], gvec)
+    for b in sorted(bodies):  # dampers acting on the motion relative to a body's frame
+        load = kind_of(system.body(b)).damping_load(der, system.body(b))
+        if load is not None:
+            pose = der.poses[b]
+            force = rot(pose.angle) * load[0]
+            add(force, pose.R)
+            Mo += load[1]
     for load in system.loads:
         if isinstance(load, PointForce) and inside(load.marker):
             body, _ = system.marker(load.marker)

@@ -244,10 +244,23 @@ class EfPart:
         force, external to the section (the strain-rate damping is internal: no load). N is
         their component along the tangent, M their moment about the section point.
         qdd: coordinate name -> q''."""
+        F, M, section, tangent = self._beyond(x, qdd, alpha)
+        return (F.dot(tangent) if fn == "N" else M), section, tangent
+
+    def damping_load(self, alpha):
+        """The mass-proportional damping's force -alpha int rho A r' (frame components; point
+        masses -alpha m r'_k) and its moment about the frame's origin (the clamped root)."""
+        F, M, _, _ = self._beyond(0.0, None, alpha)
+        return F, M
+
+    def _beyond(self, x: float, qdd: dict | None, alpha):
+        """(force, moment about the section point, section point, unit tangent) of the loads on
+        the part beyond station x (inertial() says which; qdd None: the damping's alone)."""
         at = exact(x) / exact(self.beam.length)
         f, nodes, rates = self.fractions, self.nodes(self.q), self.rates()
-        accel = [[0, 0, qdd["dx0"], 0]] + [[qdd[f"{c}{k}"] for c in ("ux", "uy", "dx", "dy")]
-                                           for k in range(1, self.n + 1)]
+        accel = None if qdd is None else (
+            [[0, 0, qdd["dx0"], 0]] + [[qdd[f"{c}{k}"] for c in ("ux", "uy", "dx", "dy")]
+                                       for k in range(1, self.n + 1)])
         e0 = min(max(k for k in range(self.n) if f[k] <= at), self.n - 1)
         lo = (at - f[e0]) / (f[e0 + 1] - f[e0])
         rx0, ry0 = (c.xreplace({xi: lo}) for c in _shape(_E))
@@ -255,27 +268,29 @@ class EfPart:
         sub0 = self._element_subs(e0)
         sx, sy, tx, ty = (c.xreplace(sub0) for c in (rx0, ry0, dx0, dy0))
         norm = sp.sqrt(tx**2 + ty**2)
-        tx, ty = tx / norm, ty / norm
 
         def load(m, r, v, a):
-            ax = A0X - GX + a[0] + alpha * v[0] - 2 * OM * v[1] - AL * r[1] - OM**2 * r[0]
-            ay = A0Y - GY + a[1] + alpha * v[1] + 2 * OM * v[0] + AL * r[0] - OM**2 * r[1]
-            return -m * (ax * tx + ay * ty if fn == "N" else (r[0] - sx) * ay - (r[1] - sy) * ax)
+            """-m times the acceleration the load balances, its moment about the section."""
+            ax, ay = alpha * v[0], alpha * v[1]
+            if a is not None:
+                ax += A0X - GX + a[0] - 2 * OM * v[1] - AL * r[1] - OM**2 * r[0]
+                ay += A0Y - GY + a[1] + 2 * OM * v[0] + AL * r[0] - OM**2 * r[1]
+            return sp.Matrix([-m * ax, -m * ay, -m * ((r[0] - sx) * ay - (r[1] - sy) * ax)])
 
-        out = sp.Integer(0)
+        out = sp.zeros(3, 1)
         for e in range(e0, self.n):
             sub = dict(zip(_E, nodes[e] + nodes[e + 1])) | {le: L * (f[e + 1] - f[e])}
             r = [c.xreplace(sub) for c in _shape(_E)]
-            v = [c.xreplace(dict(zip(_E, rates[e] + rates[e + 1]))) for c in _shape(_E)]
-            a = [c.xreplace(dict(zip(_E, accel[e] + accel[e + 1]))) for c in _shape(_E)]
-            v, a = ([c.xreplace({le: sub[le]}) for c in w] for w in (v, a))
+            v, a = ([c.xreplace(dict(zip(_E, w[e] + w[e + 1]))).xreplace({le: sub[le]})
+                     for c in _shape(_E)] if w is not None else None for w in (rates, accel))
             dens = load(rho * A * self.ratios[e][0] * sub[le], r, v, a)
-            out += _integral_from(dens, lo if e == e0 else 0)
+            out += dens.applyfunc(lambda c: _integral_from(c, lo if e == e0 else 0))
         for k, m in self.point_masses:
             if f[k] > at:
-                out += load(m, nodes[k][:2], rates[k][:2], accel[k][:2])
-        section = sp.Matrix([sx, sy]).xreplace(self.psyms)
-        return out.xreplace(self.psyms), section, sp.Matrix([tx, ty]).xreplace(self.psyms)
+                out += load(m, nodes[k][:2], rates[k][:2], None if accel is None else accel[k][:2])
+        out = out.xreplace(self.psyms)
+        tangent = sp.Matrix([tx / norm, ty / norm]).xreplace(self.psyms)
+        return out[:2, 0], out[2], sp.Matrix([sx, sy]).xreplace(self.psyms), tangent
 
     def stress(self, fn: str, x: float):
         """N = EA eps |r_x| or M = EI kappa at x (the mean of the two ends at a node)."""

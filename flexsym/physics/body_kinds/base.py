@@ -126,6 +126,13 @@ class BodyKind:
         the section's axis in frame components: the direction N is taken along)."""
         raise NotImplementedError
 
+    def damping_load(self, der, body) -> tuple[sp.Matrix, sp.Expr] | None:
+        """The force its damping exerts from outside (frame components) and its moment about
+        the frame's origin: the mass-proportional and modal dampers act on its motion relative
+        to its frame, so the joints carry them (a joint reaction's momentum balance adds them);
+        None when it has none (the strain-rate damping is internal)."""
+        return None
+
 
 class BeamKind(BodyKind):
     """A flexible body: a beam whose frame is its root's tangent frame."""

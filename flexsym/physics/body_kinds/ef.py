@@ -91,5 +91,10 @@ class Ef(BeamKind):
         actual = {OM: omega, AL: der.ddt(omega), A0X: a0[0], A0Y: a0[1], GX: gl[0], GY: gl[1]}
         return out.xreplace(actual), pose.R + Arot * section, axis
 
+    def damping_load(self, der, b):
+        """The mass-proportional damping's force and moment (EfPart.damping_load)."""
+        alpha = der.ef_damping.get(b.name, (0, 0))[0]
+        return der.flex[b.name].damping_load(alpha) if alpha else None
+
 
 KIND = Ef()

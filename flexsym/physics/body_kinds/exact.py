@@ -77,6 +77,12 @@ class Exact(Modal):
             if fn == "momentum" or (fn == "reaction" and args[0] in beyond) or on_beam:
                 raise SpecError(f"{where}: output '{o.quantity}' needs its momentum, which is not "
                                 "derived yet")
+            d = b.damping
+            if (keys and args[0] == b.name and b.damped and (d.alpha or any(d.zetas(1)))
+                    and any(getattr(b.model, k) == "equilibrium" for k in keys)):
+                raise SpecError(f"{where}: output '{o.quantity}' from equilibrium would leave out "
+                                "its damping's alpha / zeta loads (not derived for exact yet): give "
+                                "beta, or moment / axial_force = \"constitutive\"")
         super().check(system, tree, b)
 
     def part(self, b, psyms: dict, qnames: list[str]):
