@@ -800,31 +800,6 @@ class System:
                                 f"derived in 3D (derived: {', '.join(SPATIAL_STRAINS)})")
             if b.model.axial_force == "equilibrium" or b.model.moment == "equilibrium":
                 pass  # N and the moments from equilibrium are derived in 3D
-            self._check_spatial_damping_loads(b)
-
-    def _check_spatial_damping_loads(self, b) -> None:
-        """A spatial modal beam damped by alpha or zeta: its dampers act on its motion relative
-        to its frame, and their load is not in the spatial section forces from equilibrium nor
-        in the momentum balance of a tree joint's reaction yet (planar systems have it:
-        physics/body_kinds/modal.py, _damping_field). Refused where an output reads them."""
-        d = b.damping
-        if not b.damped or not (d.alpha or any(d.zetas(1))):
-            return
-        beyond = {j.name for j in self.joints if j.name not in self.tree().cut
-                  and b.name in self.tree().subtree(self, j.name)}
-        # (N takes the load's axial part: none without axial modes)
-        own = {"N": ("axial_force",) if b.model.axial else (), "sigma": ("axial_force", "moment")}
-        for o in self.outputs:
-            fn, args = parse_output(self, o.quantity)
-            keys = own.get(fn, ("moment",) if fn in ("M", "Mx", "My", "Mz") else ())
-            if (args and args[0] == b.name and (fn in ("Qy", "Qz") or any(
-                    getattr(b.model, k) == "equilibrium" for k in keys))) or (
-                    fn == "reaction" and args[0] in beyond):
-                raise SpecError(f"system '{self.name}': output {o.column} = '{o.quantity}': body "
-                                f"'{b.name}' is damped by alpha / zeta, whose load on the beam is "
-                                "not in a spatial system's equilibrium section forces and joint "
-                                "reactions yet: give beta (strain-rate damping, internal), or "
-                                "moment / axial_force = \"constitutive\"")
 
     def _check_magnitudes(self) -> None:
         """Every number of the system: a real number (not bool, complex, str, None), finite and

@@ -476,6 +476,10 @@ def _joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
 
     gvec = vec(next((ld.g for ld in system.loads if isinstance(ld, Gravity)), (0, 0, 0)))
     F, Mo = F + mass * gvec, Mo + cross(S, gvec)
+    for b in sorted(bodies):  # dampers acting on the motion relative to a beam's frame
+        load = kind_of(system.body(b)).damping_load(der, system.body(b))
+        if load is not None:
+            F, Mo = F + load[0], Mo + load[1]
     for load in system.loads:
         if isinstance(load, PointForce) and inside(load.marker):
             add(_point_force(der, load), _marker_point(der, load.marker))

@@ -9,10 +9,24 @@ import sympy as sp
 from flexsym.core.errors import SpecError
 from flexsym.model.exact_numbers import exact
 from flexsym.model.parameters import BEAM_PARAMS
+from flexsym.model.system import Gravity
 
 
 def rot(phi) -> sp.Matrix:
     return sp.Matrix([[sp.cos(phi), -sp.sin(phi)], [sp.sin(phi), sp.cos(phi)]])
+
+
+def frame_acceleration(der, body: str) -> tuple:
+    """(A, {omega, omega', a0x, a0y, gx, gy}) of a body's frame: its rotation, its angular rate
+    and acceleration, its origin's acceleration and gravity in frame components (what the
+    equilibrium recoveries put in for their placeholders, in this order)."""
+    pose = der.poses[body]
+    Arot = rot(pose.angle)
+    omega = der.ddt(pose.angle)
+    a0 = Arot.T * der.ddt(pose.R, 2)
+    g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
+    gl = Arot.T * sp.Matrix([exact(c) for c in g])
+    return Arot, (omega, der.ddt(omega), a0[0], a0[1], gl[0], gl[1])
 
 
 def cross(a, b) -> sp.Expr:

@@ -8,9 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from flexsym.model.exact_numbers import exact
-from flexsym.model.system import Gravity
-from flexsym.physics.body_kinds.base import BeamKind, exact_number, record_body, rot, station
+from flexsym.physics.body_kinds.base import (BeamKind, exact_number, frame_acceleration, record_body,
+                                             station)
 from flexsym.physics.efbody import A0X, A0Y, AL, GX, GY, OM, ef_part
 from flexsym.physics.validity import Prefixed, strain_gauge
 
@@ -82,14 +81,9 @@ class Ef(BeamKind):
         qdd = {c: der.qdd[index[sym]] for c, sym in part.q.items()}
         alpha = der.ef_damping.get(beam.name, (0, 0))[0]
         out, section, axis = part.inertial(fn, x, qdd, alpha)
-        pose = der.poses[beam.name]
-        Arot = rot(pose.angle)
-        omega = der.ddt(pose.angle)
-        a0 = Arot.T * der.ddt(pose.R, 2)
-        g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
-        gl = Arot.T * sp.Matrix([exact(c) for c in g])
-        actual = {OM: omega, AL: der.ddt(omega), A0X: a0[0], A0Y: a0[1], GX: gl[0], GY: gl[1]}
-        return out.xreplace(actual), pose.R + Arot * section, axis
+        Arot, motion = frame_acceleration(der, beam.name)
+        actual = dict(zip((OM, AL, A0X, A0Y, GX, GY), motion))
+        return out.xreplace(actual), der.poses[beam.name].R + Arot * section, axis
 
     def damping_load(self, der, b):
         """The mass-proportional damping's force and moment (EfPart.damping_load)."""

@@ -19,8 +19,9 @@ from flexsym.core.errors import SpecError
 from flexsym.model.exact_numbers import exact
 from flexsym.model.strain_models import STRAIN_MODELS
 from flexsym.model.modes import s
-from flexsym.model.system import FlexibleBeam, Gravity
-from flexsym.physics.body_kinds.base import BeamKind, exact_number, record_body, rot, station
+from flexsym.model.system import FlexibleBeam
+from flexsym.physics.body_kinds.base import (BeamKind, exact_number, frame_acceleration, record_body,
+                                             station)
 from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
                                     gravity_density, kinetic_density, momentum_density, w)
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
@@ -207,16 +208,11 @@ class Modal(BeamKind):
             out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * (dx * ay - dy * ax), at, 1)
             if f.weights["rot"] != 0:
                 out -= rho_ * A_ * L_**3 * tab.integrate(f.weights["rot"] * (al + f.v_ddot_s / L_), at, 1)
-        pose = der.poses[beam.name]
-        Arot = rot(pose.angle)
-        omega = der.ddt(pose.angle)
-        a0 = Arot.T * der.ddt(pose.R, 2)
-        g = next((ld.g for ld in der.system.loads if isinstance(ld, Gravity)), (0, 0))
-        gl = Arot.T * sp.Matrix([exact(c) for c in g])
-        actual = {om: omega, al: der.ddt(omega), a0x: a0[0], a0y: a0[1], gx: gl[0], gy: gl[1]}
+        Arot, motion = frame_acceleration(der, beam.name)
+        actual = dict(zip((om, al, a0x, a0y, gx, gy), motion))
         out = out.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
         u, v, _ = self.fields_at(der, beam.name, x)
-        section = pose.R + Arot * sp.Matrix([station(der, beam.name, x) + u, v])
+        section = der.poses[beam.name].R + Arot * sp.Matrix([station(der, beam.name, x) + u, v])
         return out, section, sp.Matrix([1, 0])
 
 

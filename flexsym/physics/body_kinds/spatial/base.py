@@ -117,6 +117,12 @@ class SpatialKind:
         """Ground <- the marker's (section's) axes."""
         raise NotImplementedError
 
+    def damping_load(self, der, body) -> tuple[sp.Matrix, sp.Matrix] | None:
+        """The force and the moment about the ground origin (ground components) of its dampers
+        that act on its motion relative to its frame (a tree joint's reaction carries them);
+        None: none (the strain-rate damping is internal)."""
+        return None
+
     def momentum(self, der, body, fr: Frame) -> sp.Matrix:
         """Its angular momentum about the ground origin, ground components."""
         raise SpecError(f"body '{body.name}': angular momentum is not derived for a spatial {self.name} body")

@@ -6,7 +6,7 @@ as in the plane: the data give the table's weights, each plane's modes (_beam_mo
 prestress from the unit load cases (_load_case_energy)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import sympy as sp
@@ -88,11 +88,30 @@ class Modal(SpatialBeam):
             der.terms.append((b.name, term_name, wrt, Vt, Qk))
             der.V += Vt
             der.Q += Qk
+        keys = der.spatial[b.name]["keys"]
         if b.damped:  # D in the elastic rates (body_kinds.modal.damping_dissipation), Q -= dD/dq'
-            der.dissipation[b.name] = _dissipation(b, P, table, integral, der.spatial[b.name]["keys"])
+            der.dissipation[b.name] = _dissipation(b, P, table, integral, keys)
             der.Q -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
-                                   integral=integral, om=om, vf=vf, actual=actual)
+                                   integral=integral, om=om, vf=vf, actual=actual,
+                                   damping=_damping_field(b, P, table, integral, keys))
+
+    def damping_load(self, der, b) -> tuple[sp.Matrix, sp.Matrix] | None:
+        """The alpha and zeta dampers' load (_damping_field) over the beam: its force and its
+        moment about the ground origin, ground components (a tree joint's momentum balance)."""
+        d = der.spatial[b.name]
+        W = d["damping"]
+        if W is None:
+            return None
+        P, F, integral = d["P"], d["F"], d["integral"]
+        L = P["L"]
+        f = -P["rho"] * P["A"] * L * d["table"].weight("mu") * sp.Matrix([W["u"], W["v"], W["vz"]])
+        tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
+        torque = -P["rho"] * (P["Iy"] + P["I"]) * L * d["table"].weight("ip") * W["phi"] * tangent
+        moment = cross(d["r"], f) + torque
+        fr = der.spatial["frames"][b.name]
+        force = fr.A * sp.Matrix([integral(c) for c in f])
+        return force, cross(fr.R, force) + fr.A * sp.Matrix([integral(c) for c in moment])
 
     def axis_point(self, der, body: str, x: float) -> sp.Matrix:
         return _at(der, body, x, "r")
@@ -266,17 +285,39 @@ def _load_case_axial_force(der, b: FlexibleBeam, fr: Frame, x: float) -> sp.Expr
                     for c in f])
 
 
-def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict) -> sp.Expr:
-    """D of a damped spatial modal beam: as in the plane, from the strain-rate energy (axial,
-    both bending planes, torsion) and the relative kinetic energy (translation and the
-    section's spin, as T holds them) of the undeformed beam's elastic rates."""
+def _rate_energies(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict):
+    """(K2, M2, rates): the strain-rate energy (axial, both bending planes, torsion) and the
+    relative kinetic energy (translation and the section's spin, as T holds them) of the
+    undeformed beam's elastic rates, the quadratic forms a damped beam's D is written in."""
     rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n, _, _ in beam_coordinates(b)}
     R = _fields(b, rate, rate, rate, table, False, keys)  # fields linear in the rates
     w = table.weight
     K2 = integral(sum(_strain_density(t, R, P, None, w) for t in ("axial", "bending", "torsion")))
     M2 = integral(P["rho"] * P["A"] * P["L"] / 2 * w("mu") * (R["u"]**2 + R["v"]**2 + R["vz"]**2)
                   + P["rho"] * (P["Iy"] + P["I"]) * P["L"] / 2 * w("ip") * R["phi"]**2)
-    return damping_dissipation(b.damping, K2, M2, list(rate.values()))
+    return K2, M2, list(rate.values())
+
+
+def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict) -> sp.Expr:
+    """D of a damped spatial modal beam: as in the plane, from its rate energies."""
+    K2, M2, rates = _rate_energies(b, P, table, integral, keys)
+    return damping_dissipation(b.damping, K2, M2, rates)
+
+
+def _damping_field(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict):
+    """The planar _damping_field in 3D (body_kinds/modal.py): w = M^-1 dD/dq' of the alpha and
+    zeta dampers, M the modal mass of the rate fields (translation and the section's spin), and
+    the fields u, v, vz, phi of w: the load -rho A (u_w, v_w, vz_w) and the torque
+    -rho (I_y + I_z) phi_w about the axis do the dampers' virtual work. None without them."""
+    d = b.damping
+    names = [n for n, _, _ in beam_coordinates(b)]
+    if not b.damped or not (d.alpha or any(d.zetas(len(names)))):
+        return None
+    K2, M2, rates = _rate_energies(b, P, table, integral, keys)
+    D = damping_dissipation(replace(d, beta=0.0), K2, M2, rates)
+    w = sp.hessian(M2, rates).LUsolve(sp.Matrix([sp.diff(D, r) for r in rates]))
+    wd = dict(zip(names, w))
+    return _fields(b, wd, wd, wd, table, False, keys)
 
 
 def _section_frame(der, fb: Frame, beam: str, x: float) -> Frame:
@@ -380,6 +421,9 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) 
     gl = sp.Matrix(sp.symbols(f"{beam.name}_g_x {beam.name}_g_y {beam.name}_g_z", real=True))
     rd = sp.Matrix([F["u_d"], F["v_d"], F["vz_d"]])
     rdd = sp.Matrix([F["u_dd"], F["v_dd"], F["vz_dd"]])
+    W = d["damping"]  # the alpha and zeta dampers' load, as an acceleration field (and spin)
+    if W is not None:
+        rdd += sp.Matrix([W["u"], W["v"], W["vz"]])
     acc = a0 + cross(al, r) + cross(om, cross(om, r)) + 2 * cross(om, rd) + rdd
     L, rho, A = P["L"], P["rho"], P["A"]
     w = d["table"].weight
@@ -398,6 +442,8 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) 
         # plus omega x h (the gyroscopic part, in all three components)
         spin_rate = F["phi_dd"] + al[0] + (al[1] * F["v_s"] + om[1] * F["v_d_s"]
                                            + al[2] * F["vz_s"] + om[2] * F["vz_d_s"]) / L
+        if W is not None:
+            spin_rate += W["phi"]
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
         h_rate = (spin_rate * tangent + d["spin"] * sp.Matrix([0, F["v_d_s"] / L, F["vz_d_s"] / L])
                   + cross(om, d["spin"] * tangent))
