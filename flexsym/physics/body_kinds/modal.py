@@ -196,7 +196,7 @@ class Modal(BeamKind):
         X = L_ * s + f.u
         ax = a0x - gx + f.u_ddot - 2 * om * f.v_dot - al * f.v - om**2 * X
         ay = a0y - gy + f.v_ddot + 2 * om * f.u_dot + al * X - om**2 * f.v
-        damp = _damping_field(beam, part)
+        damp = _damping_field(der, beam)
         if damp is not None:  # the dampers' load -rho A (u_w, v_w) on the part beyond x
             ax, ay = ax + damp[0], ay + damp[1]
         view = part.view()
@@ -215,12 +215,11 @@ class Modal(BeamKind):
         section = der.poses[beam.name].R + Arot * sp.Matrix([station(der, beam.name, x) + u, v])
         return out, section, sp.Matrix([1, 0])
 
-
     def damping_load(self, der, b):
         """-rho A (u_w, v_w) of _damping_field over the beam, and its moment about the frame's
         origin (at the deformed points)."""
         part = der.flex[b.name]
-        damp = _damping_field(b, part)
+        damp = _damping_field(der, b)
         if damp is None:
             return None
         rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
@@ -233,41 +232,47 @@ class Modal(BeamKind):
                 M.xreplace(values).xreplace(part.psyms))
 
 
-def _damping_field(b: FlexibleBeam, part: FlexPart):
-    """(u_w, v_w) such that the load -rho A (u_w, v_w) on the beam does the virtual work of its
-    mass-proportional and modal dampers (their generalised force -dD/dq'; beta's strain-rate
-    stress is internal, no load): w = M^-1 dD/dq' with M the modal mass of the rate fields
-    linear in q' (those D is written in), and the field sum_j w_j phi_j, the one load in the
-    modes' span weighted by rho A (for alpha: alpha times the relative velocity). None when
-    the beam has neither. In the table's symbols and the global beam parameters."""
-    d = b.damping
-    if not b.damped or not (d.alpha or any(d.zetas(len(part.coords)))):
-        return None
+def _rate_fields(b: FlexibleBeam, part: FlexPart, values: dict):
+    """(K2, M2, the rates, the fields of given coordinate values): the strain-rate and
+    relative kinetic energies of the undeformed beam's elastic rates (the fields linear in the
+    rates: no foreshortening), the quadratic forms its D is written in, and fields(values)
+    builds the same linear fields of other values (in the table's symbols)."""
     spec, tab = b.model, part.table
     axial = [part.modes[r.coordinate] for r in spec.axial]
     bending = [part.modes[r.coordinate] for r in spec.bending]
     rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in part.coords}
     rf = build_fields(axial, bending, rate, rate, tab, False)
-    values = tab.substitutions()
-    K2 = tab.integrate(ENERGY_TERMS["axial"].density(rf) + ENERGY_TERMS["bending"].density(rf)).xreplace(values)
-    M2 = tab.integrate(kinetic_density(rf, FrameMotion(sp.Integer(0)))).xreplace(values)
-    rates = [rate[n] for n in part.coords]
-    D = damping_dissipation(replace(d, beta=0.0), K2, M2, rates)
-    w = sp.hessian(M2, rates).LUsolve(sp.Matrix([sp.diff(D, r) for r in rates]))
-    wf = build_fields(axial, bending, dict(zip(part.coords, w)), dict(zip(part.coords, w)), tab, False)
-    return wf.u, wf.v
+    K2 = tab.integrate(ENERGY_TERMS["axial"].density(rf) + ENERGY_TERMS["bending"].density(rf))
+    M2 = tab.integrate(kinetic_density(rf, FrameMotion(sp.Integer(0))))
+    fields = lambda v: build_fields(axial, bending, v, v, tab, False)  # noqa: E731
+    return K2.xreplace(values), M2.xreplace(values), [rate[n] for n in part.coords], fields
+
+
+def _damping_field(der, b: FlexibleBeam):
+    """(u_w, v_w) such that the load -rho A (u_w, v_w) on the beam does the virtual work of its
+    mass-proportional and modal dampers (their generalised force -dD/dq'; beta's strain-rate
+    stress is internal, no load): w = M^-1 dD/dq' with M the modal mass of the rate fields
+    linear in q' (those D is written in), and the field sum_j w_j phi_j, the one load in the
+    modes' span weighted by rho A (for alpha: alpha times the relative velocity). None when
+    the beam has neither. In the table's symbols and the global beam parameters; once per
+    derivation."""
+    d, part = b.damping, der.flex[b.name]
+    if not b.damped or not (d.alpha or any(d.zetas(len(part.coords)))):
+        return None
+
+    def field():
+        K2, M2, rates, fields = _rate_fields(b, part, part.table.substitutions())
+        D = damping_dissipation(replace(d, beta=0.0), K2, M2, rates)
+        w = sp.hessian(M2, rates).LUsolve(sp.Matrix([sp.diff(D, r) for r in rates]))
+        wf = fields(dict(zip(part.coords, w)))
+        return wf.u, wf.v
+    return der.once(("damping_field", b.name), field)
 
 
 def _modal_dissipation(b: FlexibleBeam, part: FlexPart, body_expr) -> sp.Expr:
-    """D of a damped modal beam (module doc): the strain-rate and relative kinetic energies of
-    the undeformed beam's elastic rates (the fields linear in the rates: no foreshortening)."""
-    spec, tab = b.model, part.table
-    rate = {n: sp.Symbol(f"{b.name}_{n}_d", real=True) for n in part.coords}
-    rf = build_fields([part.modes[r.coordinate] for r in spec.axial],
-                      [part.modes[r.coordinate] for r in spec.bending], rate, rate, tab, False)
-    K2 = body_expr(tab.integrate(ENERGY_TERMS["axial"].density(rf) + ENERGY_TERMS["bending"].density(rf)))
-    M2 = body_expr(tab.integrate(kinetic_density(rf, FrameMotion(sp.Integer(0)))))
-    return damping_dissipation(b.damping, K2, M2, [rate[n] for n in part.coords])
+    """D of a damped modal beam (module doc) from its rate energies (_rate_fields)."""
+    K2, M2, rates, _ = _rate_fields(b, part, {})
+    return damping_dissipation(b.damping, body_expr(K2), body_expr(M2), rates)
 
 
 def damping_dissipation(d, K2: sp.Expr, M2: sp.Expr, rates: list) -> sp.Expr:
