@@ -26,7 +26,7 @@ add alpha m |r'_k|^2 / 2 (point_mass_dissipation, sympy).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 
 import sympy as sp
@@ -34,6 +34,7 @@ import sympy as sp
 from flexsym.model.exact_numbers import exact
 from flexsym.physics.energy import A, E, I, L, rho
 from flexsym.physics.fe import elastic_element, hermite, le, xi
+from flexsym.physics.integrals import gauss_legendre
 
 _E = sp.Matrix(sp.symbols("x1 y1 dx1 dy1 x2 y2 dx2 dy2", real=True))
 _ED = sp.Matrix([sp.Symbol(str(c) + "_d", real=True) for c in _E])
@@ -50,15 +51,10 @@ def _shape(e):
     return rx, ry
 
 
-def _integral_from(expr, lo):
-    """int_lo^1 expr dxi of a polynomial in xi, term by term (exact)."""
-    poly = sp.Poly(sp.expand(expr), xi)
-    return sp.Add(*[c * (1 - lo**(k + 1)) / (k + 1) for (k,), c in poly.terms()])
-
-
 def _integral01(expr):
-    """int_0^1 expr dxi of a polynomial in xi (exact, as sp.integrate, faster)."""
-    return _integral_from(expr, 0)
+    """int_0^1 expr dxi of a polynomial in xi, term by term (exact, as sp.integrate, faster)."""
+    poly = sp.Poly(sp.expand(expr), xi)
+    return sp.Add(*[c / (k + 1) for (k,), c in poly.terms()])
 
 
 @lru_cache(maxsize=None)
@@ -81,7 +77,6 @@ def generic_dissipation():
     energy (Kelvin-Voigt: eps' and kappa' at V^e's Gauss points, linear in e' through the
     derivatives of fe.elastic_element's eps and kappa); D_alpha = int rho A |r'|^2 / 2 dx."""
     from flexsym.model.variant import QUAD_POINTS
-    from flexsym.physics.integrals import gauss_legendre
 
     _, _, _, _, eps, kappa, _ = generic_element()
     rate = lambda f: sp.Add(*[sp.diff(f, c) * cd for c, cd in zip(_E, _ED)])
@@ -107,6 +102,7 @@ class EfPart:
     qd: dict
     psyms: dict  # global beam parameter symbol -> this body's
     body: object = None  # fedata.BeamBody or None (uniform)
+    memo: dict = field(default_factory=dict, repr=False, compare=False)  # _beyond's loads
 
     @property
     def coords(self) -> list[str]:
@@ -254,7 +250,14 @@ class EfPart:
 
     def _beyond(self, x: float, qdd: dict | None, alpha):
         """(force, moment about the section point, section point, unit tangent) of the loads on
-        the part beyond station x (inertial() says which; qdd None: the damping's alone)."""
+        the part beyond station x (inertial() says which; qdd None: the damping's alone); once
+        per station (N and M share it)."""
+        key = (x, qdd is None, alpha)
+        if key not in self.memo:
+            self.memo[key] = self._loads_beyond(x, qdd, alpha)
+        return self.memo[key]
+
+    def _loads_beyond(self, x: float, qdd: dict | None, alpha):
         at = exact(x) / exact(self.beam.length)
         f, nodes, rates = self.fractions, self.nodes(self.q), self.rates()
         accel = None if qdd is None else (
@@ -276,6 +279,9 @@ class EfPart:
                 ay += A0Y - GY + a[1] + 2 * OM * v[0] + AL * r[0] - OM**2 * r[1]
             return sp.Matrix([-m * ax, -m * ay, -m * ((r[0] - sx) * ay - (r[1] - sy) * ax)])
 
+        # the densities are polynomials of degree <= 6 in xi: 4 Gauss points integrate them
+        # exactly, without expanding the products (sympy took a minute for 64 elements)
+        xg, wg = (tuple(sp.Float(v, 30) for v in vals) for vals in gauss_legendre(4))
         out = sp.zeros(3, 1)
         for e in range(e0, self.n):
             sub = dict(zip(_E, nodes[e] + nodes[e + 1])) | {le: L * (f[e + 1] - f[e])}
@@ -283,7 +289,9 @@ class EfPart:
             v, a = ([c.xreplace(dict(zip(_E, w[e] + w[e + 1]))).xreplace({le: sub[le]})
                      for c in _shape(_E)] if w is not None else None for w in (rates, accel))
             dens = load(rho * A * self.ratios[e][0] * sub[le], r, v, a)
-            out += dens.applyfunc(lambda c: _integral_from(c, lo if e == e0 else 0))
+            start = lo if e == e0 else 0
+            out += sum(((1 - start) * wk * dens.xreplace({xi: start + (1 - start) * xk})
+                        for xk, wk in zip(xg, wg)), sp.zeros(3, 1))
         for k, m in self.point_masses:
             if f[k] > at:
                 out += load(m, nodes[k][:2], rates[k][:2], None if accel is None else accel[k][:2])
