@@ -88,13 +88,14 @@ class Modal(SpatialBeam):
             der.terms.append((b.name, term_name, wrt, Vt, Qk))
             der.V += Vt
             der.Q += Qk
-        keys = der.spatial[b.name]["keys"]
+        field = None
         if b.damped:  # D in the elastic rates (body_kinds.modal.damping_dissipation), Q -= dD/dq'
-            der.dissipation[b.name] = _dissipation(b, P, table, integral, keys)
+            energies = _rate_energies(b, P, table, integral, der.spatial[b.name]["keys"])
+            der.dissipation[b.name] = damping_dissipation(b.damping, *energies)
             der.Q -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
+            field = _damping_field(b, energies, table, der.spatial[b.name]["keys"])
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
-                                   integral=integral, om=om, vf=vf, actual=actual,
-                                   damping=_damping_field(b, P, table, integral, keys))
+                                   integral=integral, om=om, vf=vf, actual=actual, damping=field)
 
     def damping_load(self, der, b) -> tuple[sp.Matrix, sp.Matrix] | None:
         """The alpha and zeta dampers' load (_damping_field) over the beam: its force and its
@@ -298,22 +299,17 @@ def _rate_energies(b: FlexibleBeam, P: dict, table: IntegralTable, integral, key
     return K2, M2, list(rate.values())
 
 
-def _dissipation(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict) -> sp.Expr:
-    """D of a damped spatial modal beam: as in the plane, from its rate energies."""
-    K2, M2, rates = _rate_energies(b, P, table, integral, keys)
-    return damping_dissipation(b.damping, K2, M2, rates)
-
-
-def _damping_field(b: FlexibleBeam, P: dict, table: IntegralTable, integral, keys: dict):
+def _damping_field(b: FlexibleBeam, energies: tuple, table: IntegralTable, keys: dict):
     """The planar _damping_field in 3D (body_kinds/modal.py): w = M^-1 dD/dq' of the alpha and
-    zeta dampers, M the modal mass of the rate fields (translation and the section's spin), and
-    the fields u, v, vz, phi of w: the load -rho A (u_w, v_w, vz_w) and the torque
-    -rho (I_y + I_z) phi_w about the axis do the dampers' virtual work. None without them."""
+    zeta dampers, M the modal mass of the rate fields (translation and the section's spin;
+    energies: _rate_energies), and the fields u, v, vz, phi of w: the load
+    -rho A (u_w, v_w, vz_w) and the torque -rho (I_y + I_z) phi_w about the axis do the
+    dampers' virtual work. None without them."""
     d = b.damping
     names = [n for n, _, _ in beam_coordinates(b)]
-    if not b.damped or not (d.alpha or any(d.zetas(len(names)))):
+    if not (d.alpha or any(d.zetas(len(names)))):
         return None
-    K2, M2, rates = _rate_energies(b, P, table, integral, keys)
+    K2, M2, rates = energies
     D = damping_dissipation(replace(d, beta=0.0), K2, M2, rates)
     w = sp.hessian(M2, rates).LUsolve(sp.Matrix([sp.diff(D, r) for r in rates]))
     wd = dict(zip(names, w))
