@@ -88,20 +88,20 @@ class Modal(SpatialBeam):
             der.terms.append((b.name, term_name, wrt, Vt, Qk))
             der.V += Vt
             der.Q += Qk
-        field = None
+        keys, energies = der.spatial[b.name]["keys"], None
         if b.damped:  # D in the elastic rates (body_kinds.modal.damping_dissipation), Q -= dD/dq'
-            energies = _rate_energies(b, P, table, integral, der.spatial[b.name]["keys"])
+            energies = _rate_energies(b, P, table, integral, keys)
             der.dissipation[b.name] = damping_dissipation(b.damping, *energies)
             der.Q -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
-            field = _damping_field(b, energies, table, der.spatial[b.name]["keys"])
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
-                                   integral=integral, om=om, vf=vf, actual=actual, damping=field)
+                                   integral=integral, om=om, vf=vf, actual=actual, keys=keys,
+                                   energies=energies)
 
     def damping_load(self, der, b) -> tuple[sp.Matrix, sp.Matrix] | None:
         """The alpha and zeta dampers' load (_damping_field) over the beam: its force and its
         moment about the ground origin, ground components (a tree joint's momentum balance)."""
         d = der.spatial[b.name]
-        W = d["damping"]
+        W = _damping(der, b)
         if W is None:
             return None
         P, F, integral = d["P"], d["F"], d["integral"]
@@ -299,6 +299,16 @@ def _rate_energies(b: FlexibleBeam, P: dict, table: IntegralTable, integral, key
     return K2, M2, list(rate.values())
 
 
+def _damping(der, b: FlexibleBeam):
+    """_damping_field of a damped beam, made when an output first reads it, once per derivation
+    (None: undamped, or damped by beta alone)."""
+    d = der.spatial[b.name]
+    if d["energies"] is None:
+        return None
+    return der.once(("damping_field", b.name),
+                    lambda: _damping_field(b, d["energies"], d["table"], d["keys"]))
+
+
 def _damping_field(b: FlexibleBeam, energies: tuple, table: IntegralTable, keys: dict):
     """The planar _damping_field in 3D (body_kinds/modal.py): w = M^-1 dD/dq' of the alpha and
     zeta dampers, M the modal mass of the rate fields (translation and the section's spin;
@@ -417,7 +427,7 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) 
     gl = sp.Matrix(sp.symbols(f"{beam.name}_g_x {beam.name}_g_y {beam.name}_g_z", real=True))
     rd = sp.Matrix([F["u_d"], F["v_d"], F["vz_d"]])
     rdd = sp.Matrix([F["u_dd"], F["v_dd"], F["vz_dd"]])
-    W = d["damping"]  # the alpha and zeta dampers' load, as an acceleration field (and spin)
+    W = _damping(der, beam)  # the alpha and zeta dampers' load, as an acceleration field (and spin)
     if W is not None:
         rdd += sp.Matrix([W["u"], W["v"], W["vz"]])
     acc = a0 + cross(al, r) + cross(om, cross(om, r)) + 2 * cross(om, rd) + rdd
