@@ -46,8 +46,8 @@ def test_double_pendulum_ef_at_defaults_and_modal_within_targets(tmp_path, capsy
     step only below 50 us): ef runs at the scene's step and the modal run (m3) stays within the
     targets. Measured m3 against ef-16 (N and M from equilibrium): phi1 1.1e-6, phi2 9.4e-6,
     w_mid 7.5e-3, N_mid 1.9e-4, M_mid 5.5e-3 (against its curvature moment: N_mid 1.3e-3,
-    M_mid 1.0e-2; `flexsym select` against ef-32's curvature: m2 and m3 at 8.6e-3 to 1.1e-2,
-    M_mid)."""
+    M_mid 1.0e-2; `flexsym select`, against ef-16 from equilibrium at half the step: m2 and m3
+    at 5.8e-3 to 7.4e-3, M_mid and w_mid; against ef-32's curvature it read 8.6e-3 to 1.1e-2)."""
     modal, _ = run(tmp_path, capsys, "double_pendulum")
     ef, _ = run(tmp_path, capsys, "double_pendulum", "--model", "ef")
     errors = {c: history_error(modal, ef, c) for c in ("phi1", "phi2", "w_mid", "N_mid", "M_mid")}

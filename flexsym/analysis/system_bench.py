@@ -109,13 +109,13 @@ def run_rows(built, scene, integrator, dt, repeat=1, options=()):
     return run_built(built, validate(given, Where("api")))
 
 
-def ef_system(system, elements: int):
-    """The system with every flexible body replaced by `elements` ANCF elements, N and M from
-    the elements' strain and curvature: the references of the studies, bench-systems and select
-    (docs/validation/ef-systems.md, their Richardson extrapolation) are measured so; a scene's
-    ef beam gives them from equilibrium (docs/theory/stress-recovery.md)."""
-    ef = replace(customize(builtin("ef"), elements=elements), axial_force="constitutive",
-                 moment="constitutive")
+def ef_system(system, elements: int, recovery: str = "constitutive"):
+    """The system with every flexible body replaced by `elements` ANCF elements, N and M by
+    `recovery`: "constitutive", the elements' strain and curvature (the references of the
+    studies and bench-systems, docs/validation/ef-systems.md, and their Richardson
+    extrapolation, were measured so), or "auto", a scene's ef beam's own (from equilibrium in a
+    planar system, docs/theory/stress-recovery.md; select's reference)."""
+    ef = replace(customize(builtin("ef"), elements=elements), axial_force=recovery, moment=recovery)
     return replace(system, bodies=tuple(replace(b, model=ef) if b.flexible else b
                                         for b in system.bodies))
 

@@ -9,24 +9,15 @@ STEP_FACTORS times the scene's step (those that divide the row interval), with t
 integrator and its settings; a model the mechanism refuses (prestress on a beam held beyond its
 root, exact where the scene reads the momentum, ...) is listed with its reason.
 
-Reference: every flexible body as REFERENCE_ELEMENTS ANCF elements at half the scene's step;
-its own error is estimated by halving its step and its elements, and printed (it should be
-well under TOL). With --exact it must judge errors of 1e-5 to 1e-4 of the peaks, which ef-32
-does not: its section moment comes from the element curvature and converges at order 2 in
-the elements, 6.5e-4 of the peak off on the four-bar's M_mid (and 1.6e-4 at 64 elements, for
-a build of about 4 minutes). (A scene's ef beam now gives N and M from equilibrium, which
-converges at order 4: 4 elements are 1.4e-5 off on the four-bar; select's reference keeps the
-curvature, system_bench.ef_system, until its study is redone with it.) So --exact adds one cheap run, ef on REFERENCE_ELEMENTS / 4 elements (a build of about 20 s),
-and per column (mesh_extrapolated) extrapolates ef-32 by Richardson, R = F32 + (F32 - F16) / 3,
-only where the third mesh shows order 2 (the changes 8->16 and 16->32 falling by a ratio
-within ORDER_2); the other columns keep ef-32. Measured on scenes/four_bar.toml and
-scenes/flex_rocker.toml against ef on 64 elements (at dt/2): M_mid's changes fall by 4.00 and
-4.00 (8-16-32-64 elements), and R(16, 32) is within 6e-8 (four-bar) and 3e-8 (flex_rocker) of
-R(32, 64); N_mid's fall by 14 and 13 (kept: ef-32 is 1.1e-5 and 2.4e-6 off ef-64), the motion
-columns' by 16 (at round-off). The mesh part of the own error is, per column, the change of
-the extrapolation when every mesh is halved (extrapolated columns), the remainder d / (rho - 1)
-of changes falling by the measured rho (faster than order 2), or the last change d (slower);
-the step part is the default's (dt against dt/2). The default (without --exact) is unchanged.
+Reference: every flexible body as ANCF elements at half the scene's step, with a scene's ef
+beam's own recovery of N and M: in a planar mechanism 16 elements from equilibrium (order 4
+in the elements: on scenes/four_bar.toml ef-8 and ef-16 at dt/2 are within 3.0e-6 and 3.3e-6
+of each peak of ef-64 at dt/4, both mostly their step's error; the elements' curvature, which
+converges at order 2, left ef-32 6.5e-4 off in M_mid), in a spatial one 32 (a spatial ef beam's
+section forces come from its strains). Its own error is estimated by doubling its step and,
+apart, halving its elements, and printed (it should be well under TOL); it judges --exact's
+1e-5 to 1e-4 of the peaks as it is (an earlier reference extrapolated the curvature's M in
+the elements).
 
 Error of a candidate: the largest over the scene's columns of max_t |y - y_ef| / max_t |y_ef|.
 Cost: CPU time of the integration (median of --repeat runs); costs within the timing noise
@@ -39,8 +30,6 @@ import json
 import math
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from flexsym.analysis.model_select import NOISE_FLOOR
 from flexsym.analysis.system_bench import column_errors, ef_system, run_rows
 from flexsym.core.errors import SpecError
@@ -52,8 +41,7 @@ from flexsym.toolchain.pipeline import prepare_system, system_folder
 
 MODELS = ("m1", "m2", "m3", "prestress")
 STEP_FACTORS = (1, 2, 4, 5)
-REFERENCE_ELEMENTS = 32  # ef's M from the element curvature: 16 elements are 2e-3 of the peak off
-ORDER_2 = (2 ** 1.8, 2 ** 2.2)  # --exact: ratios of successive mesh changes taken as order 2
+REFERENCE_ELEMENTS = {2: 16, 3: 32}  # by the system's dimension: N and M from equilibrium / strains
 
 
 @dataclass
@@ -126,14 +114,14 @@ def check_selectable(scene) -> None:
                         "must move by guided drivers and clamps alone)")
 
 
-def _reference(scene, columns, log, extrapolate: bool):
-    """(reference rows by column, its own error estimated: the largest over the columns)."""
+def _reference(scene, columns, log):
+    """(reference rows, its own error estimated: the largest over the columns of its changes
+    when its step and, apart, its elements are doubled)."""
     o = scene.options
-    n = REFERENCE_ELEMENTS
-    how = f"; --exact: extrapolated in the elements where {n // 4}, {n // 2} and {n} show order 2" \
-        if extrapolate else ""
-    log(f"reference: ef with {n} elements per beam, {o.integrator} at dt = {o.dt / 2:g} s{how}")
-    ef = ef_system(scene.system, n)
+    n = REFERENCE_ELEMENTS[scene.system.dimension]
+    how = "from equilibrium" if scene.system.dimension == 2 else "from their strains"
+    log(f"reference: ef with {n} elements per beam (N and M {how}), {o.integrator} at dt = {o.dt / 2:g} s")
+    ef = ef_system(scene.system, n, "auto")
     ref = _run(ef, scene, o.dt / 2)
     if not ref.ok:
         raise SpecError(f"{scene.path}: the ef reference stopped ({ref.message}); select needs a "
@@ -141,53 +129,12 @@ def _reference(scene, columns, log, extrapolate: bool):
     outside = system_range_notes(ef, ref)
     if outside:  # no model is derived for this motion: nothing to select
         raise SpecError(f"{scene.path}: the ef reference {outside[0]}")
-    # its own error, estimated by halving the step and the elements
     half_step = _run(ef, scene, o.dt)
-    half_mesh = _run(ef_system(scene.system, n // 2), scene, o.dt / 2)
-    own = [errors(r, ref, columns)[0] if r.ok else math.inf for r in (half_step, half_mesh)]
-    quarter = _run(ef_system(scene.system, n // 4), scene, o.dt / 2) if extrapolate else None
-    if extrapolate and not (half_mesh.ok and quarter.ok):
-        log(f"  not extrapolated: the run with {n // 2 if not half_mesh.ok else n // 4} elements stopped")
-        extrapolate = False
-    if not extrapolate:
-        log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0]:.1e}, elements "
-            f"({n // 2} against {n}) {own[1]:.1e} of the peaks")
-        return ref, max(own)
-    values, mesh, notes = mesh_extrapolated(ref, half_mesh, quarter, columns)
-    log(f"  in the elements (ratio of the changes {n // 4}->{n // 2} and {n // 2}->{n}; 4 is order 2): "
-        + ", ".join(notes))
-    worst = max(columns, key=lambda c: mesh[c])
-    log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0]:.1e}, elements "
-        f"{mesh[worst]:.1e} of the peaks (largest in {worst})")
-    return values, max(own[0], mesh[worst])
-
-
-def mesh_extrapolated(fine, half, quarter, columns):
-    """--exact's reference from ef on n, n/2 and n/4 elements (one step): per column, with the
-    changes d1 = |half - quarter| and d2 = |fine - half| (max over the rows, over the peak) and
-    their ratio rho = d1 / d2,
-    - rho within ORDER_2 (order 2, the curvature's and the axial strain's, shown by the third
-      mesh): fine + (fine - half) / 3, its error estimated as its change when every mesh is
-      halved, |(fine + (fine - half)/3) - (half + (half - quarter)/3)|;
-    - rho above (converging faster): fine, its error the remainder d2 / (rho - 1) of changes
-      that keep falling by rho;
-    - below (slower, or not yet converging): fine, its error d2 (the default's estimate).
-    Returns (rows by column, error by column, a note per column)."""
-    values, error, notes = {}, {}, []
-    for c in columns:
-        f, h, q = fine[c], half[c], quarter[c]
-        peak = float(np.max(np.abs(f))) or 1.0
-        d1, d2 = (float(np.max(np.abs(a - b))) / peak for a, b in ((h, q), (f, h)))
-        rho = d1 / d2 if d2 > 0 else math.inf
-        if ORDER_2[0] <= rho <= ORDER_2[1]:
-            values[c] = f + (f - h) / 3
-            error[c] = float(np.max(np.abs(values[c] - (h + (h - q) / 3)))) / peak
-            notes.append(f"{c} {rho:.2f} extrapolated")
-        else:
-            values[c] = f
-            error[c] = d2 / (rho - 1) if rho > ORDER_2[1] and math.isfinite(rho) else d2
-            notes.append(f"{c} {rho:.3g} kept")
-    return values, error, notes
+    half_mesh = _run(ef_system(scene.system, n // 2, "auto"), scene, o.dt / 2)
+    own = [errors(r, ref, columns) if r.ok else (math.inf, "its run stopped") for r in (half_step, half_mesh)]
+    log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0][0]:.1e} ({own[0][1]}), "
+        f"elements ({n // 2} against {n}) {own[1][0]:.1e} ({own[1][1]}) of the peaks")
+    return ref, max(own[0][0], own[1][0])
 
 
 def exact_modes(system) -> str:
@@ -201,13 +148,12 @@ def exact_modes(system) -> str:
 
 
 def select_system(scene, tol: float, repeat: int = 3, log=print, exact: bool = False):
-    """(candidates, chosen or None, reference's own error); exact: also the built-in `exact`,
-    against the reference extrapolated in the elements (mesh_extrapolated)."""
+    """(candidates, chosen or None, reference's own error); exact: also the built-in `exact`."""
     check_selectable(scene)
     columns = list(scene.columns)
     o = scene.options
     steps = [o.dt * k for k in STEP_FACTORS if o.out_every % k == 0]
-    ref, ref_error = _reference(scene, columns, log, exact)
+    ref, ref_error = _reference(scene, columns, log)
     results = []
     for name in MODELS + (("exact",) if exact else ()):
         try:

@@ -833,8 +833,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_arguments(p, ("repeat",), defaults={"repeat": "3"})
     p.add_argument("--exact", action="store_true", help="also try the exact-kinematics model "
                    "(one-beam scene: strain exact, bending cf1..cfK; mechanism: the built-in exact "
-                   "on every flexible body, its modes from the beam's ends, against ef extrapolated "
-                   "in the elements where a third mesh shows order 2). Opt-in: an exact model takes "
+                   "on every flexible body, its modes from the beam's ends). Opt-in: an exact model takes "
                    "tens of seconds (one beam) to a few minutes (a mechanism) to compile")
     p.set_defaults(func=cmd_select)
 
