@@ -222,9 +222,9 @@ BAD = [  # (what, scene, edits of its text, what the one line says)
       ('v_tip = "v(blade, tip)"', 'v_tip = "R(blade.near, x, y)"')],
      "output 'R(blade.near, x, y)': marker 'blade.near' at x = 3.3 m is not on a node of the ef beam's 4 "
      "elements (every 2.5 m)"),
-    ("mass-proportional damping on a spatial ef beam", FLAP,
-     [('model = "m3"', 'model = { variant = "ef", elements = 4 }\ndamping = { alpha = 0.5 }')],
-     "damping alpha (mass-proportional) of a spatial ef beam is not derived yet: give beta"),
+    ("modal damping ratios on a spatial ef beam", FLAP,
+     [('model = "m3"', 'model = { variant = "ef", elements = 4 }\ndamping = { zeta = 0.02 }')],
+     "damping zeta applies to modal models (a ratio per mode); ef has no modes: give beta (and alpha)"),
     ("a zeta per planar coordinate", FLAP, [('model = "m3"', 'model = "m3"\ndamping = { zeta = [0.01, 0.02, 0.03] }')],
      "damping zeta has 3 values, model 'foreshortening' has 7 coordinates (v_static, v_cp1, v_cp2, vz_static, vz_cp1, "
      "vz_cp2, phi_ff1)"),

@@ -274,14 +274,20 @@ def _rod_element_kernel(der: SystemDerivation) -> list:
 
 
 def _rod_damping_kernel(der: SystemDerivation) -> list:
-    """One rod3d element's Kelvin-Voigt damping force g = dD/de' and its Jacobians (casadi AD),
-    D = c rod3d.strain_rate_energy(e, e'; pe) with c = beta; generated once when a spatial ef
-    beam is damped, called per element by system.c (rod_damping_add: f gets -g)."""
-    if not any(b["beta"] for b in getattr(der, "rod_bodies", ())):
+    """One rod3d element's damping force g = dD/de' and its Jacobians (casadi AD), D = c[0]
+    rod3d.strain_rate_energy (beta, Kelvin-Voigt) + c[1] rod3d.relative_kinetic_energy with the
+    bending inertia factor c[2] (alpha, mass-proportional: its term only when some beam has
+    alpha); generated once when a spatial ef beam is damped, called per element by system.c
+    (rod_damping_add: f gets -g)."""
+    bodies = [b for b in getattr(der, "rod_bodies", ()) if b["beta"] or b["alpha"]]
+    if not bodies:
         return []
-    from flexsym.physics.rod3d import strain_rate_energy
-    e, ed, pe, c = ca.SX.sym("e", 12), ca.SX.sym("ed", 12), ca.SX.sym("pe", 8), ca.SX.sym("c")
-    g = ca.gradient(c * strain_rate_energy(e, ed, pe[0], pe[1:8]), ed)
+    from flexsym.physics.rod3d import relative_kinetic_energy, strain_rate_energy
+    e, ed, pe, c = ca.SX.sym("e", 12), ca.SX.sym("ed", 12), ca.SX.sym("pe", 8), ca.SX.sym("c", 3)
+    D = c[0] * strain_rate_energy(e, ed, pe[0], pe[1:8])
+    if any(b["alpha"] for b in bodies):
+        D += c[1] * relative_kinetic_energy(e, ed, pe[0], pe[1:8], c[2])
+    g = ca.gradient(D, ed)
     return [("rod_damping", "one rod3d element: damping force g = dD/de' and its Jacobians",
              [("e", e), ("ed", ed), ("pe", pe), ("c", c)],
              [("g", g), ("g_e", ca.jacobian(g, e)), ("g_ed", ca.jacobian(g, ed))]),
@@ -410,6 +416,7 @@ def rod_elements(der: SystemDerivation) -> list[dict]:
         out.append({"name": body["name"], "n": n, "kinetic_in_c": body["kinetic_in_c"],
                     "free_c": bool(body.get("free_c")), "fidx": body.get("fidx", []),
                     "rotary": body["pidx"].get("bending_inertia"), "beta": body["beta"],
+                    "alpha": body["alpha"],
                     "params": [body["pidx"][k] for k in ("L", "E", "G", "rho", "A", "Iy", "I", "J")],
                     "elements": [[(i, c_double(a)) for i, a in node[k] + node[k + 1]] for k in range(n)]})
     return out
@@ -678,7 +685,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "rod_bodies": rod_elements(der),
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
         "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
-        "rod_damped": any(b["beta"] for b in getattr(der, "rod_bodies", ())),
+        "rod_damped": any(b["beta"] or b["alpha"] for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
         "kernel_ops": sum(k.total_ops for k in emitted),
         "has_residual": any(k.kernel.name == "residual" for k in emitted), "of_derivation": False,

@@ -767,7 +767,7 @@ class System:
         """What the spatial derivation (physics/spatial.py) supports so far, refused in one line
         before any work: revolute, prismatic, cylindrical, universal, spherical and clamp joints
         in a tree, modal beams (uniform, or from finite-element data with spatial sections) or
-        the geometrically exact ef (rod3d: uniform, damped by beta only)."""
+        the geometrically exact ef (rod3d: uniform)."""
         where = f"system '{self.name}'"
         for j in self.joints:
             if j.kind not in SPATIAL_JOINT_KINDS:
@@ -790,10 +790,6 @@ class System:
                     raise SpecError(f"{where}: body '{b.name}': N and the moments from equilibrium "
                                     "are derived for planar ef beams only (a spatial ef beam's come "
                                     "from its strains; its joints' reactions from equilibrium)")
-                if b.damped and b.damping.alpha:
-                    raise SpecError(f"{where}: body '{b.name}': damping alpha (mass-proportional) of a "
-                                    "spatial ef beam is not derived yet: give beta (strain-rate), as "
-                                    "its modal models take")
                 continue  # the geometrically exact rod (physics/rod3d.py), uniform
             if b.model.strain not in SPATIAL_STRAINS:
                 raise SpecError(f"{where}: body '{b.name}': strain model '{b.model.strain}' is not "

@@ -170,6 +170,14 @@ def strain_rate_energy(e, ed, le, sec):
     return element_functions()["strain_rate"](e, ed, le, sec)
 
 
+def relative_kinetic_energy(e, ed, le, sec, bending_inertia=1.0):
+    """kinetic_energy of the rates e' relative to the frame alone (omega = V = 0): alpha times it
+    is the element's mass-proportional dissipation, as alpha/2 q'^T M q' is a modal beam's. Any
+    expressions for e, e' (element_functions' "kinetic" is built on symbols)."""
+    zero = ca.SX.zeros(3)
+    return element_functions()["kinetic"](e, ed, zero, zero, le, sec, bending_inertia)
+
+
 def _strain_rate_energy(e, ed, le, sec):
     Gamma, K, _ = element_kinematics(e, le)
     cG, cK = _stiffness(sec)

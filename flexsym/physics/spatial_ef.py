@@ -25,7 +25,7 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.model.exact_numbers import exact
-from flexsym.physics.rod3d import element_functions, quaternion, strain_rate_energy
+from flexsym.physics.rod3d import element_functions, quaternion, relative_kinetic_energy, strain_rate_energy
 
 EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
 EF_V = sp.Symbol("V_rod_", real=True)  # the rod elements' elastic energy (casadi)
@@ -79,7 +79,8 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
     free_c = not in_c and not getattr(der, "ef_free_ad", False)
     der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c,
                                free_c=free_c, frame=fr,
-                               beta=float(b.damping.beta) if b.damped else None))  # Kelvin-Voigt
+                               beta=float(b.damping.beta) if b.damped else None,  # Kelvin-Voigt
+                               alpha=float(b.damping.alpha) if b.damped else None))  # mass-proportional
     info["kinetic_in_c"], info["free_c"] = in_c, free_c
     der.terms.append((b.name, "rod3d_elastic", ("node",), None, None))
 
@@ -225,20 +226,25 @@ ROD_D = sp.Symbol("D_rod_", real=True)  # the damped rods' dissipation (casadi)
 
 
 def rod_dissipation_output(der) -> sp.Expr:
-    """The damped spatial ef beams' dissipation D = sum of beta D_e (rod3d.strain_rate_energy
-    per element) in the `dissipation` output (a placeholder, casadi)."""
+    """The damped spatial ef beams' dissipation D = sum over elements of beta
+    rod3d.strain_rate_energy + alpha rod3d.relative_kinetic_energy in the `dissipation` output
+    (a placeholder, casadi)."""
     if ROD_D not in der.casadi_outputs:
         def value(tr, xx):
             total = ca.SX(0.0)
             for body in der.rod_bodies:
-                if not body["beta"]:
+                if not (body["beta"] or body["alpha"]):
                     continue
-                info = der.spatial[body["name"]]
+                info, pidx = der.spatial[body["name"]], body["pidx"]
                 nodes, rates = rod_nodes(info, xx["q"], xx["p"]), rod_nodes(info, xx["qd"], None)
-                le, sec = xx["p"][info["pidx"]["L"]] / info["n"], rod_section(info, xx["p"])
-                total += body["beta"] * sum((strain_rate_energy(ca.vertcat(nodes[k], nodes[k + 1]),
-                                                                ca.vertcat(rates[k], rates[k + 1]), le, sec)
-                                             for k in range(info["n"])), ca.SX(0.0))
+                le, sec = xx["p"][pidx["L"]] / info["n"], rod_section(info, xx["p"])
+                bi = xx["p"][pidx["bending_inertia"]] if "bending_inertia" in pidx else 1.0
+                for k in range(info["n"]):
+                    e, ed = ca.vertcat(nodes[k], nodes[k + 1]), ca.vertcat(rates[k], rates[k + 1])
+                    if body["beta"]:
+                        total += body["beta"] * strain_rate_energy(e, ed, le, sec)
+                    if body["alpha"]:
+                        total += body["alpha"] * relative_kinetic_energy(e, ed, le, sec, bi)
             return total
         der.casadi_outputs[ROD_D] = value
     return ROD_D

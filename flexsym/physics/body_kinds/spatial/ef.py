@@ -65,30 +65,22 @@ class Ef(SpatialBeam):
 
     def momentum(self, der, b, fr) -> sp.Matrix:
         """Angular momentum about the ground origin (ground components), conjugate to rod3d's T
-        (spatial_ef.ef_body): per element rho A le/6 (2 p1 x v1 + p1 x v2 + p2 x v1 + 2 p2 x v2)
-        with p_k = A^T R + r_k and v_k = V + r_k' + omega x r_k (frame components: the linear
-        element's consistent mass, exact), and at each node its lumped rotary inertia (le/2 per
-        element, the root's too) Lambda_k J W_k, J = rho diag(I_y + I_z, b I_y, b I_z),
-        W_k = Lambda_k^T omega + 2 G(e_k) e_k' (the node's quaternion e_k, as a hung body's
-        frame: hang)."""
-        info = der.spatial[b.name]
-        n, node, P, pidx = info["n"], info["node"], info["P"], info["pidx"]
-        le = P["L"] / n
-        bi = der.params[pidx["bending_inertia"]][1] if "bending_inertia" in pidx else 1
-        J = sp.diag(P["rho"] * (P["Iy"] + P["I"]), bi * P["rho"] * P["Iy"], bi * P["rho"] * P["I"])
-        Rl = fr.A.T * fr.R
-        pos = [Rl + node(k) for k in range(n + 1)]
-        vel = [fr.V + der.ddt(node(k)) + cross(fr.omega, node(k)) for k in range(n + 1)]
-        H = sp.zeros(3, 1)
-        for k in range(n):
-            (p1, v1), (p2, v2) = (pos[k], vel[k]), (pos[k + 1], vel[k + 1])
-            H += P["rho"] * P["A"] * le / 6 * (2 * cross(p1, v1) + cross(p1, v2) + cross(p2, v1) + 2 * cross(p2, v2))
-        for k in range(n + 1):
-            e = ef_node_quaternion(der, b.name, k)
-            Lam = euler_rotation(e)
-            W = Lam.T * fr.omega + 2 * euler_G(e) * der.ddt(e)
-            H += (le / 2 if k in (0, n) else le) * Lam * J * W
-        return fr.A * H
+        (spatial_ef.ef_body): _moment_of_rates with the absolute velocities."""
+        return fr.A * _moment_of_rates(der, b, fr, relative=False)[1]
+
+    def damping_load(self, der, b):
+        """The mass-proportional damper's load (alpha; beta's strain-rate stress is internal):
+        D_alpha is rod3d's kinetic energy of the rates relative to the frame, so on a rigid
+        virtual motion of the beam its force -dD/de' does the work of -alpha times the
+        momentum of those rates: the force -alpha int rho A r' dx and its moment (about the
+        ground origin, ground components) -alpha (H of the relative rates)."""
+        alpha = b.damping.alpha if b.damped else 0
+        if not alpha:
+            return None
+        fr = der.spatial["frames"][b.name]
+        force, moment = _moment_of_rates(der, b, fr, relative=True)
+        a = exact(alpha)
+        return -a * fr.A * force, -a * fr.A * moment
 
     def axis_point(self, der, body: str, x: float) -> sp.Matrix:
         return ef_at(der, body, x)
@@ -105,6 +97,35 @@ class Ef(SpatialBeam):
     def section(self, der, beam, x: float, fn: str, loads_beyond) -> sp.Expr:
         """rod3d's own section forces (constitutive, shear included)."""
         return ef_section(der, beam, x, fn)
+
+
+def _moment_of_rates(der, b, fr, relative: bool) -> tuple[sp.Matrix, sp.Matrix]:
+    """(linear momentum, angular momentum about the ground origin), frame components, of a
+    spatial ef beam's velocities v_k = r_k' (+ V + omega x r_k unless relative) and its
+    sections' angular velocities W_k = 2 G(e_k) e_k' (+ Lambda_k^T omega), positions
+    p_k = A^T R + r_k: per element rho A le/2 (v1 + v2) and rho A le/6 (2 p1 x v1 + p1 x v2 +
+    p2 x v1 + 2 p2 x v2) (the linear element's consistent mass, exact), and at each node its
+    lumped rotary inertia (le/2 per element, the root's too) Lambda_k J W_k,
+    J = rho diag(I_y + I_z, b I_y, b I_z), as rod3d's T (spatial_ef.ef_body)."""
+    info = der.spatial[b.name]
+    n, node, P, pidx = info["n"], info["node"], info["P"], info["pidx"]
+    le = P["L"] / n
+    bi = der.params[pidx["bending_inertia"]][1] if "bending_inertia" in pidx else 1
+    J = sp.diag(P["rho"] * (P["Iy"] + P["I"]), bi * P["rho"] * P["Iy"], bi * P["rho"] * P["I"])
+    Rl = fr.A.T * fr.R
+    pos = [Rl + node(k) for k in range(n + 1)]
+    vel = [der.ddt(node(k)) + (sp.zeros(3, 1) if relative else fr.V + cross(fr.omega, node(k))) for k in range(n + 1)]
+    lin, H = sp.zeros(3, 1), sp.zeros(3, 1)
+    for k in range(n):
+        (p1, v1), (p2, v2) = (pos[k], vel[k]), (pos[k + 1], vel[k + 1])
+        lin += P["rho"] * P["A"] * le / 2 * (v1 + v2)
+        H += P["rho"] * P["A"] * le / 6 * (2 * cross(p1, v1) + cross(p1, v2) + cross(p2, v1) + 2 * cross(p2, v2))
+    for k in range(n + 1):
+        e = ef_node_quaternion(der, b.name, k)
+        Lam = euler_rotation(e)
+        W = 2 * euler_G(e) * der.ddt(e) + (sp.zeros(3, 1) if relative else Lam.T * fr.omega)
+        H += (le / 2 if k in (0, n) else le) * Lam * J * W
+    return lin, H
 
 
 KIND = Ef()
