@@ -108,7 +108,7 @@ def system_kernels_agree():
             M_, f_ = equations_of_motion(T, sp.zeros(len(der.q), 1), der.q, der.qd,
                                          [g.symbols for g in der.guided])
             M, f, y = M + M_, f + f_, y.xreplace({EF_T: T})
-        # time derivatives that casadi takes (spatial._along_motion): here sympy does
+        # time derivatives that casadi takes (body_kinds.spatial.base.along_motion): here sympy does
         y = y.xreplace({s_: der.ddt(e, k) for s_, (e, k) in getattr(der, "along", {}).items()})
         lib = ctypes.CDLL(str(built.library))
         rnd = np.random.default_rng(seed)

@@ -65,13 +65,9 @@ def test_four_bar_mid_resultants_converge_at_order_four(four_bar_runs):
     assert _rel(coarse["M_mid"], fine["M_mid"]) <= 1e-4
 
 
-def test_equilibrium_is_refused_where_it_is_not_derived():
-    """A spatial ef beam (its resultants come from its strains) and torsion modes on ef: one
-    line each, before any work."""
+def test_torsion_modes_on_ef_are_refused():
+    """Torsion modes on ef: one line, before any work (a spatial ef beam twists through its
+    nodes' rotations; its N and moments from equilibrium: tests/test_spatial_ef_equilibrium.py)."""
     planar = _scene("four_bar", {"elements": 4, "torsion": []})
     with pytest.raises(SpecError, match="torsion to modal variants only"):
         system_from_dict(planar, name="four_bar")
-    with open(ROOT / "scenes" / "spatial_slider_crank.toml", "rb") as f:
-        spatial = with_model(tomllib.load(f), {"variant": "ef", "elements": 4, "moment": "equilibrium"})
-    with pytest.raises(SpecError, match="derived for planar ef beams only"):
-        system_from_dict(spatial, name="spatial_slider_crank")

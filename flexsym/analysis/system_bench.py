@@ -110,11 +110,11 @@ def run_rows(built, scene, integrator, dt, repeat=1, options=()):
 
 
 def ef_system(system, elements: int, recovery: str = "constitutive"):
-    """The system with every flexible body replaced by `elements` ANCF elements, N and M by
+    """The system with every flexible body replaced by `elements` ef elements, N and M by
     `recovery`: "constitutive", the elements' strain and curvature (the references of the
     studies and bench-systems, docs/validation/ef-systems.md, and their Richardson
-    extrapolation, were measured so), or "auto", a scene's ef beam's own (from equilibrium in a
-    planar system, docs/theory/stress-recovery.md; select's reference)."""
+    extrapolation, were measured so), "equilibrium" (select's reference,
+    docs/theory/stress-recovery.md), or "auto", a scene's ef beam's own."""
     ef = replace(customize(builtin("ef"), elements=elements), axial_force=recovery, moment=recovery)
     return replace(system, bodies=tuple(replace(b, model=ef) if b.flexible else b
                                         for b in system.bodies))

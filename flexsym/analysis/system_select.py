@@ -9,15 +9,16 @@ STEP_FACTORS times the scene's step (those that divide the row interval), with t
 integrator and its settings; a model the mechanism refuses (prestress on a beam held beyond its
 root, exact where the scene reads the momentum, ...) is listed with its reason.
 
-Reference: every flexible body as ANCF elements at half the scene's step, with a scene's ef
-beam's own recovery of N and M: in a planar mechanism 16 elements from equilibrium (order 4
+Reference: every flexible body as `ef` elements at half the scene's step, N and M from the
+equilibrium of the part beyond the station: in a planar mechanism 16 ANCF elements (order 4
 in the elements: on scenes/four_bar.toml ef-8 and ef-16 at dt/2 are within 3.0e-6 and 3.3e-6
 of each peak of ef-64 at dt/4, both mostly their step's error; the elements' curvature, which
-converges at order 2, left ef-32 6.5e-4 off in M_mid), in a spatial one 32 (a spatial ef beam's
-section forces come from its strains). Its own error is estimated by doubling its step and,
-apart, halving its elements, and printed (it should be well under TOL); it judges --exact's
-1e-5 to 1e-4 of the peaks as it is (an earlier reference extrapolated the curvature's M in
-the elements).
+converges at order 2, left ef-32 6.5e-4 off in M_mid), in a spatial one 32 rod elements
+(order 2 with the motion: on scenes/flap.toml 9.4e-5 of the peaks off ef-64 in v_tip, 6.2e-5
+in T_A, where the elements' strains left T_A 6.1e-3 off). Its own error is estimated
+by doubling its step and, apart, halving its elements, and printed (it should be well under
+TOL); it judges --exact's 1e-5 to 1e-4 of the peaks as it is (an earlier reference
+extrapolated the curvature's M in the elements).
 
 Error of a candidate: the largest over the scene's columns of max_t |y - y_ef| / max_t |y_ef|.
 Cost: CPU time of the integration (median of --repeat runs); costs within the timing noise
@@ -41,7 +42,7 @@ from flexsym.toolchain.pipeline import prepare_system, system_folder
 
 MODELS = ("m1", "m2", "m3", "prestress")
 STEP_FACTORS = (1, 2, 4, 5)
-REFERENCE_ELEMENTS = {2: 16, 3: 32}  # by the system's dimension: N and M from equilibrium / strains
+REFERENCE_ELEMENTS = {2: 16, 3: 32}  # by the system's dimension (ANCF / rod elements), N and M from equilibrium
 
 
 @dataclass
@@ -119,9 +120,9 @@ def _reference(scene, columns, log):
     when its step and, apart, its elements are doubled)."""
     o = scene.options
     n = REFERENCE_ELEMENTS[scene.system.dimension]
-    how = "from equilibrium" if scene.system.dimension == 2 else "from their strains"
-    log(f"reference: ef with {n} elements per beam (N and M {how}), {o.integrator} at dt = {o.dt / 2:g} s")
-    ef = ef_system(scene.system, n, "auto")
+    log(f"reference: ef with {n} elements per beam (N and M from equilibrium), {o.integrator} at "
+        f"dt = {o.dt / 2:g} s")
+    ef = ef_system(scene.system, n, "equilibrium")
     ref = _run(ef, scene, o.dt / 2)
     if not ref.ok:
         raise SpecError(f"{scene.path}: the ef reference stopped ({ref.message}); select needs a "
@@ -130,7 +131,7 @@ def _reference(scene, columns, log):
     if outside:  # no model is derived for this motion: nothing to select
         raise SpecError(f"{scene.path}: the ef reference {outside[0]}")
     half_step = _run(ef, scene, o.dt)
-    half_mesh = _run(ef_system(scene.system, n // 2, "auto"), scene, o.dt / 2)
+    half_mesh = _run(ef_system(scene.system, n // 2, "equilibrium"), scene, o.dt / 2)
     own = [errors(r, ref, columns) if r.ok else (math.inf, "its run stopped") for r in (half_step, half_mesh)]
     log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0][0]:.1e} ({own[0][1]}), "
         f"elements ({n // 2} against {n}) {own[1][0]:.1e} ({own[1][1]}) of the peaks")

@@ -786,10 +786,6 @@ class System:
                     raise SpecError(f"{where}: body '{b.name}': the spatial ef is a uniform rod; "
                                     "this body's sections vary or carry point masses (run a modal "
                                     "model, or give the uniform section)")
-                if "equilibrium" in (b.model.axial_force, b.model.moment):
-                    raise SpecError(f"{where}: body '{b.name}': N and the moments from equilibrium "
-                                    "are derived for planar ef beams only (a spatial ef beam's come "
-                                    "from its strains; its joints' reactions from equilibrium)")
                 continue  # the geometrically exact rod (physics/rod3d.py), uniform
             if b.model.strain not in SPATIAL_STRAINS:
                 raise SpecError(f"{where}: body '{b.name}': strain model '{b.model.strain}' is not "

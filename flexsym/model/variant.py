@@ -155,10 +155,10 @@ class FESpec:
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), compare=False)
     body: object = None  # fedata.BeamBody: per-element sections and point masses
-    # N and M of a planar ef beam in a system: the equilibrium of the part of the beam beyond
-    # the station ("auto", as a modal beam's in a mechanism, or "equilibrium") or the elements'
-    # own strain and curvature ("constitutive"); a spatial ef beam's and the one-beam ef's are
-    # their elements' own
+    # N and M of an ef beam in a system: the equilibrium of the part of the beam beyond the
+    # station ("equilibrium"; "auto" in a planar system, as a modal beam's in a mechanism) or
+    # the elements' own strain and curvature ("constitutive"; "auto" in a spatial one); the
+    # one-beam ef's are its elements' own
     axial_force: str = "auto"
     moment: str = "auto"
     kind = "fe"

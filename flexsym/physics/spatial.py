@@ -71,7 +71,6 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 import numpy as np
 import sympy as sp
 
@@ -86,7 +85,7 @@ from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guide
                                       joint_coordinate, motor_torque, spring_force_on_a, start_of,
                                       violation)
 from flexsym.physics.body_kinds.spatial import kind_of
-from flexsym.physics.body_kinds.spatial.base import (Frame, Motion, cross, euler_G, euler_rotation,
+from flexsym.physics.body_kinds.spatial.base import (Frame, Motion, along_motion, cross, euler_G, euler_rotation,
                                                      rotation, vec)
 from flexsym.physics.lagrange import equations_of_motion
 from flexsym.physics.spatial_ef import ef_elastic_output, ef_kinetic_output, rod_dissipation_output
@@ -151,7 +150,7 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
     der.ef_free_ad = ef_free_ad
     der.spatial = {}
     der.rod_bodies, der.casadi_T, der.casadi_outputs = [], [], {}  # spatial ef beams (casadi)
-    der.along = {}  # placeholder -> (expression, order) of _along_motion
+    der.along = {}  # placeholder -> (expression, order) of along_motion
     der.casadi_T_out = []
 
     for b in system.bodies:  # what the kinds build once (a body may hang from a beam's marker)
@@ -501,30 +500,8 @@ def _joint_reaction(der, joint) -> tuple[sp.Matrix, sp.Matrix]:
             add(Fc, _marker_point(der, ref))
             Mo += tc
     P = _marker_point(der, joint.child)
-    Fr = _along_motion(der, S, 2) - F
-    return Fr, _along_motion(der, _momentum(der, bodies), 1) - Mo - cross(P, Fr)
-
-
-def _along_motion(der, X: sp.Matrix, order: int) -> sp.Matrix:
-    """d^order X / dt^order along the motion, as placeholders whose values casadi computes:
-    forward AD of X's casadi translation along (q, q', d) -> (q', q'', d') (the drive's d' =
-    [1, theta', theta'', 0]: X holds no theta''). Its cost grows with X's size; sympy's
-    derivative of a beam's momentum by each coordinate in turn took 9-16 s on a 4-element arm
-    and 11 minutes on 16 elements (spatial_arm's slew reaction)."""
-    out = []
-    for e in X:
-        sym = sp.Symbol(f"ddt{order}_{len(der.casadi_outputs)}_", real=True)
-
-        def value(tr, xx, e=e):
-            z, zd = ca.vertcat(xx["q"], xx["qd"], xx["d"]), ca.vertcat(xx["qd"], xx["qdd"], xx["ddot"])
-            v = tr(e)
-            for _ in range(order):
-                v = ca.jtimes(v, z, zd)
-            return v
-        der.casadi_outputs[sym] = value
-        der.along[sym] = (e, order)  # what it stands for: der.ddt(e, order) (tests compare)
-        out.append(sym)
-    return sp.Matrix(out)
+    Fr = along_motion(der, S, 2) - F
+    return Fr, along_motion(der, _momentum(der, bodies), 1) - Mo - cross(P, Fr)
 
 
 def _marker_point(der, ref: str) -> sp.Matrix:

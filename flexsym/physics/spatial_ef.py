@@ -25,7 +25,8 @@ import sympy as sp
 
 from flexsym.core.errors import SpecError
 from flexsym.model.exact_numbers import exact
-from flexsym.physics.rod3d import element_functions, quaternion, relative_kinetic_energy, strain_rate_energy
+from flexsym.physics.rod3d import (element_functions, qconj, qlog, qmul, quaternion, relative_kinetic_energy,
+                                   strain_rate_energy)
 
 EF_NODE = ("ux", "uy", "uz", "px", "py", "pz")
 EF_V = sp.Symbol("V_rod_", real=True)  # the rod elements' elastic energy (casadi)
@@ -167,6 +168,31 @@ def ef_node_quaternion(der, body: str, k: int) -> sp.Matrix:
             der.ef_start = {}
         der.ef_start |= {e: sp.Integer(int(c == 0)) for c, e in enumerate(quats[k])}
     return quats[k]
+
+
+def ef_station_quaternion(der, body: str, x: float) -> sp.Matrix:
+    """The unit quaternion of the section at station x (rotation relative to the frame): at a
+    node its own (ef_node_quaternion), between nodes k and k+1 the elements' interpolation of
+    the rotations, e_k (x) exp(t log(e_k* (x) e_k+1)) at t = (x - x_k) / l_e (rod3d's
+    Crisfield-Jelenic interpolation), as output placeholders given their casadi values by
+    sysgen (an output only projects on it: no time derivative)."""
+    info = der.spatial[body]
+    n = info["n"]
+    s_ = exact(x) / exact(info["length"]) * n
+    if s_ == int(s_):
+        return ef_node_quaternion(der, body, int(s_))
+    k, t = int(s_), float(s_ - int(s_))
+    out = []
+    for c in range(4):
+        sym = sp.Symbol(f"rod_{body}_q{c}_{len(der.casadi_outputs)}", real=True)
+
+        def value(tr, xx, info=info, k=k, t=t, c=c):
+            e1, e2 = (quaternion(ca.vertcat(*[xx["q"][i] for i in info["idx"][j][3:6]]))
+                      if j > 0 else ca.DM([1, 0, 0, 0]) for j in (k, k + 1))
+            return qmul(e1, quaternion(t * qlog(qmul(qconj(e1), e2))))[c]
+        der.casadi_outputs[sym] = value
+        out.append(sym)
+    return sp.Matrix(out)
 
 
 def ef_section(der, beam, x: float, fn: str) -> sp.Expr:

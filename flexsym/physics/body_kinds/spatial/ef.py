@@ -10,9 +10,10 @@ import sympy as sp
 from flexsym.model.exact_numbers import exact
 from flexsym.physics.assemble import Coordinate
 from flexsym.physics.body_kinds import ef as planar
-from flexsym.physics.body_kinds.spatial.base import Frame, SpatialBeam, cross, euler_G, euler_rotation
+from flexsym.physics.body_kinds.spatial.base import (Frame, SpatialBeam, along_motion, cross, euler_G,
+                                                     euler_rotation)
 from flexsym.physics.spatial_ef import (ef_at, ef_body, ef_coordinates, ef_node_quaternion, ef_part,
-                                        ef_quaternion, ef_section)
+                                        ef_quaternion, ef_section, ef_station_quaternion)
 from flexsym.physics.validity import Prefixed, strain_gauge
 
 
@@ -95,8 +96,15 @@ class Ef(SpatialBeam):
         return r[k] - (exact(x) / exact(beam.length) * der.spatial[beam.name]["P"]["L"] if k == 0 else 0)
 
     def section(self, der, beam, x: float, fn: str, loads_beyond) -> sp.Expr:
-        """rod3d's own section forces (constitutive, shear included)."""
-        return ef_section(der, beam, x, fn)
+        """rod3d's own section forces (constitutive, shear included), or with `moment` /
+        `axial_force` = "equilibrium" (Q and the moments / N) those of the part beyond x
+        (_equilibrium), in the deformed section's axes."""
+        source = beam.model.axial_force if fn == "N" else beam.model.moment
+        if source != "equilibrium":
+            return ef_section(der, beam, x, fn)
+        S, M = _equilibrium(der, beam, x, loads_beyond)
+        turn = euler_rotation(ef_station_quaternion(der, beam.name, x)).T  # frame -> section
+        return (turn * (S if fn in ("N", "Qy", "Qz") else M))[("N", "Qy", "Qz", "Mx", "My", "Mz").index(fn) % 3]
 
 
 def _moment_of_rates(der, b, fr, relative: bool) -> tuple[sp.Matrix, sp.Matrix]:
@@ -126,6 +134,64 @@ def _moment_of_rates(der, b, fr, relative: bool) -> tuple[sp.Matrix, sp.Matrix]:
         W = 2 * euler_G(e) * der.ddt(e) + (sp.zeros(3, 1) if relative else Lam.T * fr.omega)
         H += (le / 2 if k in (0, n) else le) * Lam * J * W
     return lin, H
+
+
+def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
+    """(S, M): the force and the moment about the section's axis point of every load on the part
+    of the beam beyond station x, inertia included (frame components), once per station. Per
+    element the part beyond x of rho A (g - a - alpha r') with the linear element's position r,
+    rate r' and acceleration a = a_0 + alpha_f x r + omega x (omega x r) + 2 omega x r' + r''
+    (each linear in the element: 2 Gauss points are exact for the moments); at each node minus
+    the rate of its sections' lumped spin momentum h_k = Lambda_k J W_k (d/dt along the motion
+    plus omega x h_k) and alpha Lambda_k J W_rel,k, weighted by the part of its tributary
+    length (l_e/2 each side, as rod3d's T lumps it) beyond x; then the loads on its markers
+    beyond x (loads_beyond). At the root this is the whole beam's momentum balance, which a
+    tree joint's reaction takes by another path (_moment_of_rates, along_motion)."""
+    memo = der.spatial[b.name].setdefault("equilibrium", {})
+    if x in memo:
+        return memo[x]
+    info = der.spatial[b.name]
+    n, node, P, pidx = info["n"], info["node"], info["P"], info["pidx"]
+    fr = der.spatial["frames"][b.name]
+    L, rho, A = P["L"], P["rho"], P["A"]
+    le = L / n
+    om = fr.omega
+    al, a0 = der.ddt(om), der.ddt(fr.V) + cross(om, fr.V)
+    alpha = exact(b.damping.alpha) if b.damped and b.damping.alpha else 0
+    s_ = exact(x) / exact(b.length) * n  # the station in element lengths
+    section = ef_at(der, b.name, x)
+    pos = [node(k) for k in range(n + 1)]
+    vel = [der.ddt(r) for r in pos]
+    acc = [der.ddt(v) for v in vel]
+    S, M = sp.zeros(3, 1), sp.zeros(3, 1)
+    gauss = (sp.Rational(1, 2) - sp.sqrt(3) / 6, sp.Rational(1, 2) + sp.sqrt(3) / 6)
+    for k in range(n):
+        t0 = max(sp.Integer(0), s_ - k)
+        if t0 >= 1:
+            continue
+        for g in gauss:  # t in [t0, 1], each point's weight (1 - t0) / 2 of the element
+            t = t0 + (1 - t0) * g
+            r = (1 - t) * pos[k] + t * pos[k + 1]
+            v = (1 - t) * vel[k] + t * vel[k + 1]
+            a = a0 + cross(al, r) + cross(om, cross(om, r)) + 2 * cross(om, v) + (1 - t) * acc[k] + t * acc[k + 1]
+            f = rho * A * le * (1 - t0) / 2 * (fr.g - a - alpha * v)
+            S += f
+            M += cross(r - section, f)
+    bi = der.params[pidx["bending_inertia"]][1] if "bending_inertia" in pidx else 1
+    J = sp.diag(rho * (P["Iy"] + P["I"]), bi * rho * P["Iy"], bi * rho * P["I"])
+    for k in range(n + 1):
+        lo, hi = max(sp.Rational(2 * k - 1, 2), 0, s_), min(sp.Rational(2 * k + 1, 2), n)
+        if hi <= lo:
+            continue
+        e = ef_node_quaternion(der, b.name, k)
+        Lam = euler_rotation(e)
+        W_rel = 2 * euler_G(e) * der.ddt(e)
+        h = Lam * J * (Lam.T * om + W_rel)
+        M -= (hi - lo) * le * (along_motion(der, h, 1) + cross(om, h) + alpha * Lam * J * W_rel)
+    S = sp.Matrix([loads_beyond(der, b, x, "S" + c, S[i], section) for i, c in enumerate("xyz")])
+    M = sp.Matrix([loads_beyond(der, b, x, "M" + c, M[i], section) for i, c in enumerate("xyz")])
+    memo[x] = (S, M)
+    return memo[x]
 
 
 KIND = Ef()
