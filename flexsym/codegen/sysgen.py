@@ -279,7 +279,7 @@ def _rod_damping_kernel(der: SystemDerivation) -> list:
     bending inertia factor c[2] (alpha, mass-proportional: its term only when some beam has
     alpha); generated once when a spatial ef beam is damped, called per element by system.c
     (rod_damping_add: f gets -g)."""
-    bodies = [b for b in getattr(der, "rod_bodies", ()) if b["beta"] or b["alpha"]]
+    bodies = [b for b in getattr(der, "rod_bodies", ()) if b["damped"]]
     if not bodies:
         return []
     from flexsym.physics.rod3d import relative_kinetic_energy, strain_rate_energy
@@ -416,7 +416,7 @@ def rod_elements(der: SystemDerivation) -> list[dict]:
         out.append({"name": body["name"], "n": n, "kinetic_in_c": body["kinetic_in_c"],
                     "free_c": bool(body.get("free_c")), "fidx": body.get("fidx", []),
                     "rotary": body["pidx"].get("bending_inertia"), "beta": body["beta"],
-                    "alpha": body["alpha"],
+                    "alpha": body["alpha"], "damped": body["damped"],
                     "params": [body["pidx"][k] for k in ("L", "E", "G", "rho", "A", "Iy", "I", "J")],
                     "elements": [[(i, c_double(a)) for i, a in node[k] + node[k + 1]] for k in range(n)]})
     return out
@@ -685,7 +685,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "rod_bodies": rod_elements(der),
         "rod_kinetic": any(b["kinetic_in_c"] for b in getattr(der, "rod_bodies", ())),
         "rod_free": any(b.get("free_c") for b in getattr(der, "rod_bodies", ())),
-        "rod_damped": any(b["beta"] or b["alpha"] for b in getattr(der, "rod_bodies", ())),
+        "rod_damped": any(b["damped"] for b in getattr(der, "rod_bodies", ())),
         "static_start": system.start == "static",
         "kernel_ops": sum(k.total_ops for k in emitted),
         "has_residual": any(k.kernel.name == "residual" for k in emitted), "of_derivation": False,

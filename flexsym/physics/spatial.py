@@ -593,7 +593,7 @@ def _output(der, quantity: str) -> sp.Expr:
     if fn == "violation":
         return violation(der)
     if fn == "dissipation":  # 2 D: the power of the damped beams (an ef beam's: casadi)
-        damped_rods = any(r["beta"] or r["alpha"] for r in getattr(der, "rod_bodies", ()))
+        damped_rods = any(r["damped"] for r in getattr(der, "rod_bodies", ()))
         return 2 * (sp.Add(*der.dissipation.values()) + (rod_dissipation_output(der) if damped_rods else 0))
     if fn in ("Hx", "Hy", "Hz"):  # modal beams only (System.validate)
         return _momentum(der)["xyz".index(fn[1])]

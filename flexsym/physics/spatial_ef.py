@@ -78,10 +78,11 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
     # element kernels called per element in C as well (sysgen._rod_free_kernels), unless the
     # derivation asks for the whole-system AD path (der.ef_free_ad: a check of the C path)
     free_c = not in_c and not getattr(der, "ef_free_ad", False)
+    # Kelvin-Voigt (strain rate) and mass-proportional (rates relative to the frame) damping
+    beta, alpha = (float(getattr(b.damping, k)) if b.damped else 0.0 for k in ("beta", "alpha"))
     der.rod_bodies.append(dict(name=b.name, n=n, pidx=pidx, idx=idx, kinetic_in_c=in_c,
                                free_c=free_c, frame=fr,
-                               beta=float(b.damping.beta) if b.damped else None,  # Kelvin-Voigt
-                               alpha=float(b.damping.alpha) if b.damped else None))  # mass-proportional
+                               beta=beta, alpha=alpha, damped=bool(beta or alpha)))
     info["kinetic_in_c"], info["free_c"] = in_c, free_c
     der.terms.append((b.name, "rod3d_elastic", ("node",), None, None))
 
@@ -91,7 +92,7 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
         V = ca.vertcat(*[tr(e) for e in fr.V])
         nodes, rates = rod_nodes(info, x["q"], x["p"]), rod_nodes(info, x["qd"], None)
         le, sec = x["p"][pidx["L"]] / n, rod_section(info, x["p"])
-        bi = x["p"][pidx["bending_inertia"]] if "bending_inertia" in pidx else 1.0
+        bi = rod_bending_inertia(info, x["p"])
         return sum((f(ca.vertcat(nodes[k], nodes[k + 1]), ca.vertcat(rates[k], rates[k + 1]),
                       omega, V, le, sec, bi) for k in range(n)), ca.SX(0.0))
     if in_c or free_c:
@@ -106,6 +107,12 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
 def rod_section(info, p):
     """sec = (E, G, rho, A, Iy, Iz, J) of rod3d from the run-time parameters."""
     return ca.vertcat(*[p[info["pidx"][k]] for k in ("E", "G", "rho", "A", "Iy", "I", "J")])
+
+
+def rod_bending_inertia(info, p):
+    """rod3d's bending_inertia factor from the run-time parameters (a free frame's beam has it,
+    spatial_ef.ef_body; else 1)."""
+    return p[info["pidx"]["bending_inertia"]] if "bending_inertia" in info["pidx"] else 1.0
 
 
 def rod_nodes(info, v, p):
@@ -259,12 +266,12 @@ def rod_dissipation_output(der) -> sp.Expr:
         def value(tr, xx):
             total = ca.SX(0.0)
             for body in der.rod_bodies:
-                if not (body["beta"] or body["alpha"]):
+                if not body["damped"]:
                     continue
-                info, pidx = der.spatial[body["name"]], body["pidx"]
+                info = der.spatial[body["name"]]
                 nodes, rates = rod_nodes(info, xx["q"], xx["p"]), rod_nodes(info, xx["qd"], None)
-                le, sec = xx["p"][pidx["L"]] / info["n"], rod_section(info, xx["p"])
-                bi = xx["p"][pidx["bending_inertia"]] if "bending_inertia" in pidx else 1.0
+                le, sec = xx["p"][info["pidx"]["L"]] / info["n"], rod_section(info, xx["p"])
+                bi = rod_bending_inertia(info, xx["p"])
                 for k in range(info["n"]):
                     e, ed = ca.vertcat(nodes[k], nodes[k + 1]), ca.vertcat(rates[k], rates[k + 1])
                     if body["beta"]:

@@ -116,10 +116,9 @@ def _moment_of_rates(der, b, fr, relative: bool) -> tuple[sp.Matrix, sp.Matrix]:
     lumped rotary inertia (le/2 per element, the root's too) Lambda_k J W_k,
     J = rho diag(I_y + I_z, b I_y, b I_z), as rod3d's T (spatial_ef.ef_body)."""
     info = der.spatial[b.name]
-    n, node, P, pidx = info["n"], info["node"], info["P"], info["pidx"]
+    n, node, P = info["n"], info["node"], info["P"]
     le = P["L"] / n
-    bi = der.params[pidx["bending_inertia"]][1] if "bending_inertia" in pidx else 1
-    J = sp.diag(P["rho"] * (P["Iy"] + P["I"]), bi * P["rho"] * P["Iy"], bi * P["rho"] * P["I"])
+    J = _rotary_inertia(der, info)
     Rl = fr.A.T * fr.R
     pos = [Rl + node(k) for k in range(n + 1)]
     vel = [der.ddt(node(k)) + (sp.zeros(3, 1) if relative else fr.V + cross(fr.omega, node(k))) for k in range(n + 1)]
@@ -129,11 +128,26 @@ def _moment_of_rates(der, b, fr, relative: bool) -> tuple[sp.Matrix, sp.Matrix]:
         lin += P["rho"] * P["A"] * le / 2 * (v1 + v2)
         H += P["rho"] * P["A"] * le / 6 * (2 * cross(p1, v1) + cross(p1, v2) + cross(p2, v1) + 2 * cross(p2, v2))
     for k in range(n + 1):
-        e = ef_node_quaternion(der, b.name, k)
-        Lam = euler_rotation(e)
-        W = 2 * euler_G(e) * der.ddt(e) + (sp.zeros(3, 1) if relative else Lam.T * fr.omega)
+        Lam, W_rel = _node_rotation(der, b.name, k)
+        W = W_rel + (sp.zeros(3, 1) if relative else Lam.T * fr.omega)
         H += (le / 2 if k in (0, n) else le) * Lam * J * W
     return lin, H
+
+
+def _rotary_inertia(der, info) -> sp.Matrix:
+    """J = rho diag(I_y + I_z, b I_y, b I_z) per unit length, the sections' rotary inertia as
+    rod3d's T lumps it (b: its bending_inertia factor, a run-time parameter of a free frame's
+    beam, else 1)."""
+    P, pidx = info["P"], info["pidx"]
+    bi = der.params[pidx["bending_inertia"]][1] if "bending_inertia" in pidx else 1
+    return sp.diag(P["rho"] * (P["Iy"] + P["I"]), bi * P["rho"] * P["Iy"], bi * P["rho"] * P["I"])
+
+
+def _node_rotation(der, body: str, k: int) -> tuple[sp.Matrix, sp.Matrix]:
+    """(Lambda_k, W_rel,k): node k's section rotation relative to the frame and its angular
+    velocity relative to the frame in the section's axes, 2 G(e_k) e_k' (e_k its quaternion)."""
+    e = ef_node_quaternion(der, body, k)
+    return euler_rotation(e), 2 * euler_G(e) * der.ddt(e)
 
 
 def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
@@ -151,7 +165,7 @@ def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
     if x in memo:
         return memo[x]
     info = der.spatial[b.name]
-    n, node, P, pidx = info["n"], info["node"], info["P"], info["pidx"]
+    n, node, P = info["n"], info["node"], info["P"]
     fr = der.spatial["frames"][b.name]
     L, rho, A = P["L"], P["rho"], P["A"]
     le = L / n
@@ -177,15 +191,12 @@ def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
             f = rho * A * le * (1 - t0) / 2 * (fr.g - a - alpha * v)
             S += f
             M += cross(r - section, f)
-    bi = der.params[pidx["bending_inertia"]][1] if "bending_inertia" in pidx else 1
-    J = sp.diag(rho * (P["Iy"] + P["I"]), bi * rho * P["Iy"], bi * rho * P["I"])
+    J = _rotary_inertia(der, info)
     for k in range(n + 1):
         lo, hi = max(sp.Rational(2 * k - 1, 2), 0, s_), min(sp.Rational(2 * k + 1, 2), n)
         if hi <= lo:
             continue
-        e = ef_node_quaternion(der, b.name, k)
-        Lam = euler_rotation(e)
-        W_rel = 2 * euler_G(e) * der.ddt(e)
+        Lam, W_rel = _node_rotation(der, b.name, k)
         h = Lam * J * (Lam.T * om + W_rel)
         M -= (hi - lo) * le * (along_motion(der, h, 1) + cross(om, h) + alpha * Lam * J * W_rel)
     S = sp.Matrix([loads_beyond(der, b, x, "S" + c, S[i], section) for i, c in enumerate("xyz")])
