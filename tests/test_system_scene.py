@@ -95,6 +95,17 @@ def test_inspect_shows_the_system(capsys):
     assert "constraint equations: slider_pin: 2 (position)" in out
 
 
+def test_inspect_shows_a_spatial_ef_beam(capsys, tmp_path):
+    """A spatial system whose beam is ef: its nodes' coordinates (a traceback before: the list
+    read the modal models' modes)."""
+    scene = tmp_path / "arm_ef.toml"
+    scene.write_text((SCENES / "spatial_arm.toml").read_text().replace(
+        'model = "m3"\n', 'model = { variant = "ef", elements = 4, moment = "equilibrium" }\n'))
+    assert main(["inspect", str(scene), "--section", "system"]) == 0
+    out = capsys.readouterr().out
+    assert "elastic coordinates: link: ux, uy, uz, px, py, pz of nodes 1..4 (ef)" in out
+
+
 # (case, text replaced, replacement, what the one line must say besides the file name)
 MALFORMED = [
     ("unknown_body", 'child = "rod.root"', 'child = "bar.root"', "joint 'crank_pin': child 'bar.root' names an unknown body 'bar'"),

@@ -836,7 +836,8 @@ def _summary3(system: System) -> str:
                      + (" [guided]" if j.name in guided else "")
                      + (" [closes a loop]" if j.name in cut else ""))
     lines += ["", "elastic coordinates: " + "; ".join(
-        f"{b.name}: " + ", ".join(n for n, _, _ in beam_coordinates(b))
+        f"{b.name}: " + (", ".join(n for n, _, _ in beam_coordinates(b)) if b.model.kind == "modal"
+                         else f"ux, uy, uz, px, py, pz of nodes 1..{b.model.elements} (ef)")
         for b in system.bodies if b.flexible)]
     lines += ["", "loads: " + (", ".join(type(x).__name__ + (f" g = {x.g}" if isinstance(x, Gravity) else "")
                                         for x in system.loads) or "none")]
