@@ -37,21 +37,24 @@ def test_a_cantilevers_static_moments_at_and_between_nodes():
     small gravity q = rho A g in both planes: from equilibrium My(x) = q (L - x)^2 / 2,
     Mz = -My and Qz = -q (L - x) at the root, between nodes (0.3 L) and at a node (0.5 L),
     within 1e-6 (measured 2e-8: the sag's own geometry); the elements' strains (linear between
-    the element midpoints) give My 3.1 % (root) to 12.5 % (mid-span) off. The two recoveries
-    are two such cantilevers, side by side in one system (one build)."""
+    the element midpoints) give My 3.1 % (root) to 12.5 % (mid-span) off. A beam that names
+    no recovery gets equilibrium's. The recoveries are three such cantilevers in one system
+    (one build)."""
     from test_spatial_damping import A, L, RHO
 
     q = RHO * A * 0.0981
     stations = (0.0, 0.3, 0.5)
-    beams = {"equilibrium": "beam", "constitutive": "own"}
+    beams = {"equilibrium": "beam", "constitutive": "own", "auto": "auto"}
     columns = {f"{b}_{f}_{k}": f"{f}({b}, {x})" for b in beams.values()
                for f in ("Qz", "My", "Mz") for k, x in enumerate(stations)}
     data = cantilever({}, model=_model(4, "equilibrium"), g=(0.0, -0.0981, -0.0981), columns=columns)
     data["system"]["start"] = "static"
     del data["body"][0]["damping"]
-    data["body"].append(dict(data["body"][0], name="own", model=_model(4, "constitutive")))
-    data["joint"].append({"name": "root_own", "kind": "clamp", "parent": "ground",
-                          "point": [2.0, 0.0, 0.0], "child": "own.root"})
+    for k, (recovery, name) in enumerate(list(beams.items())[1:]):  # in line: x = 2, 4
+        model = _model(4, recovery) if recovery != "auto" else {"variant": "ef", "elements": 4}
+        data["body"].append(dict(data["body"][0], name=name, model=model))
+        data["joint"].append({"name": f"root_{name}", "kind": "clamp", "parent": "ground",
+                              "point": [2.0 * (k + 1), 0.0, 0.0], "child": f"{name}.root"})
     r = run_ok(built(data), t_end=0.01, dt=1e-3, integrator="newmark", out_every=1)
     for k, x in enumerate(stations):
         moment = q * (L - x)**2 / 2
@@ -59,3 +62,5 @@ def test_a_cantilevers_static_moments_at_and_between_nodes():
         assert np.abs(r[f"beam_Mz_{k}"] + moment).max() <= 1e-6 * moment
         assert np.abs(r[f"beam_Qz_{k}"] + q * (L - x)).max() <= 1e-6 * q * L
         assert np.abs(r[f"own_My_{k}"][0] - moment) > 0.02 * moment
+        for f in ("Qz", "My", "Mz"):
+            assert np.abs(r[f"auto_{f}_{k}"] - r[f"beam_{f}_{k}"]).max() <= 1e-12 * moment

@@ -156,9 +156,8 @@ class FESpec:
     aliases: tuple[str, ...] = field(default=(), compare=False)
     body: object = None  # fedata.BeamBody: per-element sections and point masses
     # N and M of an ef beam in a system: the equilibrium of the part of the beam beyond the
-    # station ("equilibrium"; "auto" in a planar system, as a modal beam's in a mechanism) or
-    # the elements' own strain and curvature ("constitutive"; "auto" in a spatial one); the
-    # one-beam ef's are its elements' own
+    # station ("equilibrium", and "auto", as a modal beam's in a mechanism) or the elements'
+    # own strain and curvature ("constitutive"); the one-beam ef's are its elements' own
     axial_force: str = "auto"
     moment: str = "auto"
     kind = "fe"

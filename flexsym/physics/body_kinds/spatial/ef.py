@@ -96,11 +96,12 @@ class Ef(SpatialBeam):
         return r[k] - (exact(x) / exact(beam.length) * der.spatial[beam.name]["P"]["L"] if k == 0 else 0)
 
     def section(self, der, beam, x: float, fn: str, loads_beyond) -> sp.Expr:
-        """rod3d's own section forces (constitutive, shear included), or with `moment` /
-        `axial_force` = "equilibrium" (Q and the moments / N) those of the part beyond x
-        (_equilibrium), in the deformed section's axes."""
+        """Those of the part beyond x (_equilibrium), in the deformed section's axes, unless
+        `moment` / `axial_force` (Q and the moments / N) say "constitutive": then rod3d's own
+        (strains, shear included), which converge at the mesh's second order against the
+        equilibrium's fourth (docs/validation/spatial.md)."""
         source = beam.model.axial_force if fn == "N" else beam.model.moment
-        if source != "equilibrium":
+        if source == "constitutive":
             return ef_section(der, beam, x, fn)
         S, M = _equilibrium(der, beam, x, loads_beyond)
         turn = euler_rotation(ef_station_quaternion(der, beam.name, x)).T  # frame -> section
