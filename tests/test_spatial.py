@@ -324,16 +324,6 @@ def test_spatial_outputs_are_refused_in_a_planar_system():
         system_from_dict(data, name="planar")
 
 
-def test_select_on_a_free_spatial_beam_is_refused_up_front():
-    """select needs the ef reference, which a spatial beam on a free joint (S6's ball joint)
-    does not have at a usable cost: one line naming the beam, exit 2, before its report."""
-    r = subprocess.run([sys.executable, "-m", "flexsym.apps.cli", "select", str(S6), "--tol", "0.01"],
-                       capture_output=True, text=True)
-    assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
-    assert "a spatial ef beam on a joint that moves freely ('strip')" in r.stderr
-    assert len(r.stderr.strip().splitlines()) == 1
-
-
 def test_frame_driven_is_the_derivations_decision():
     """System.frame_driven (a structural decision: clamps and guided joints to ground) says
     which spatial ef beams get their element kinetic energy in C: the frame's motion of those

@@ -15,10 +15,13 @@ in the elements: on scenes/four_bar.toml ef-8 and ef-16 at dt/2 are within 3.0e-
 of each peak of ef-64 at dt/4, both mostly their step's error; the elements' curvature, which
 converges at order 2, left ef-32 6.5e-4 off in M_mid), in a spatial one 32 rod elements
 (order 2 with the motion: on scenes/flap.toml 9.4e-5 of the peaks off ef-64 in v_tip, 6.2e-5
-in T_A, where the elements' strains left T_A 6.1e-3 off). Its own error is estimated
-by doubling its step and, apart, halving its elements, and printed (it should be well under
-TOL); it judges --exact's 1e-5 to 1e-4 of the peaks as it is (an earlier reference
-extrapolated the curvature's M in the elements).
+in T_A, where the elements' strains left T_A 6.1e-3 off). A spatial rod that a free joint
+moves (a ball joint, a loop's coupler) has its sections' bending rotary inertia scaled to
+FREE_FRAME_ROTARY of the physical, as the modal beams have none (on a ball joint it rolls a
+strip at O(1)). Its own error is estimated by doubling its step and, apart, halving its
+elements (and doubling that rotary inertia), and printed (it should be well under TOL); it
+judges --exact's 1e-5 to 1e-4 of the peaks as it is (an earlier reference extrapolated the
+curvature's M in the elements).
 
 Error of a candidate: the largest over the scene's columns of max_t |y - y_ef| / max_t |y_ef|.
 Cost: CPU time of the integration (median of --repeat runs); costs within the timing noise
@@ -35,6 +38,7 @@ from flexsym.analysis.model_select import NOISE_FLOOR
 from flexsym.analysis.system_bench import column_errors, ef_system, run_rows
 from flexsym.core.errors import SpecError
 from flexsym.model.variant import builtin
+from flexsym.physics.spatial_ef import bending_inertia_param
 from flexsym.physics.validity import system_range_notes
 from flexsym.scenes.system_scene import checked_system
 from flexsym.codegen.generate import MANIFEST
@@ -43,6 +47,10 @@ from flexsym.toolchain.pipeline import prepare_system, system_folder
 MODELS = ("m1", "m2", "m3", "prestress")
 STEP_FACTORS = (1, 2, 4, 5)
 REFERENCE_ELEMENTS = {2: 16, 3: 32}  # by the system's dimension (ANCF / rod elements), N and M from equilibrium
+# A free frame's rod keeps its sections' bending rotary inertia rho b (I_y, I_z) (a run-time
+# factor b, 1 physical); the modal beams have none, so the reference scales it down to theirs.
+# b = 0 makes the rod's mass matrix singular; its effect is linear in b (docs/validation/spatial.md)
+FREE_FRAME_ROTARY = 1e-4
 
 
 @dataclass
@@ -84,11 +92,19 @@ def with_model(system, name: str):
 TUNING = ("newton_tol", "rho_inf", "penalty", "newmark_beta", "newmark_gamma")
 
 
-def _run(system, scene, dt: float, repeat: int = 1):
-    """system_bench's run of a scene's rows, at step dt, with the scene's integrator settings."""
+def _run(system, scene, dt: float, repeat: int = 1, params=None):
+    """system_bench's run of a scene's rows, at step dt, with the scene's integrator settings
+    (and run-time parameters `params`)."""
     o = scene.options
     tuning = tuple((k, getattr(o, k)) for k in TUNING if getattr(o, k) is not None)
-    return run_rows(prepare_system(system), scene, o.integrator, dt, repeat, tuning)
+    return run_rows(prepare_system(system), scene, o.integrator, dt, repeat,
+                    tuning + ((("params", params),) if params else ()))
+
+
+def _rotary(system, b: float) -> dict:
+    """The bending rotary inertia factor b for every spatial ef beam a free joint moves."""
+    names = (bending_inertia_param(system, x.name) for x in system.bodies if x.flexible)
+    return {n: b for n in names if n is not None} if system.dimension == 3 else {}
 
 
 def coordinates(system) -> int:
@@ -103,39 +119,35 @@ def errors(r, ref, columns) -> tuple[float, str]:
     return per[f"e_{worst}"], worst
 
 
-def check_selectable(scene) -> None:
-    """Refuse, before any line is printed or any work done, what select cannot score."""
-    system = scene.system
-    free = [b.name for b in system.bodies if b.flexible and not system.frame_driven(b.name)]
-    if system.dimension == 3 and free:
-        raise SpecError(f"{scene.path}: select needs the ef reference, and a spatial ef beam on a "
-                        f"joint that moves freely ('{free[0]}') is not a reference select can use "
-                        "yet: it carries the sections' bending rotary inertia the modal beams leave "
-                        "out, and converges in minutes (see docs/validation/spatial.md; its frame "
-                        "must move by guided drivers and clamps alone)")
-
-
 def _reference(scene, columns, log):
     """(reference rows, its own error estimated: the largest over the columns of its changes
-    when its step and, apart, its elements are doubled)."""
+    when its step and, apart, its elements are doubled, and, for a beam a free joint moves,
+    when its sections' bending rotary inertia is doubled)."""
     o = scene.options
     n = REFERENCE_ELEMENTS[scene.system.dimension]
-    log(f"reference: ef with {n} elements per beam (N and M from equilibrium), {o.integrator} at "
-        f"dt = {o.dt / 2:g} s")
     ef = ef_system(scene.system, n, "equilibrium")
-    ref = _run(ef, scene, o.dt / 2)
+    rotary = _rotary(ef, FREE_FRAME_ROTARY)
+    log(f"reference: ef with {n} elements per beam (N and M from equilibrium), {o.integrator} at "
+        f"dt = {o.dt / 2:g} s" + (f"; the sections' bending rotary inertia {FREE_FRAME_ROTARY:g} of the "
+                                 "physical on the beams a free joint moves, as the modal beams' (none)"
+                                 if rotary else ""))
+    ref = _run(ef, scene, o.dt / 2, params=rotary)
     if not ref.ok:
         raise SpecError(f"{scene.path}: the ef reference stopped ({ref.message}); select needs a "
                         "reference: try a smaller [solver] dt")
     outside = system_range_notes(ef, ref)
     if outside:  # no model is derived for this motion: nothing to select
         raise SpecError(f"{scene.path}: the ef reference {outside[0]}")
-    half_step = _run(ef, scene, o.dt)
-    half_mesh = _run(ef_system(scene.system, n // 2, "equilibrium"), scene, o.dt / 2)
-    own = [errors(r, ref, columns) if r.ok else (math.inf, "its run stopped") for r in (half_step, half_mesh)]
+    half_step = _run(ef, scene, o.dt, params=rotary)
+    half_mesh = _run(ef_system(scene.system, n // 2, "equilibrium"), scene, o.dt / 2, params=rotary)
+    more_rotary = [_run(ef, scene, o.dt / 2, params=_rotary(ef, 2 * FREE_FRAME_ROTARY))] if rotary else []
+    own = [errors(r, ref, columns) if r.ok else (math.inf, "its run stopped")
+           for r in [half_step, half_mesh] + more_rotary]
     log(f"  the reference's own error, estimated: step (dt against dt/2) {own[0][0]:.1e} ({own[0][1]}), "
-        f"elements ({n // 2} against {n}) {own[1][0]:.1e} ({own[1][1]}) of the peaks")
-    return ref, max(own[0][0], own[1][0])
+        f"elements ({n // 2} against {n}) {own[1][0]:.1e} ({own[1][1]})"
+        + (f", rotary inertia ({2 * FREE_FRAME_ROTARY:g} against {FREE_FRAME_ROTARY:g}) {own[2][0]:.1e} "
+           f"({own[2][1]})" if rotary else "") + " of the peaks")
+    return ref, max(e for e, _ in own)
 
 
 def exact_modes(system) -> str:
@@ -150,7 +162,6 @@ def exact_modes(system) -> str:
 
 def select_system(scene, tol: float, repeat: int = 3, log=print, exact: bool = False):
     """(candidates, chosen or None, reference's own error); exact: also the built-in `exact`."""
-    check_selectable(scene)
     columns = list(scene.columns)
     o = scene.options
     steps = [o.dt * k for k in STEP_FACTORS if o.out_every % k == 0]

@@ -553,13 +553,12 @@ MAX_BENDING = 5
 
 
 def _select_system(args, scene, tol: float, repeat: int) -> int:
-    from flexsym.analysis.system_select import check_selectable, select_system, table
+    from flexsym.analysis.system_select import select_system, table
 
     if args.max_bending is not None:
         raise SpecError(f"{args.scene}: --max-bending applies to one-beam scenes; a mechanism's "
                         "candidates are the built-in models m1, m2, m3 and prestress (and exact with "
                         "--exact) at 1, 2, 4 and 5 times its step")
-    check_selectable(scene)
     print(f"{scene.path}: candidates on outputs {', '.join(scene.columns)}, tolerance {tol:g}")
     results, best, ref_error = select_system(scene, tol, repeat=repeat, exact=args.exact)
     print()
@@ -567,6 +566,12 @@ def _select_system(args, scene, tol: float, repeat: int) -> int:
     if ref_error > tol / 3:
         print(f"\nnote: the reference's own error {ref_error:.1e} (its step or its elements, above) is "
               "not well under the tolerance: the errors above are partly the reference's")
+    if best is None and ref_error > tol:
+        print(f"\nno candidate is within {tol:g}, and neither is the reference (its own error "
+              f"{ref_error:.1e}): ef at select's mesh and step does not converge these outputs over "
+              "this run either; measure a finer ef by hand (`flexsym run SCENE --model ef` on a "
+              "copy with more elements and a smaller step), or score a shorter run")
+        return 1
     if best is None:
         print(f"\nno candidate is within {tol:g}; ef is the model to use (`flexsym run {scene.path} --model ef`)")
         return 1

@@ -341,10 +341,16 @@ def check_params(params: dict, where: Where = API, maneuver: str | None = None) 
     out = {}
     label = "--param " if where.kind == "cli" else "params "
     for name, value in params.items():
-        if name not in beam | man:
+        # a system with several beams names each one's body_<name> (System.beam_param); the
+        # model itself refuses a body it does not have (the runtime's one line, exit 2)
+        base = name if name in beam | man else next(
+            (b for b in sorted(beam, key=len, reverse=True)
+             if name.endswith("_" + b) and len(name) > len(b) + 1), None)
+        if base is None:
             known = f"beam: {', '.join(sorted(beam))}; manoeuvre: {', '.join(sorted(man)) or 'none'}"
-            raise SpecError(f"{label.strip()}: unknown parameter '{name}' ({known})")
-        rule = BY_NAME.get(name) or Option(name, float, None, "", low=0.0, low_open=True)
+            raise SpecError(f"{label.strip()}: unknown parameter '{name}' ({known}; in a system with "
+                            "several beams, <body>_<beam parameter>)")
+        rule = BY_NAME.get(base) or Option(name, float, None, "", low=0.0, low_open=True)
         out[name] = replace(rule, name=label + name).convert(value, API)
     return out
 

@@ -55,6 +55,15 @@ def ef_part(der, b, P: dict) -> None:
     der.spatial[b.name] = dict(kind="ef", n=n, P=P, idx=idx, pidx=pidx, node=node, length=b.length)
 
 
+def bending_inertia_param(system, body: str) -> str | None:
+    """The run-time parameter of a spatial ef beam's bending rotary inertia factor: a beam
+    whose frame a free joint moves has one ("bending_inertia", or "<body>_bending_inertia" when
+    the system has more flexible bodies); a driven frame's beam has none (None)."""
+    if system.frame_driven(body):
+        return None
+    return "bending_inertia" if sum(x.flexible for x in system.bodies) == 1 else f"{body}_bending_inertia"
+
+
 def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
     """Registers a spatial ef beam's elements (der.rod_bodies, der.casadi_T) in its frame fr and
     returns its gravity potential (sympy)."""
@@ -64,7 +73,7 @@ def ef_body(der, b, P: dict, fr, om, vf, actual, gvec) -> sp.Expr:
         # a free frame's beam: its sections' bending rotary inertia rho b (I_y, I_z) with the
         # factor b a run-time parameter (rod3d's bending_inertia; 1: physical). A small b is the
         # modal models' and the benchmark's beam (none); b = 0 makes M singular.
-        pname = "bending_inertia" if sum(x.flexible for x in der.system.bodies) == 1 else f"{b.name}_bending_inertia"
+        pname = bending_inertia_param(der.system, b.name)
         pidx["bending_inertia"] = len(der.params)
         der.params.append((pname, sp.Symbol(pname, positive=True), 1.0))
     L, rho, A = P["L"], P["rho"], P["A"]
