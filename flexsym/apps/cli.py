@@ -564,7 +564,7 @@ def _select_system(args, scene, tol: float, repeat: int) -> int:
     print()
     print(table(results, best, tol))
     if ref_error > tol / 3:
-        print(f"\nnote: the reference's own error {ref_error:.1e} (its step or its elements, above) is "
+        print(f"\nnote: the reference's own error {ref_error:.1e} (its estimates above) is "
               "not well under the tolerance: the errors above are partly the reference's")
     if best is None and ref_error > tol:
         print(f"\nno candidate is within {tol:g}, and neither is the reference (its own error "
