@@ -75,13 +75,12 @@ class Ef(SpatialBeam):
         virtual motion of the beam its force -dD/de' does the work of -alpha times the
         momentum of those rates: the force -alpha int rho A r' dx and its moment (about the
         ground origin, ground components) -alpha (H of the relative rates)."""
-        alpha = b.damping.alpha if b.damped else 0
+        alpha = _alpha(b)
         if not alpha:
             return None
         fr = der.spatial["frames"][b.name]
         force, moment = _moment_of_rates(der, b, fr, relative=True)
-        a = exact(alpha)
-        return -a * fr.A * force, -a * fr.A * moment
+        return -alpha * fr.A * force, -alpha * fr.A * moment
 
     def axis_point(self, der, body: str, x: float) -> sp.Matrix:
         return ef_at(der, body, x)
@@ -135,6 +134,12 @@ def _moment_of_rates(der, b, fr, relative: bool) -> tuple[sp.Matrix, sp.Matrix]:
     return lin, H
 
 
+def _alpha(b):
+    """The beam's mass-proportional damping coefficient alpha (exact), 0 when it has none (the
+    damper's load on its joints and the equilibrium's -alpha rho A r' read it alike)."""
+    return exact(b.damping.alpha) if b.damped and b.damping.alpha else 0
+
+
 def _rotary_inertia(der, info) -> sp.Matrix:
     """J = rho diag(I_y + I_z, b I_y, b I_z) per unit length, the sections' rotary inertia as
     rod3d's T lumps it (b: its bending_inertia factor, a run-time parameter of a free frame's
@@ -172,7 +177,7 @@ def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
     le = L / n
     om = fr.omega
     al, a0 = der.ddt(om), der.ddt(fr.V) + cross(om, fr.V)
-    alpha = exact(b.damping.alpha) if b.damped and b.damping.alpha else 0
+    alpha = _alpha(b)
     s_ = exact(x) / exact(b.length) * n  # the station in element lengths
     section = ef_at(der, b.name, x)
     pos = [node(k) for k in range(n + 1)]

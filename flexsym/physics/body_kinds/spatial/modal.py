@@ -80,19 +80,20 @@ class Modal(SpatialBeam):
         der.V_grav += (-integral(rho * A * L * w("mu")) * gvec.dot(fr.R)
                        - integral(rho * A * L * w("mu") * fr.g.dot(r)))
         for term_name, wrt in strain.terms + (("torsion", ("torsion",)),):
-            if term_name == "prestress" and b.model.body is not None:
-                Vt = _load_case_energy(der, b)  # the unit inertial load cases (fedata)
-            else:
-                Vt = integral(_strain_density(term_name, F, P, fr.omega, w))
             if term_name == "prestress" and b.model.body is None and not der.system.frame_driven(b.name):
                 # A spin the joints' rates carry: -V_p is the centrifugal part of T that the
                 # foreshortening gives (m3), so it joins T and Lagrange's equations take its
                 # dependence on those rates too; as a potential read at the current spin the
                 # joint's equation missed d/dt dV_p/dq' (a tilted hinge's T + V drifted 47 %)
-                der.frame_T.append((-integral(_strain_density(term_name, F, P, om, w)), actual))
-                der.terms.append((b.name, term_name + " (in T, the joints' spin)", wrt, Vt,
-                                  sp.zeros(len(q), 1)))
+                Vp = integral(_strain_density(term_name, F, P, om, w))  # in the frame's placeholders
+                der.frame_T.append((-Vp, actual))
+                der.terms.append((b.name, term_name + " (in T, the joints' spin)", wrt,
+                                  Vp.xreplace(actual), sp.zeros(len(q), 1)))
                 continue
+            if term_name == "prestress" and b.model.body is not None:
+                Vt = _load_case_energy(der, b)  # the unit inertial load cases (fedata)
+            else:
+                Vt = integral(_strain_density(term_name, F, P, fr.omega, w))
             Qk = generalized_force(Vt, q, [c.body == b.name and c.group in wrt for c in coords])
             der.terms.append((b.name, term_name, wrt, Vt, Qk))
             der.V += Vt
