@@ -33,10 +33,13 @@ Q: strain terms (their groups only), gravity, motors, point forces and torques.
 
 Geometric stiffening per strain model in a system: #1/#2 (geometric_stiffness) and #3
 (foreshortening) need nothing: the axial coordinates, or u_fs, respond to the frame's actual
-motion through T. `prestress` keeps N(x) = rho A phi'^2 (L^2 - x^2)/2 with phi' the frame's
-actual rate (a velocity-dependent stiffness on the bending coordinates, a force term, not
-part of the Lagrangian); the frame's translational acceleration and gravity are NOT in this
-N(x): use #1-#3 when they matter (S2, S3).
+motion through T. `prestress` keeps V_p = 1/2 int N(x) v_x^2, N(x) = rho A phi'^2 (L^2 - x^2)/2
+with phi' the frame's actual rate: a potential that varies in time under a guided drive, and
+on a frame that joints spin -V_p joins T (it is the part of m3's T linear in the
+foreshortening), so the joints' equations take its rate dependence and T + V is conserved;
+its sections, momentum and reactions then read the foreshortened fields (FlexPart.
+inertial_fields). The frame's translational acceleration and gravity are NOT in this N(x):
+use #1-#3 when they matter (S2, S3).
 Outputs of q, q', q'', the drive and lambda: joint reactions (joint_reaction: a cut joint's
 from lambda, a tree joint's from the momentum balance of the subtree beyond it), N and M from
 equilibrium (_equilibrium_stress: the part of the beam beyond the station with the frame's

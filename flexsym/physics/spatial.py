@@ -44,13 +44,15 @@ out, as the spatial benchmarks define it):
     phi_x^2 (always, on the torsion coordinate), cubic EA/2 int u_x (v_x^2 + vz_x^2) (#1/#2:
     K_G in both planes from the axial modes), prestress 1/2 int N(x) (v_x^2 + vz_x^2) with
     N = rho A (omega_y^2 + omega_z^2)(L^2 - x^2)/2 (the centrifugal load of the frame's actual
-    rotation about the axes across the beam).
+    rotation about the axes across the beam; on a frame that joints spin, -V_p is in T, as in
+    the plane: body_kinds/spatial/modal.py).
 A beam from finite-element data: each term carries its section distribution (the table's
 weights: rho A with the point masses, EA, EI_z, EI_y, GJ, rho (I_y + I_z)), each plane and the
 torsion have their own modes from the mesh (modal._beam_modes), and prestress is the geometric
 stiffness of the twelve unit inertial load cases projected on the modes times the frame's
-actual omega_i omega_j, alpha_i and a_i (modal._load_case_energy); where a_i reads a free frame's
-q'', that part of the force joins M (not symmetric then: the runtime factors it by LU).
+actual omega_i omega_j, alpha_i and a_i (modal._load_case_energy; on a frame that joints spin
+the omega_i omega_j cases' energy joins T, as the analytic V_p does); where a_i reads a free
+frame's q'', that part of the force joins M (not symmetric then: the runtime factors it by LU).
 What the generalisation keeps and drops: the bending planes couple only through the frame's
 motion, the foreshortening and the cubic term (both planes in one stretch); torsion is
 linear and couples to bending only through omega.t in T (the propeller moment of a section

@@ -41,6 +41,15 @@ class FlexPart:
     groups: dict  # mode name -> 'axial' | 'bending'
     coords: list  # mode names in order
     psyms: dict  # global beam parameter symbol -> this body's symbol
+    shortened: object = None  # prestress: the fields with the foreshortening (inertial_stress)
+
+    def inertial_fields(self, system):
+        """The fields whose inertia the sections, the momentum and the reactions read. Prestress
+        on a frame that the joints spin takes the foreshortening's: its -V_p in T (Modal.contribute)
+        is m3's T to second order in the deflection, so its sections balance the motion T gives
+        (S1's root moment then equals the clamp's reaction, as m3's does)."""
+        spun = self.shortened is not None and not system.frame_driven(self.beam.name)
+        return self.shortened if spun else self.fields
 
     def view(self):
         """What outputs.field_at / output_expression read (a derivation-like object)."""
@@ -114,10 +123,12 @@ class Modal(BeamKind):
         symdd = {n: sp.Symbol(f"{b.name}_{n}_dd", real=True) for n in names}
         table = IntegralTable(modes) if spec.body is None else BodyIntegralTable(spec.body, modes)
         strain = STRAIN_MODELS[spec.strain]
-        fields = build_fields([modes[r.coordinate] for r in spec.axial],
-                              [modes[r.coordinate] for r in spec.bending], sym, symd, table,
-                              strain.foreshortening, symdd)
-        return (b, table, fields, modes, {r.coordinate: r.axis for r in spec.modes}, names, psyms)
+        def fields(foreshortening):
+            return build_fields([modes[r.coordinate] for r in spec.axial],
+                                [modes[r.coordinate] for r in spec.bending], sym, symd, table,
+                                foreshortening, symdd)
+        return (b, table, fields(strain.foreshortening), modes, {r.coordinate: r.axis for r in spec.modes},
+                names, psyms, fields(True) if spec.strain == "prestress" else None)
 
     def part(self, b, psyms: dict, qnames: list[str]):
         return FlexPart(*self.part_args(b, psyms))
@@ -141,6 +152,15 @@ class Modal(BeamKind):
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
             V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
+            if term_name == "prestress" and not der.system.frame_driven(b.name):
+                # A spin the joints' rates carry: -V_p is the centrifugal part of T that the
+                # foreshortening gives (m3), so it joins T and Lagrange's equations take its
+                # dependence on those rates (as in 3D, body_kinds/spatial/modal.py: as a
+                # potential read at the current spin S3's T + V drifted 1.4e-6 of V's peak)
+                der.T -= V
+                der.terms.append((b.name, term_name + " (centrifugal, in T: the joints' spin)", wrt, V,
+                                  sp.zeros(len(der.q), 1)))
+                continue
             Qk = generalized_force(V, der.q, [c.body == b.name and c.group in wrt for c in der.coords])
             der.terms.append((b.name, term_name, wrt, V, Qk))
             der.V += V
@@ -156,9 +176,10 @@ class Modal(BeamKind):
         der.T += body_expr(tab.integrate(kinetic_density(fl, motion)))
         der.V_grav += body_expr(tab.integrate(gravity_density(fl, ph[5], ph[6]))) \
             - body_expr(mass) * frame.g.dot(frame.pose.R)
-        H_ = body_expr(tab.integrate(momentum_density(fl, motion, ph[3], ph[4])))
+        fi = part.inertial_fields(der.system)
+        H_ = body_expr(tab.integrate(momentum_density(fi, motion, ph[3], ph[4])))
         der.momentum += H_
-        Ig = tab.integrate(gravity_density(fl, ph[5], ph[6]))  # linear in g: -g.(first moment)
+        Ig = tab.integrate(gravity_density(fi, ph[5], ph[6]))  # linear in g: -g.(first moment)
         record_body(der, b.name, body_expr(mass), frame.pose, frame.A,
                     [body_expr(-sp.diff(Ig, gk)) for gk in ph[5:]], H_)
 
@@ -190,7 +211,7 @@ class Modal(BeamKind):
         guided hub) integrated by the table; N along the frame's x axis."""
         part = der.flex[beam.name]
         rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
-        f, tab = part.fields, part.table
+        f, tab = part.inertial_fields(der.system), part.table
         om, al, a0x, a0y, gx, gy = sp.symbols("Om_ Al_ A0x_ A0y_ gx_ gy_", real=True)
         at = exact(x) / exact(beam.length)
         X = L_ * s + f.u

@@ -54,7 +54,9 @@ class Modal(SpatialBeam):
         sym, symd, symdd = ({n: sp.Symbol(f"{b.name}_{n}{k}", real=True) for n, _, _ in names}
                             for k in ("", "_d", "_dd"))
         F = _fields(b, sym, symd, symdd, table, strain.foreshortening, keys)
-        der.spatial[b.name] = dict(F=F, table=table, modes=modes, keys=keys, P=P,
+        # prestress: the fields with the foreshortening, for its sections (_frame_section_of)
+        short = _fields(b, sym, symd, symdd, table, True, keys) if strain.name == "prestress" else None
+        der.spatial[b.name] = dict(F=F, table=table, modes=modes, keys=keys, P=P, short=short,
                                    sym=sym, r=sp.Matrix([P["L"] * s + F["u"], F["v"], F["vz"]]))
 
     def hang(self, der, fr: Frame, body: str, m):
@@ -80,18 +82,26 @@ class Modal(SpatialBeam):
         der.V_grav += (-integral(rho * A * L * w("mu")) * gvec.dot(fr.R)
                        - integral(rho * A * L * w("mu") * fr.g.dot(r)))
         for term_name, wrt in strain.terms + (("torsion", ("torsion",)),):
-            if term_name == "prestress" and b.model.body is None and not der.system.frame_driven(b.name):
-                # A spin the joints' rates carry: -V_p is the centrifugal part of T that the
-                # foreshortening gives (m3), so it joins T and Lagrange's equations take its
+            if term_name == "prestress":
+                # A spin the joints' rates carry: the centrifugal V_p is minus the part of T that
+                # the foreshortening gives (m3), so it joins T and Lagrange's equations take its
                 # dependence on those rates too; as a potential read at the current spin the
-                # joint's equation missed d/dt dV_p/dq' (a tilted hinge's T + V drifted 47 %)
-                Vp = integral(_strain_density(term_name, F, P, om, w))  # in the frame's placeholders
-                der.frame_T.append((-Vp, actual))
-                der.terms.append((b.name, term_name + " (in T, the joints' spin)", wrt,
-                                  Vp.xreplace(actual), sp.zeros(len(q), 1)))
-                continue
-            if term_name == "prestress" and b.model.body is not None:
-                Vt = _load_case_energy(der, b)  # the unit inertial load cases (fedata)
+                # joint's equation missed d/dt dV_p/dq' (a tilted hinge's T + V drifted 47 %).
+                # A mesh's acceleration load cases stay a potential (they read q'').
+                spun = not der.system.frame_driven(b.name)
+                turn = om if spun else fr.omega  # the frame's placeholders, or its actual motion
+                if b.model.body is None:
+                    Vt, Vp = sp.Integer(0), integral(_strain_density(term_name, F, P, turn, w))
+                else:  # the unit inertial load cases (fedata)
+                    Vt, Vp = _load_case_energy(der, b, turn)
+                if not spun:
+                    Vt += Vp
+                else:
+                    der.frame_T.append((-Vp, actual))
+                    der.terms.append((b.name, term_name + " (centrifugal, in T: the joints' spin)", wrt,
+                                      Vp.xreplace(actual), sp.zeros(len(q), 1)))
+                    if Vt == 0:
+                        continue
             else:
                 Vt = integral(_strain_density(term_name, F, P, fr.omega, w))
             Qk = generalized_force(Vt, q, [c.body == b.name and c.group in wrt for c in coords])
@@ -103,7 +113,17 @@ class Modal(SpatialBeam):
             energies = _rate_energies(b, P, table, integral, keys)
             der.dissipation[b.name] = damping_dissipation(b.damping, *energies)
             der.Q -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
+        short = der.spatial[b.name]["short"]
+        if short is not None and not der.system.frame_driven(b.name):
+            # prestress's -V_p in T is m3's T to second order in the deflection: its sections,
+            # momentum and reactions take the foreshortening's inertia as m3's do (as in the plane,
+            # body_kinds.modal.FlexPart.inertial_fields), so they balance the motion T gives
+            ri = sp.Matrix([L * s + short["u"], short["v"], short["vz"]])
+            inertial = (short, ri, vf + sp.Matrix([short["u_d"], short["v_d"], short["vz_d"]]) + cross(om, ri))
+        else:
+            inertial = (F, r, vel)
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, P=P, r=r, vel=vel, spin=spin,
+                                   inertial=inertial,
                                    integral=integral, om=om, vf=vf, actual=actual, keys=keys,
                                    energies=energies)
 
@@ -119,7 +139,7 @@ class Modal(SpatialBeam):
         f = -P["rho"] * P["A"] * L * d["table"].weight("mu") * sp.Matrix([W["u"], W["v"], W["vz"]])
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
         torque = -P["rho"] * (P["Iy"] + P["I"]) * L * d["table"].weight("ip") * W["phi"] * tangent
-        moment = cross(d["r"], f) + torque
+        moment = cross(d["inertial"][1], f) + torque
         fr = der.spatial["frames"][b.name]
         force = fr.A * sp.Matrix([integral(c) for c in f])
         return force, cross(fr.R, force) + fr.A * sp.Matrix([integral(c) for c in moment])
@@ -142,7 +162,8 @@ class Modal(SpatialBeam):
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
         Rl = sp.Matrix(sp.symbols(f"{b.name}_R_x {b.name}_R_y {b.name}_R_z", real=True))
         w = d["table"].weight
-        dens = P["rho"] * P["A"] * L * w("mu") * cross(Rl + d["r"], d["vel"]) \
+        _, r, vel = d["inertial"]
+        dens = P["rho"] * P["A"] * L * w("mu") * cross(Rl + r, vel) \
             + P["rho"] * (P["Iy"] + P["I"]) * L * w("ip") * d["spin"] * tangent
         now = d["actual"] | dict(zip(Rl, fr.A.T * fr.R))  # substituted after integrating
         return fr.A * sp.Matrix([d["integral"](e).xreplace(now) for e in dens])
@@ -152,7 +173,7 @@ class Modal(SpatialBeam):
         d = der.spatial[b.name]
         mu = d["P"]["rho"] * d["P"]["A"] * d["P"]["L"] * d["table"].weight("mu")
         m = d["integral"](mu)
-        return m, m * fr.R + fr.A * sp.Matrix([d["integral"](mu * e) for e in d["r"]])
+        return m, m * fr.R + fr.A * sp.Matrix([d["integral"](mu * e) for e in d["inertial"][1]])
 
     def displacement(self, der, beam, x: float, fn: str) -> sp.Expr:
         return _at(der, beam.name, x, fn)
@@ -259,12 +280,13 @@ def _load_case_factors(der, fr: Frame, cases) -> dict:
     return out
 
 
-def _load_case_energy(der, b: FlexibleBeam) -> sp.Expr:
+def _load_case_energy(der, b: FlexibleBeam, spin: sp.Matrix) -> tuple[sp.Expr, sp.Expr]:
     """The prestress of a body from finite-element data: V = 1/2 sum_c f_c rho A L^(m_c - 1)
     q^T D_c q on each bending plane's coordinates, D_c the geometric stiffness of unit load
     case c projected on the plane's modes (fedata.load_case_stiffness), f_c its frame's
     actual motion (_load_case_factors): the stiffening follows the frame's rotation, angular
-    and linear acceleration and gravity, whatever they are."""
+    and linear acceleration and gravity, whatever they are. (V of the acceleration cases, V of
+    the centrifugal cases omega_i omega_j with omega = spin, e.g. the frame's placeholders)."""
     d = der.spatial[b.name]
     P, sym, keys, modes = d["P"], d["sym"], d["keys"], d["modes"]
     planes = {}
@@ -272,14 +294,17 @@ def _load_case_energy(der, b: FlexibleBeam) -> sp.Expr:
         names = [n for n, g, _ in beam_coordinates(b) if g == "bending" and n.split("_")[0] == plane]
         planes[plane] = (names, load_case_stiffness(b.model.body, [modes[keys[n]].shape for n in names]))
     # the frame's factors once for both planes (their cases are the same: K_G,e is either's)
-    f = _load_case_factors(der, der.spatial["frames"][b.name], {c for _, D in planes.values() for c in D})
-    V = sp.Integer(0)
+    cases = {c for _, D in planes.values() for c in D}
+    f = _load_case_factors(der, der.spatial["frames"][b.name], {c for c in cases if not c.startswith("ww")})
+    f |= {c: spin["xyz".index(c[3])] * spin["xyz".index(c[4])] for c in cases if c.startswith("ww")}
+    V = [sp.Integer(0), sp.Integer(0)]
     for names, D in planes.values():
         qv = sp.Matrix([sym[n] for n in names])
         for case, Dc in D.items():
             Dm = sp.Matrix(Dc.shape[0], Dc.shape[1], [sp.Float(repr(float(v)), 17) for v in Dc.ravel()])
-            V += f[case] * P["rho"] * P["A"] * P["L"]**(load_case_scale(case) - 1) * (qv.T * Dm * qv)[0, 0] / 2
-    return sp.expand(V)
+            V[case.startswith("ww")] += (f[case] * P["rho"] * P["A"] * P["L"]**(load_case_scale(case) - 1)
+                                         * (qv.T * Dm * qv)[0, 0] / 2)
+    return sp.expand(V[0]), sp.expand(V[1])
 
 
 def _load_case_axial_force(der, b: FlexibleBeam, fr: Frame, x: float) -> sp.Expr:
@@ -379,8 +404,8 @@ def _at(der, body: str, x: float, what: str):
     def fa(e):  # field_at leaves s (in L s) alone: the station is s = at
         e = field_at(view, e, at).xreplace({s: at})
         return e.xreplace(d["table"].substitutions()).xreplace(generic)
-    if what == "r":
-        return sp.Matrix([fa(e) for e in d["r"]])
+    if what in ("r", "inertial r"):  # the axis point; or the fields' the inertia reads (contribute)
+        return sp.Matrix([fa(e) for e in (d["r"] if what == "r" else d["inertial"][1])])
     return fa(d["F"][what])
 
 
@@ -431,7 +456,7 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) 
     # + 2 omega x r' + r'', integrated in placeholders and then given the frame's actual motion
     fr = der.spatial["frames"][beam.name]
     at = exact(x) / exact(beam.length)
-    om, F, r = d["om"], d["F"], d["r"]
+    om, (F, r, _) = d["om"], d["inertial"]
     al = sp.Matrix(sp.symbols(f"{beam.name}_Al_x {beam.name}_Al_y {beam.name}_Al_z", real=True))
     a0 = sp.Matrix(sp.symbols(f"{beam.name}_A0_x {beam.name}_A0_y {beam.name}_A0_z", real=True))
     gl = sp.Matrix(sp.symbols(f"{beam.name}_g_x {beam.name}_g_y {beam.name}_g_z", real=True))
@@ -445,7 +470,7 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) 
     w = d["table"].weight
     load = rho * A * L * w("mu") * (gl - acc)
     force, k = fn[0] == "S", "xyz".index(fn[1])
-    section = _at(der, beam.name, x, "r")
+    section = _at(der, beam.name, x, "inertial r")  # the moments' point, of the fields r is
     if force:
         out = d["integral"](load[k], at, 1)
     else:
