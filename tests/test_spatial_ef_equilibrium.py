@@ -38,8 +38,8 @@ def test_a_cantilevers_static_moments_at_and_between_nodes():
     Mz = -My and Qz = -q (L - x) at the root, between nodes (0.3 L) and at a node (0.5 L),
     within 1e-6 (measured 2e-8: the sag's own geometry); the elements' strains (linear between
     the element midpoints) give My 3.1 % (root) to 12.5 % (mid-span) off. A beam that names
-    no recovery gets equilibrium's. The recoveries are three such cantilevers in one system
-    (one build)."""
+    no recovery gets equilibrium's, and its outputs that name "constitutive" equal the strains'
+    beam's. The recoveries are three such cantilevers in one system (one build)."""
     from test_spatial_damping import A, L, RHO
 
     q = RHO * A * 0.0981
@@ -47,6 +47,9 @@ def test_a_cantilevers_static_moments_at_and_between_nodes():
     beams = {"equilibrium": "beam", "constitutive": "own", "auto": "auto"}
     columns = {f"{b}_{f}_{k}": f"{f}({b}, {x})" for b in beams.values()
                for f in ("Qz", "My", "Mz") for k, x in enumerate(stations)}
+    # an output's own recovery (tests/test_output_recovery.py): the strains' on the default beam
+    columns |= {f"auto_{f}_con_{k}": f"{f}(auto, {x}, constitutive)" for f in ("My", "Mz")
+                for k, x in enumerate(stations)}
     data = cantilever({}, model=_model(4, "equilibrium"), g=(0.0, -0.0981, -0.0981), columns=columns)
     data["system"]["start"] = "static"
     del data["body"][0]["damping"]
@@ -64,3 +67,5 @@ def test_a_cantilevers_static_moments_at_and_between_nodes():
         assert np.abs(r[f"own_My_{k}"][0] - moment) > 0.02 * moment
         for f in ("Qz", "My", "Mz"):
             assert np.abs(r[f"auto_{f}_{k}"] - r[f"beam_{f}_{k}"]).max() <= 1e-12 * moment
+        for f in ("My", "Mz"):
+            assert np.abs(r[f"auto_{f}_con_{k}"] - r[f"own_{f}_{k}"]).max() <= 1e-12 * moment

@@ -27,7 +27,8 @@ def _strip() -> dict:
     N and the moments from equilibrium; started at rest in static equilibrium."""
     cols = {"N0": "N(strip, root)", "Qy0": "Qy(strip, root)", "Qz0": "Qz(strip, root)",
             "My0": "My(strip, root)", "Mz0": "Mz(strip, root)", "s0": f"sigma(strip, root, {Y}, {Z})",
-            "Qy": f"Qy(strip, {X})", "Qz": f"Qz(strip, {X})", "vz_tip": "vz(strip, tip)"}
+            "Qy": f"Qy(strip, {X})", "Qz": f"Qz(strip, {X})", "vz_tip": "vz(strip, tip)",
+            "My0_eq": "My(strip, root, equilibrium)", "My0_con": "My(strip, root, constitutive)"}
     for k, n in STEPS.items():
         cols |= {f"My_{k}": f"My(strip, {X + n * H:g})", f"vz_{k}": f"vz(strip, {X + n * H:g})"}
     return {
@@ -85,6 +86,17 @@ def test_the_moment_changes_by_the_shear(strip):
     assert err < 1e-6, (dM, strip["Qz"][0], err)
 
 
+def test_an_outputs_own_recovery_at_a_station_its_beam_recovers_otherwise(strip):
+    """My at the root from the modes' curvature next to the beam's own (equilibrium) in one
+    derivation: each is computed once per station and recovery (the sections' memo holds the
+    recovery in its key), so the constitutive column is its own and the equilibrium one is My0
+    (exactly). The constitutive one equals a model-level "constitutive" run's My0 (measured
+    once, to 0): 1.61 N m, near the linear beam's W L^2/2 - L FZ = 1.62 N m, since its strain
+    does not see the pull's moment FX vz_tip, which equilibrium takes (0.442 N m)."""
+    assert np.array_equal(strip["My0_eq"], strip["My0"])
+    assert np.abs(strip["My0_con"] - strip["My0"]).max() > 1e-2 * np.abs(strip["My0"]).max()
+
+
 def test_root_stress_against_its_columns_and_the_closed_form(strip):
     """sigma(root, Y, Z) = N/A - Mz Y/I_z + My Z/I_y from the run's own columns (measured 3e-16),
     and the cantilever's closed form with My = W L^2/2 - L FZ + vz_tip FX (u = 0: the tip is at
@@ -137,6 +149,12 @@ BAD = [  # (scene, output, what the one line says)
     (FLAP, "Qz(blade, 1.0, 0.0)", "needs (beam, x) with x a marker name"),
     (FLAP, "Qy(hub, 1.0)", "'hub' is not a flexible body"),
     (FLAP_N_CONSTITUTIVE, "sigma(blade, 1.0, 0.0, 0.01)", "has no axial mode to carry N"),
+    # an output's own recovery (tests/test_output_recovery.py)
+    (PLANAR, "M(beam, mid, curvature)", "the recovery 'curvature' must be one of equilibrium, constitutive"),
+    (PLANAR, "N(beam, mid, constitutive)", "has no axial mode to carry N"),
+    (PLANAR, "w(beam, mid, equilibrium)", "needs (beam, x) with x a marker name"),
+    (FLAP, "Qy(blade, 1.0, constitutive)", "needs (beam, x) with x a marker name"),
+    (FLAP, "My(blade, 1.0, equilibrium, 2)", "needs (beam, x) or (beam, x, recovery)"),
 ]
 
 

@@ -34,7 +34,7 @@ from flexsym.model.variant import builtin, customize
 from flexsym.core.paths import PACKAGE_DIR
 from flexsym.toolchain.run import run_built
 from flexsym.scenes.scene import load_scene
-from flexsym.model.system import Output
+from flexsym.model.system import RECOVERABLE, Output, parse_output
 from flexsym.toolchain.pipeline import prepare_system
 
 SCENES_DIR = PACKAGE_DIR.parent / "scenes"
@@ -114,10 +114,17 @@ def ef_system(system, elements: int, recovery: str = "constitutive"):
     `recovery`: "constitutive", the elements' strain and curvature (the references of the
     studies and bench-systems, docs/validation/ef-systems.md, and their Richardson
     extrapolation, were measured so), "equilibrium" (select's reference,
-    docs/theory/stress-recovery.md), or "auto", a scene's ef beam's own."""
+    docs/theory/stress-recovery.md), or "auto", a scene's ef beam's own. An output that names
+    its own recovery, M(B, x, constitutive), gets the reference's (but with "auto"): a
+    candidate's curvature moment is measured against the reference's moment."""
     ef = replace(customize(builtin("ef"), elements=elements), axial_force=recovery, moment=recovery)
-    return replace(system, bodies=tuple(replace(b, model=ef) if b.flexible else b
-                                        for b in system.bodies))
+
+    def reference(o: Output) -> Output:  # an output's own recovery gives way to the reference's
+        fn, args = parse_output(system, o.quantity)
+        named = recovery != "auto" and fn in RECOVERABLE and len(args) == 3
+        return replace(o, quantity=f"{fn}({args[0]}, {args[1]})") if named else o
+    return replace(system, bodies=tuple(replace(b, model=ef) if b.flexible else b for b in system.bodies),
+                   outputs=tuple(reference(o) for o in system.outputs))
 
 
 def _ef_run(name: str, scene, case, repeat=1):

@@ -59,6 +59,10 @@ SPATIAL_ONLY = ("z", "vz", "Mx", "My", "Mz", "Qy", "Qz", "R", "Hx", "Hy", "Hz")
 PLANAR_ONLY = ("M", "momentum")  # not in 3D: Mx, My, Mz and Hx, Hy, Hz
 SIGMA_REACH = 10.0  # a section point lies within this many radii of gyration sqrt(I/A) of the axis
 OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", "Hz")
+# a section force or moment may name its recovery, N(B, x, equilibrium), over its beam model's
+# axial_force (N) / moment (the moments): one run can carry both (output_beam)
+RECOVERABLE = ("N", "M", "Mx", "My", "Mz")
+OUTPUT_RECOVERIES = ("equilibrium", "constitutive")
 # reaction(joint, c) per dimension: the force's ground components, then the moment about the
 # joint's child point (the plane's one, or its ground components)
 REACTION_COMPONENTS = {2: ("x", "y", "moment"), 3: ("x", "y", "z", "mx", "my", "mz")}
@@ -1097,7 +1101,15 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
         system._ref(where, args[0])
     else:
         want = (3 if system.dimension == 2 else 4) if fn == "sigma" else 2
+        if fn in RECOVERABLE and len(args) == 3:
+            if args[2] not in OUTPUT_RECOVERIES:
+                raise SpecError(f"{where}: the recovery '{args[2]}' must be one of "
+                                f"{', '.join(OUTPUT_RECOVERIES)}")
+            want = 3
         if len(args) != want:
+            if fn in RECOVERABLE:
+                raise SpecError(f"{where}: needs (beam, x) or (beam, x, recovery) with x a marker name "
+                                f"or a position in m and recovery {' or '.join(OUTPUT_RECOVERIES)}")
             if fn != "sigma":
                 raise SpecError(f"{where}: needs (beam, x) with x a marker name or a position in m")
             if want == 3:
@@ -1114,6 +1126,16 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
         if fn == "sigma":
             section_point(b, x, args[2:], where)
     return fn, args
+
+
+def output_beam(system: System, fn: str, args: tuple[str, ...]) -> FlexibleBeam:
+    """The beam an output reads (parse_output's fn, args): the system's, with the output's own
+    recovery, if it names one, in place of its model's axial_force (N) or moment."""
+    beam = system.body(args[0])
+    if fn in RECOVERABLE and len(args) == 3:
+        key = "axial_force" if fn == "N" else "moment"
+        beam = replace(beam, model=replace(beam.model, **{key: args[2]}))
+    return beam
 
 
 def section_at(beam: FlexibleBeam, x: float) -> tuple[float, float, float | None]:

@@ -64,8 +64,8 @@ from flexsym.physics.lagrange import equations_of_motion, jacobi_integral
 from flexsym.model.joint_kinds import KINDS, planar_cut_rows, planar_frame
 from flexsym.model.maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from flexsym.model.system import (GROUND, Gravity, PointForce, SpringDamper, System, Torque,
-                     beam_station, length_scale, parse_output, section_at,
-                     section_point)
+                     beam_station, length_scale, output_beam, parse_output,
+                     section_at, section_point)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
 
@@ -525,7 +525,7 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
     if fn == "violation":
         return violation(der)
     if fn in ("v", "u", "w", "N", "M"):
-        beam = system.body(args[0])
+        beam = output_beam(system, fn, args)  # N, M: with the output's recovery, if it names one
         x = beam_station(system, beam, args[1], where)
         u, v, _ = beam_fields_at(der, beam.name, x)
         if fn == "u":

@@ -81,8 +81,8 @@ from flexsym.model.exact_numbers import exact
 from flexsym.model.joint_kinds import KINDS
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.system import (GROUND, SECOND, FlexibleBeam, Gravity, PointForce, SpringDamper,
-                                  System, Torque, beam_station, length_scale, parse_output,
-                                  section_at, section_point)
+                                  System, Torque, beam_station, length_scale, output_beam,
+                                  parse_output, section_at, section_point)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
                                       joint_coordinate, motor_torque, spring_force_on_a, start_of,
                                       violation)
@@ -602,7 +602,7 @@ def _output(der, quantity: str) -> sp.Expr:
     if fn == "reaction":  # x, y, z: the force; mx, my, mz: the moment (REACTION_COMPONENTS)
         F, M = joint_reaction(der, system.joint(args[0]))
         return (F if len(args[1]) == 1 else M)["xyz".index(args[1][-1])]
-    beam = system.body(args[0])
+    beam = output_beam(system, fn, args)  # N and the moments: with the output's recovery, if named
     x = beam_station(system, beam, args[1], where)
     if fn == "sigma":
         return _sigma(der, beam, x, args[2:], where)

@@ -74,7 +74,7 @@ from flexsym.model.end_modes import with_end_modes
 from flexsym.model.modes import mode
 from flexsym.model.system import (GROUND, SECOND, beam_coordinates, Damping, Driver, FlexibleBeam, Gravity, Joint, Marker, Output, PointForce,
                      RigidBody, Section, SpringDamper, System, Torque, beam_station, length_scale,
-                     parse_output)
+                     output_beam, parse_output)
 
 SYSTEM_TABLES = ("system", "body", "joint", "driver", "gravity", "load", "solver", "output")
 _ARRAYS = ("body", "joint", "driver", "load")
@@ -623,7 +623,7 @@ def _carried(system: System, o: Output) -> None:
     fn, args = parse_output(system, o.quantity)
     if fn not in ("v", "u", "w", "N", "M", "vz", "Mx", "My", "Mz", "sigma"):
         return
-    beam = system.body(args[0])
+    beam = output_beam(system, fn, args)  # N and the moments: the recovery it names, if it does
     model = beam.model
     where = f"system '{system.name}': output {o.column} = '{o.quantity}'"
     x = beam_station(system, beam, args[1], where)

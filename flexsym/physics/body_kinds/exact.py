@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from flexsym.core.errors import SpecError
-from flexsym.model.system import parse_output
+from flexsym.model.system import output_beam, parse_output
 from flexsym.physics.body_kinds.base import rot, station
 from flexsym.physics.body_kinds.modal import FlexPart, Modal, field_reader, loaded_beyond_root
 from flexsym.physics.energy import BEAM_PARAMS
@@ -71,15 +71,16 @@ class Exact(Modal):
         for o in system.outputs:
             fn, args = parse_output(system, o.quantity)
             keys = {"M": ("moment",), "N": ("axial_force",), "sigma": ("moment", "axial_force")}.get(fn, ())
+            model = output_beam(system, fn, args).model if keys else None  # its recovery, if named
             on_beam = keys and args[0] != b.name and any(
-                getattr(system.body(args[0]).model, k, "") == "equilibrium" for k in keys) and any(
+                getattr(model, k, "") == "equilibrium" for k in keys) and any(
                 j.parent.partition(".")[0] == args[0] for j in system.joints if j.name in beyond)
             if fn == "momentum" or (fn == "reaction" and args[0] in beyond) or on_beam:
                 raise SpecError(f"{where}: output '{o.quantity}' needs its momentum, which is not "
                                 "derived yet")
             d = b.damping
             if (keys and args[0] == b.name and b.damped and (d.alpha or any(d.zetas(1)))
-                    and any(getattr(b.model, k) == "equilibrium" for k in keys)):
+                    and any(getattr(model, k) == "equilibrium" for k in keys)):
                 raise SpecError(f"{where}: output '{o.quantity}' from equilibrium would leave out "
                                 "its damping's alpha / zeta loads (not derived for exact yet): give "
                                 "beta, or moment / axial_force = \"constitutive\"")

@@ -422,10 +422,12 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) -> 
     integrals take seconds each)."""
     if fn == "N" and beam.model.axial_force == "equilibrium":
         fn = "Sx"
+    # an output may name its own recovery (system.output_beam): the key holds the one asked for
+    key = (x, fn, "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment)
     memo = der.spatial[beam.name].setdefault("sections", {})
-    if (x, fn) not in memo:
-        memo[(x, fn)] = _frame_section_of(der, beam, x, fn, loads_beyond)
-    return memo[(x, fn)]
+    if key not in memo:
+        memo[key] = _frame_section_of(der, beam, x, fn, loads_beyond)
+    return memo[key]
 
 
 def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) -> sp.Expr:
