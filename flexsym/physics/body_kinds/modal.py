@@ -48,13 +48,20 @@ class FlexPart:
         on a frame that the joints spin takes the foreshortening's: its -V_p in T (Modal.contribute)
         is m3's T to second order in the deflection, so its sections balance the motion T gives
         (S1's root moment then equals the clamp's reaction, as m3's does)."""
-        spun = self.shortened is not None and not system.frame_driven(self.beam.name)
-        return self.shortened if spun else self.fields
+        return self.shortened if prestress_in_T(system, self.beam) else self.fields
 
     def view(self):
         """What outputs.field_at / output_expression read (a derivation-like object)."""
         return SimpleNamespace(spec=self.beam.model, table=self.table, modes=self.modes,
                                fields=self.fields)
+
+
+def prestress_in_T(system, beam) -> bool:
+    """Whether a beam's prestress V_p is written into T as -V_p (the centrifugal part of m3's T
+    that is linear in the foreshortening), planar and spatial: when the joints' rates spin its
+    frame, so that Lagrange's equations take V_p's dependence on them; under a guided drive
+    alone it stays a potential that varies in time."""
+    return beam.model.strain == "prestress" and not system.frame_driven(beam.name)
 
 
 def _beyond_root(ref, beam: str) -> bool:
@@ -152,11 +159,8 @@ class Modal(BeamKind):
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
             V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
-            if term_name == "prestress" and not der.system.frame_driven(b.name):
-                # A spin the joints' rates carry: -V_p is the centrifugal part of T that the
-                # foreshortening gives (m3), so it joins T and Lagrange's equations take its
-                # dependence on those rates (as in 3D, body_kinds/spatial/modal.py: as a
-                # potential read at the current spin S3's T + V drifted 1.4e-6 of V's peak)
+            if term_name == "prestress" and prestress_in_T(der.system, b):
+                # as a potential read at the current spin, S3's T + V drifted 1.4e-6 of V's peak
                 der.T -= V
                 der.terms.append((b.name, term_name + " (centrifugal, in T: the joints' spin)", wrt, V,
                                   sp.zeros(len(der.q), 1)))

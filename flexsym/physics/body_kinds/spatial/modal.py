@@ -83,12 +83,11 @@ class Modal(SpatialBeam):
                        - integral(rho * A * L * w("mu") * fr.g.dot(r)))
         for term_name, wrt in strain.terms + (("torsion", ("torsion",)),):
             if term_name == "prestress":
-                # A spin the joints' rates carry: the centrifugal V_p is minus the part of T that
-                # the foreshortening gives (m3), so it joins T and Lagrange's equations take its
-                # dependence on those rates too; as a potential read at the current spin the
-                # joint's equation missed d/dt dV_p/dq' (a tilted hinge's T + V drifted 47 %).
-                # A mesh's acceleration load cases stay a potential (they read q'').
-                spun = not der.system.frame_driven(b.name)
+                # in T when the joints spin the frame (planar.prestress_in_T): as a potential
+                # read at the current spin, the joint's equation missed d/dt dV_p/dq' (a tilted
+                # hinge's T + V drifted 47 %). A mesh's acceleration load cases stay a potential
+                # (they read q''); its centrifugal ones join T as the analytic V_p does.
+                spun = planar.prestress_in_T(der.system, b)
                 turn = om if spun else fr.omega  # the frame's placeholders, or its actual motion
                 if b.model.body is None:
                     Vt, Vp = sp.Integer(0), integral(_strain_density(term_name, F, P, turn, w))
@@ -113,11 +112,11 @@ class Modal(SpatialBeam):
             energies = _rate_energies(b, P, table, integral, keys)
             der.dissipation[b.name] = damping_dissipation(b.damping, *energies)
             der.Q -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
-        short = der.spatial[b.name]["short"]
-        if short is not None and not der.system.frame_driven(b.name):
-            # prestress's -V_p in T is m3's T to second order in the deflection: its sections,
-            # momentum and reactions take the foreshortening's inertia as m3's do (as in the plane,
-            # body_kinds.modal.FlexPart.inertial_fields), so they balance the motion T gives
+        if planar.prestress_in_T(der.system, b):
+            # -V_p in T is m3's T to second order in the deflection: the sections, momentum and
+            # reactions take the foreshortening's inertia as m3's do (as in the plane,
+            # FlexPart.inertial_fields), so they balance the motion T gives
+            short = der.spatial[b.name]["short"]
             ri = sp.Matrix([L * s + short["u"], short["v"], short["vz"]])
             inertial = (short, ri, vf + sp.Matrix([short["u_d"], short["v_d"], short["vz_d"]]) + cross(om, ri))
         else:
