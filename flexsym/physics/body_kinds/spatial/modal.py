@@ -54,7 +54,7 @@ class Modal(SpatialBeam):
         sym, symd, symdd = ({n: sp.Symbol(f"{b.name}_{n}{k}", real=True) for n, _, _ in names}
                             for k in ("", "_d", "_dd"))
         F = _fields(b, sym, symd, symdd, table, strain.foreshortening, keys)
-        # prestress: the fields with the foreshortening, for its sections (_frame_section_of)
+        # prestress: the fields with the foreshortening, its inertia's on a spun frame (contribute)
         short = _fields(b, sym, symd, symdd, table, True, keys) if strain.name == "prestress" else None
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, keys=keys, P=P, short=short,
                                    sym=sym, r=sp.Matrix([P["L"] * s + F["u"], F["v"], F["vz"]]))
@@ -422,17 +422,16 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) -> 
     if fn == "N" and beam.model.axial_force == "equilibrium":
         fn = "Sx"
     # an output may name its own recovery (system.output_beam): the key holds the one asked for
-    key = (x, fn, "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment)
+    source = "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment
     memo = der.spatial[beam.name].setdefault("sections", {})
-    if key not in memo:
-        memo[key] = _frame_section_of(der, beam, x, fn, loads_beyond)
-    return memo[key]
+    if (x, fn, source) not in memo:
+        memo[(x, fn, source)] = _frame_section_of(der, beam, x, fn, source, loads_beyond)
+    return memo[(x, fn, source)]
 
 
-def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) -> sp.Expr:
+def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, loads_beyond) -> sp.Expr:
     d = der.spatial[beam.name]
     P = d["P"]
-    source = "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment
     if source != "equilibrium":
         L = P["L"]
         at = exact(x) / exact(beam.length)
