@@ -178,8 +178,9 @@ def test_free_frame_acceleration_case_enters_a_nonsymmetric_mass_matrix():
     peak (measured 1.1e-6, genalpha3's own step error; with M factored as if symmetric,
     Cholesky of its lower triangle, 7.9e-5). Against m3, whose axial modes carry the same
     inertial stretch, the sag agrees within 3e-3 of its peak (measured 7.5e-4, the root
-    moment 1.9e-3); the analytic prestress, which keeps only the centrifugal load, is 25 %
-    off (the root moment 57 %)."""
+    moment 2.1e-3), as the analytic prestress does (6.5e-4, 1.4e-3: it holds the root's
+    acceleration along the beam too, test_prestress_on_a_joint.py; with the centrifugal load
+    alone it was 25 % off, the root moment 57 %)."""
     from flexsym.physics.spatial import derive_spatial
     from flexsym.scenes.system_scene import system_from_dict
 

@@ -50,8 +50,9 @@ STRAIN_MODELS: dict[str, StrainModel] = {m.name: m for m in (
                 "eq. (30)-(31): axial field carries u_fs = -1/2 int v_x^2; linear strain energy "
                 "(variant #3)"),
     StrainModel("prestress", False, _BASE + (("prestress", ("bending",)),), False,
-                "bending modes with the centrifugal-prestress geometric stiffness "
-                "w^2 int N(x) v_x^2, N = rho A (L^2 - x^2)/2"),
+                "bending modes with the prestress geometric stiffness 1/2 int N(x) v_x^2 of the "
+                "rigid beam's axial load, N = rho A w^2 (L^2 - x^2)/2 on a hub, plus "
+                "rho A (g_x - a_0x)(L - x) where its root accelerates or gravity acts along it"),
     StrainModel("exact", False, (("stretch", ("axial",)), ("curvature", ("bending",))), False,
                 "exact kinematics: bending modes' slopes are the section rotation, axial modes' "
                 "strains the stretch (none: inextensible); r = int (1 + eps)(cos phi, sin phi) dx, "

@@ -22,8 +22,8 @@ from flexsym.model.modes import s
 from flexsym.model.system import FlexibleBeam
 from flexsym.physics.body_kinds.base import (BeamKind, exact_number, frame_acceleration, record_body,
                                              station)
-from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, build_fields,
-                                    gravity_density, kinetic_density, momentum_density, w)
+from flexsym.physics.energy import (BEAM_PARAMS, ENERGY_TERMS, FrameMotion, A, L, build_fields,
+                                    gravity_density, kinetic_density, momentum_density, rho, w)
 from flexsym.physics.integrals import BodyIntegralTable, IntegralTable
 from flexsym.physics.lagrange import generalized_force
 from flexsym.physics.outputs import field_at, output_expression
@@ -62,6 +62,21 @@ def prestress_in_T(system, beam) -> bool:
     frame, so that Lagrange's equations take V_p's dependence on them; under a guided drive
     alone it stays a potential that varies in time."""
     return beam.model.strain == "prestress" and not system.frame_driven(beam.name)
+
+
+def root_load_density(part: FlexPart, ph) -> tuple[sp.Expr, sp.Expr]:
+    """(T_a, V_a) per unit s: the parts of m3's T and V_grav linear in the foreshortening
+    du = -1/2 int_0^x v_x^2 besides the centrifugal -V_p, T_a = rho A L mu (omega V_y du +
+    V_x du'), V_a = -rho A L mu g_x du (ph: the frame's placeholders, LocalMotion). Lagrange's
+    equations make them the stiffening of the axial load rho A (a_0x - g_x)(L - x) that the
+    root's acceleration and gravity put on the beam, which the centrifugal N-hat leaves out
+    (a blade clamped 0.5 m off a link's axis: w_mid 0.54 of its peak off ef, S3's pendulum 0.34);
+    written into T and V as m3 holds them, so that T + V stays conserved. Zero for a root on
+    the axis of a frame turning about a fixed point, without gravity along the beam."""
+    f, sh = part.fields, part.shortened
+    k = rho * A * L * f.weights["mu"]
+    du, du_d = sh.u - f.u, sh.u_dot - f.u_dot
+    return k * (ph[0] * ph[2] * du + ph[1] * du_d), -k * ph[5] * du
 
 
 def _beyond_root(ref, beam: str) -> bool:
@@ -159,6 +174,13 @@ class Modal(BeamKind):
         for term_name, wrt in strain.terms:
             term = ENERGY_TERMS[term_name]
             V = body_expr(tab.integrate(term.density(fl)).xreplace({w: ph[0]}))
+            if term_name == "prestress":
+                Ta, Va = (body_expr(tab.integrate(e)) for e in root_load_density(part, ph))
+                der.T += Ta
+                der.V_grav += Va
+                if Ta != 0 or Va != 0:  # (a root on a fixed axis without gravity: none)
+                        der.terms.append((b.name, "prestress (the root's acceleration and gravity along "
+                                      "the beam, in T and V)", wrt, Ta - Va, sp.zeros(len(der.q), 1)))
             if term_name == "prestress" and prestress_in_T(der.system, b):
                 # as a potential read at the current spin, S3's T + V drifted 1.4e-6 of V's peak
                 der.T -= V
@@ -206,7 +228,9 @@ class Modal(BeamKind):
                             "an axial force")
         view = SimpleNamespace(spec=spec, table=part.table, modes=part.modes, fields=part.fields)
         expr = output_expression(view, f"{fn}_o")
-        omega = der.ddt(der.poses[beam.name].angle)
+        _, (omega, _, a0x, _, gx, _) = frame_acceleration(der, beam.name)
+        if fn == "N" and spec.strain == "prestress":  # the root's acceleration and gravity (root_load_density)
+            expr -= rho * A * L * part.table.integrate(part.fields.weights["mu"], frac, 1) * (a0x - gx)
         return expr.xreplace(part.table.substitutions()).xreplace(part.psyms).xreplace({w: omega})
 
     def inertial_stress(self, der, beam, x: float, fn: str):

@@ -91,6 +91,18 @@ class Modal(SpatialBeam):
                 turn = om if spun else fr.omega  # the frame's placeholders, or its actual motion
                 if b.model.body is None:
                     Vt, Vp = sp.Integer(0), integral(_strain_density(term_name, F, P, turn, w))
+                    # the root's acceleration and gravity along the beam (planar.root_load_density)
+                    short = der.spatial[b.name]["short"]
+                    du, du_d = short["u"] - F["u"], short["u_d"] - F["u_d"]
+                    k = rho * A * L * w("mu")
+                    Ta = integral(k * ((vf[1] * om[2] - vf[2] * om[1]) * du + vf[0] * du_d))
+                    Va = integral(-k * du) * fr.g[0]
+                    if Ta.xreplace(actual) != 0 or Va != 0:  # (a root on a fixed axis without gravity: none)
+                        der.frame_T.append((Ta, actual))
+                        der.V_grav += Va
+                        der.terms.append((b.name, "prestress (the root's acceleration and gravity along "
+                                          "the beam, in T and V)", wrt, Ta.xreplace(actual) - Va,
+                                          sp.zeros(len(q), 1)))
                 else:  # the unit inertial load cases (fedata)
                     Vt, Vp = _load_case_energy(der, b, turn)
                 if not spun:
@@ -441,8 +453,8 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, l
                 fr = der.spatial["frames"][beam.name]
                 if beam.model.body is not None:  # the unit load cases' axial forces there
                     return _load_case_axial_force(der, beam, fr, x)
-                om = fr.omega
-                return P["rho"] * P["A"] * (om[1]**2 + om[2]**2) * L**2 * (1 - at**2) / 2
+                om, a0x = fr.omega, _load_case_factors(der, fr, ["a_x"])["a_x"]  # a_0x - g_x
+                return P["rho"] * P["A"] * L * ((om[1]**2 + om[2]**2) * L * (1 - at**2) / 2 - (1 - at) * a0x)
             if not beam.model.axial:
                 raise SpecError(f"system '{der.system.name}': body '{beam.name}': strain model "
                                 f"'{beam.model.strain}' has no axial coordinate to carry N")
