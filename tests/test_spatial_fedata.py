@@ -170,17 +170,16 @@ def shaken_beam(model: str) -> dict:
                                                      "w_tip": "vz(strip, tip)", "M_root": "My(strip, root)"}}}
 
 
-def test_free_frame_acceleration_case_enters_a_nonsymmetric_mass_matrix():
+def test_free_frame_acceleration_case_is_in_T_and_the_mass_matrix_symmetric():
     """The shaken beam from a mesh, prestress: the axial acceleration's load case a_x = x''
-    reads q'', that part of its force is in M (spatial.derive_spatial), which is then not
-    symmetric, and the runtime factors it by LU (ode.c). rk4 (M solved at every stage) and
-    genalpha3 (its Newton matrix, LU) agree at small steps: the tip's sag within 1e-5 of its
-    peak (measured 1.1e-6, genalpha3's own step error; with M factored as if symmetric,
-    Cholesky of its lower triangle, 7.9e-5). Against m3, whose axial modes carry the same
-    inertial stretch, the sag agrees within 3e-3 of its peak (measured 7.5e-4, the root
-    moment 2.1e-3), as the analytic prestress does (6.5e-4, 1.4e-3: it holds the root's
-    acceleration along the beam too, test_prestress_on_a_joint.py; with the centrifugal load
-    alone it was 25 % off, the root moment 57 %)."""
+    (a free coordinate's) is written into T as m3 holds it (V_x S' with S the case's quadratic
+    form, _load_case_energy), so no force reads q'' and M is symmetric (as a potential that
+    read q'', that part of the force was in M, which was then not symmetric). rk4 and
+    genalpha3 agree at small steps: the tip's sag within 1e-5 of its peak. Against m3, whose
+    axial modes carry the same inertial stretch, the sag agrees within 3e-3 of its peak
+    (measured 8.2e-4, the root moment 2.2e-3; as a potential 7.5e-4, 2.1e-3), as the analytic
+    prestress does (6.5e-4, 1.4e-3; with the centrifugal load alone it was 25 % off, the root
+    moment 57 %)."""
     from flexsym.physics.spatial import derive_spatial
     from flexsym.scenes.system_scene import system_from_dict
 
@@ -188,7 +187,7 @@ def test_free_frame_acceleration_case_enters_a_nonsymmetric_mass_matrix():
     der = derive_spatial(system_from_dict(data, name=data["system"]["name"]))
     at = {x: 0.01 for x in der.q} | {x: 0.5 for x in der.qd}
     M = np.array(der.M.xreplace(at).xreplace({p: v for _, p, v in der.params}), dtype=float)
-    assert np.abs(M - M.T).max() > 1e-3 * np.abs(M).max()  # the sympy part: only -B
+    assert np.abs(M - M.T).max() <= 1e-12 * np.abs(M).max()
     b = built(data)
     runs = [run_ok(b, integrator=i, dt=2e-5, t_end=0.3) for i in ("rk4", "genalpha3")]
     peak = np.abs(runs[0]["w_tip"]).max()

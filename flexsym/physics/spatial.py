@@ -45,14 +45,15 @@ out, as the spatial benchmarks define it):
     K_G in both planes from the axial modes), prestress 1/2 int N(x) (v_x^2 + vz_x^2) with
     N = rho A (omega_y^2 + omega_z^2)(L^2 - x^2)/2 (the centrifugal load of the frame's actual
     rotation about the axes across the beam; on a frame that joints spin, -V_p is in T, as in
-    the plane: body_kinds/spatial/modal.py).
+    the plane: body_kinds/spatial/modal.py) and the load rho A (g_x - a_0x)(L - x) of the
+    frame origin's acceleration and gravity along the beam (in T and V, as m3 holds it).
 A beam from finite-element data: each term carries its section distribution (the table's
 weights: rho A with the point masses, EA, EI_z, EI_y, GJ, rho (I_y + I_z)), each plane and the
 torsion have their own modes from the mesh (modal._beam_modes), and prestress is the geometric
 stiffness of the twelve unit inertial load cases projected on the modes times the frame's
-actual omega_i omega_j, alpha_i and a_i (modal._load_case_energy; on a frame that joints spin
-the omega_i omega_j cases' energy joins T, as the analytic V_p does); where a_i reads a free
-frame's q'', that part of the force joins M (not symmetric then: the runtime factors it by LU).
+actual omega_i omega_j, alpha_i and a_i (modal._load_case_energy: on a frame that joints spin
+the omega_i omega_j cases' energy joins T, as the analytic V_p does; the alpha_i and a_i cases
+are written into T and V as m3 holds them, so no force reads q'' and M stays symmetric).
 What the generalisation keeps and drops: the bending planes couple only through the frame's
 motion, the foreshortening and the cubic term (both planes in one stretch); torsion is
 linear and couples to bending only through omega.t in T (the propeller moment of a section
@@ -204,16 +205,8 @@ def derive_spatial(system: System, ef_free_ad: bool = False) -> SystemDerivation
         if isinstance(load, SpringDamper):
             Q_ += add_spring(der, load, _spring_ends(der, load))
     Q_ += _applied(der)
-    # a force that reads a free frame's acceleration (a body's unit load cases) is part of M
-    reads_qdd = any(e.has(*qdd) for e in Q_)  # else no system pays for the Jacobian below
-    B = Q_.jacobian(qdd) if reads_qdd else None
-    if reads_qdd:
-        Q_ = Q_.xreplace(dict.fromkeys(qdd, 0))
-        der.V = der.V.xreplace(dict.fromkeys(qdd, 0))  # V holds such terms at q'' = 0
     der.Q = Q_.applyfunc(sp.expand)
     der.M, der.f = equations_of_motion(der.T, der.Q, q, qd, [gd.symbols for gd in guided])
-    if reads_qdd:
-        der.M = (der.M - B).applyfunc(sp.expand)
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: _output(der, o.quantity) for o in system.outputs}
     return der

@@ -57,7 +57,7 @@ class Modal(SpatialBeam):
         # prestress: the fields with the foreshortening, its inertia's on a spun frame (contribute)
         short = _fields(b, sym, symd, symdd, table, True, keys) if strain.name == "prestress" else None
         der.spatial[b.name] = dict(F=F, table=table, modes=modes, keys=keys, P=P, short=short,
-                                   sym=sym, r=sp.Matrix([P["L"] * s + F["u"], F["v"], F["vz"]]))
+                                   sym=sym, symd=symd, r=sp.Matrix([P["L"] * s + F["u"], F["v"], F["vz"]]))
 
     def hang(self, der, fr: Frame, body: str, m):
         return _section_frame(der, fr, body, m.x), sp.zeros(3, 1)
@@ -85,34 +85,33 @@ class Modal(SpatialBeam):
             if term_name == "prestress":
                 # in T when the joints spin the frame (planar.prestress_in_T): as a potential
                 # read at the current spin, the joint's equation missed d/dt dV_p/dq' (a tilted
-                # hinge's T + V drifted 47 %). A mesh's acceleration load cases stay a potential
-                # (they read q''); its centrifugal ones join T as the analytic V_p does.
+                # hinge's T + V drifted 47 %). The root's acceleration and gravity: in T and V
+                # always, as m3 holds them (a mesh's acceleration load cases as a potential read
+                # q'', and a tilted hinge's T + V drifted 1.6e-4 of V's peak).
                 spun = planar.prestress_in_T(der.system, b)
                 turn = om if spun else fr.omega  # the frame's placeholders, or its actual motion
                 if b.model.body is None:
-                    Vt, Vp = sp.Integer(0), integral(_strain_density(term_name, F, P, turn, w))
+                    Vp = integral(_strain_density(term_name, F, P, turn, w))
                     # the root's acceleration and gravity along the beam (planar.root_load_density)
                     short = der.spatial[b.name]["short"]
                     du, du_d = short["u"] - F["u"], short["u_d"] - F["u_d"]
                     k = rho * A * L * w("mu")
                     Ta = integral(k * ((vf[1] * om[2] - vf[2] * om[1]) * du + vf[0] * du_d))
                     Va = integral(-k * du) * fr.g[0]
-                    if Ta.xreplace(actual) != 0 or Va != 0:  # (a root on a fixed axis without gravity: none)
-                        der.frame_T.append((Ta, actual))
-                        der.V_grav += Va
-                        der.terms.append((b.name, "prestress (the root's acceleration and gravity along "
-                                          "the beam, in T and V)", wrt, Ta.xreplace(actual) - Va,
-                                          sp.zeros(len(q), 1)))
                 else:  # the unit inertial load cases (fedata)
-                    Vt, Vp = _load_case_energy(der, b, turn)
-                if not spun:
-                    Vt += Vp
-                else:
+                    Ta, Va, Vp = _load_case_energy(der, b, turn, om, vf)
+                if Ta.xreplace(actual) != 0 or Va != 0:  # (a root on a fixed axis without gravity: none)
+                    der.frame_T.append((Ta, actual))
+                    der.V_grav += Va
+                    der.terms.append((b.name, "prestress (the root's acceleration and gravity along "
+                                      "the beam, in T and V)", wrt, Ta.xreplace(actual) - Va,
+                                      sp.zeros(len(q), 1)))
+                if spun:
                     der.frame_T.append((-Vp, actual))
                     der.terms.append((b.name, term_name + " (centrifugal, in T: the joints' spin)", wrt,
                                       Vp.xreplace(actual), sp.zeros(len(q), 1)))
-                    if Vt == 0:
-                        continue
+                    continue
+                Vt = Vp
             else:
                 Vt = integral(_strain_density(term_name, F, P, fr.omega, w))
             Qk = generalized_force(Vt, q, [c.body == b.name and c.group in wrt for c in coords])
@@ -291,31 +290,37 @@ def _load_case_factors(der, fr: Frame, cases) -> dict:
     return out
 
 
-def _load_case_energy(der, b: FlexibleBeam, spin: sp.Matrix) -> tuple[sp.Expr, sp.Expr]:
-    """The prestress of a body from finite-element data: V = 1/2 sum_c f_c rho A L^(m_c - 1)
-    q^T D_c q on each bending plane's coordinates, D_c the geometric stiffness of unit load
-    case c projected on the plane's modes (fedata.load_case_stiffness), f_c its frame's
-    actual motion (_load_case_factors): the stiffening follows the frame's rotation, angular
-    and linear acceleration and gravity, whatever they are. (V of the acceleration cases, V of
-    the centrifugal cases omega_i omega_j with omega = spin, e.g. the frame's placeholders)."""
+def _load_case_energy(der, b: FlexibleBeam, spin: sp.Matrix, om: sp.Matrix, vf: sp.Matrix):
+    """The prestress of a body from finite-element data, from its unit load cases: each case c
+    gives the quadratic form E_c = 1/2 rho A L^(m_c - 1) q^T D_c q on each bending plane's
+    coordinates, D_c the geometric stiffness of the unit load case projected on the plane's
+    modes (fedata.load_case_stiffness). The centrifugal cases omega_i omega_j: V_w = sum
+    spin_i spin_j E_c (spin: the frame's placeholders om, or its actual rate). The acceleration
+    cases a_i and alpha_i, S_i = E_(a_i), R_i = E_(alpha_i), as m3's T and V_g hold them
+    (planar.root_load_density): T_a = vf.(S' + om x S) + om.R' and V_a = -g.S, whose Lagrange
+    equations are the load (a - g).dS/dq + alpha.dR/dq of the frame's actual acceleration,
+    angular acceleration and gravity, whatever they are. Returns (T_a, V_a, V_w)."""
     d = der.spatial[b.name]
-    P, sym, keys, modes = d["P"], d["sym"], d["keys"], d["modes"]
-    planes = {}
+    P, sym, symd, keys, modes = d["P"], d["sym"], d["symd"], d["keys"], d["modes"]
+    g = der.spatial["frames"][b.name].g
+    forms, Vw = {}, sp.Integer(0)
     for plane in ("v", "vz"):
-        names = [n for n, g, _ in beam_coordinates(b) if g == "bending" and n.split("_")[0] == plane]
-        planes[plane] = (names, load_case_stiffness(b.model.body, [modes[keys[n]].shape for n in names]))
-    # the frame's factors once for both planes (their cases are the same: K_G,e is either's)
-    cases = {c for _, D in planes.values() for c in D}
-    f = _load_case_factors(der, der.spatial["frames"][b.name], {c for c in cases if not c.startswith("ww")})
-    f |= {c: spin["xyz".index(c[3])] * spin["xyz".index(c[4])] for c in cases if c.startswith("ww")}
-    V = [sp.Integer(0), sp.Integer(0)]
-    for names, D in planes.values():
+        names = [n for n, grp, _ in beam_coordinates(b) if grp == "bending" and n.split("_")[0] == plane]
         qv = sp.Matrix([sym[n] for n in names])
-        for case, Dc in D.items():
+        for case, Dc in load_case_stiffness(b.model.body, [modes[keys[n]].shape for n in names]).items():
             Dm = sp.Matrix(Dc.shape[0], Dc.shape[1], [sp.Float(repr(float(v)), 17) for v in Dc.ravel()])
-            V[case.startswith("ww")] += (f[case] * P["rho"] * P["A"] * P["L"]**(load_case_scale(case) - 1)
-                                         * (qv.T * Dm * qv)[0, 0] / 2)
-    return sp.expand(V[0]), sp.expand(V[1])
+            E = P["rho"] * P["A"] * P["L"]**(load_case_scale(case) - 1) * (qv.T * Dm * qv)[0, 0] / 2
+            if case.startswith("ww"):
+                Vw += spin["xyz".index(case[3])] * spin["xyz".index(case[4])] * E
+            else:
+                forms[case] = forms.get(case, 0) + E
+
+    def rate(e):
+        return sum(sp.diff(e, sym[n]) * symd[n] for n in sym)
+    S = sp.Matrix([forms.get(f"a_{c}", 0) for c in "xyz"])
+    R = sp.Matrix([forms.get(f"al_{c}", 0) for c in "xyz"])
+    Ta = vf.dot(S.applyfunc(rate) + cross(om, S)) + om.dot(R.applyfunc(rate))
+    return sp.expand(Ta), sp.expand(-g.dot(S)), sp.expand(Vw)
 
 
 def _load_case_axial_force(der, b: FlexibleBeam, fr: Frame, x: float) -> sp.Expr:
