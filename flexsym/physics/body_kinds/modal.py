@@ -64,19 +64,33 @@ def prestress_in_T(system, beam) -> bool:
     return beam.model.strain == "prestress" and not system.frame_driven(beam.name)
 
 
+ROOT_LOAD_TERM = "prestress (the root's acceleration and gravity along the beam, in T and V)"
+
+
+def root_load_energy(S, S_dot, R, R_dot, omega, V, g) -> tuple[sp.Expr, sp.Expr]:
+    """(T_a, V_a): the parts of m3's T and V_g linear in the second-order displacement field
+    du (the foreshortening -1/2 int_0^x v_x^2 along the beam, or a mesh's), besides the
+    centrifugal -V_p, in the frame's components (3-vectors: omega its rate, V its origin's
+    velocity, g gravity), from S = int rho A du and R = int rho A r x du and their rates:
+    T_a = V.(S' + omega x S) + omega.R', V_a = -g.S. Lagrange's equations make them the load
+    (a_0 - g).dS/dq + alpha.dR/dq of the origin's acceleration, the angular acceleration and
+    gravity: on a straight beam the stiffening of the axial load rho A (a_0x - g_x)(L - x),
+    which the centrifugal N-hat leaves out (a blade clamped 0.5 m off a link's axis: w_mid 0.37
+    of its peak off m3; S3's pendulum 0.34 off ef, as m3 0.11). Written into T and V as m3
+    holds them, T + V stays conserved and no force reads q''. Zero for a root on the axis of a
+    frame turning about a fixed point, without gravity along the beam."""
+    return V.dot(S_dot + omega.cross(S)) + omega.dot(R_dot), -g.dot(S)
+
+
 def root_load_density(part: FlexPart, ph) -> tuple[sp.Expr, sp.Expr]:
-    """(T_a, V_a) per unit s: the parts of m3's T and V_grav linear in the foreshortening
-    du = -1/2 int_0^x v_x^2 besides the centrifugal -V_p, T_a = rho A L mu (omega V_y du +
-    V_x du'), V_a = -rho A L mu g_x du (ph: the frame's placeholders, LocalMotion). Lagrange's
-    equations make them the stiffening of the axial load rho A (a_0x - g_x)(L - x) that the
-    root's acceleration and gravity put on the beam, which the centrifugal N-hat leaves out
-    (a blade clamped 0.5 m off a link's axis: w_mid 0.54 of its peak off ef, S3's pendulum 0.34);
-    written into T and V as m3 holds them, so that T + V stays conserved. Zero for a root on
-    the axis of a frame turning about a fixed point, without gravity along the beam."""
+    """root_load_energy per unit s of a planar beam (ph: the frame's placeholders, LocalMotion):
+    S = rho A L mu du along the frame's x axis, R = 0 (r x du e_x = 0 on the axis)."""
     f, sh = part.fields, part.shortened
     k = rho * A * L * f.weights["mu"]
-    du, du_d = sh.u - f.u, sh.u_dot - f.u_dot
-    return k * (ph[0] * ph[2] * du + ph[1] * du_d), -k * ph[5] * du
+    along = lambda e: sp.Matrix([k * e, 0, 0])  # noqa: E731
+    zero = sp.zeros(3, 1)
+    return root_load_energy(along(sh.u - f.u), along(sh.u_dot - f.u_dot), zero, zero,
+                            sp.Matrix([0, 0, ph[0]]), sp.Matrix([ph[1], ph[2], 0]), sp.Matrix([ph[5], ph[6], 0]))
 
 
 def _beyond_root(ref, beam: str) -> bool:
@@ -179,8 +193,7 @@ class Modal(BeamKind):
                 der.T += Ta
                 der.V_grav += Va
                 if Ta != 0 or Va != 0:  # (a root on a fixed axis without gravity: none)
-                        der.terms.append((b.name, "prestress (the root's acceleration and gravity along "
-                                      "the beam, in T and V)", wrt, Ta - Va, sp.zeros(len(der.q), 1)))
+                    der.terms.append((b.name, ROOT_LOAD_TERM, wrt, Ta - Va, sp.zeros(len(der.q), 1)))
             if term_name == "prestress" and prestress_in_T(der.system, b):
                 # as a potential read at the current spin, S3's T + V drifted 1.4e-6 of V's peak
                 der.T -= V

@@ -90,21 +90,17 @@ class Modal(SpatialBeam):
                 # q'', and a tilted hinge's T + V drifted 1.6e-4 of V's peak).
                 spun = planar.prestress_in_T(der.system, b)
                 turn = om if spun else fr.omega  # the frame's placeholders, or its actual motion
-                if b.model.body is None:
+                if b.model.body is None:  # the foreshortening along the beam (planar.root_load_density)
                     Vp = integral(_strain_density(term_name, F, P, turn, w))
-                    # the root's acceleration and gravity along the beam (planar.root_load_density)
-                    short = der.spatial[b.name]["short"]
-                    du, du_d = short["u"] - F["u"], short["u_d"] - F["u_d"]
-                    k = rho * A * L * w("mu")
-                    Ta = integral(k * ((vf[1] * om[2] - vf[2] * om[1]) * du + vf[0] * du_d))
-                    Va = integral(-k * du) * fr.g[0]
+                    short, k, zero = der.spatial[b.name]["short"], rho * A * L * w("mu"), sp.zeros(3, 1)
+                    S, S_d = (sp.Matrix([integral(k * (short[c] - F[c])), 0, 0]) for c in ("u", "u_d"))
+                    Ta, Va = planar.root_load_energy(S, S_d, zero, zero, om, vf, fr.g)
                 else:  # the unit inertial load cases (fedata)
                     Ta, Va, Vp = _load_case_energy(der, b, turn, om, vf)
                 if Ta.xreplace(actual) != 0 or Va != 0:  # (a root on a fixed axis without gravity: none)
                     der.frame_T.append((Ta, actual))
                     der.V_grav += Va
-                    der.terms.append((b.name, "prestress (the root's acceleration and gravity along "
-                                      "the beam, in T and V)", wrt, Ta.xreplace(actual) - Va,
+                    der.terms.append((b.name, planar.ROOT_LOAD_TERM, wrt, Ta.xreplace(actual) - Va,
                                       sp.zeros(len(q), 1)))
                 if spun:
                     der.frame_T.append((-Vp, actual))
@@ -296,10 +292,9 @@ def _load_case_energy(der, b: FlexibleBeam, spin: sp.Matrix, om: sp.Matrix, vf: 
     coordinates, D_c the geometric stiffness of the unit load case projected on the plane's
     modes (fedata.load_case_stiffness). The centrifugal cases omega_i omega_j: V_w = sum
     spin_i spin_j E_c (spin: the frame's placeholders om, or its actual rate). The acceleration
-    cases a_i and alpha_i, S_i = E_(a_i), R_i = E_(alpha_i), as m3's T and V_g hold them
-    (planar.root_load_density): T_a = vf.(S' + om x S) + om.R' and V_a = -g.S, whose Lagrange
-    equations are the load (a - g).dS/dq + alpha.dR/dq of the frame's actual acceleration,
-    angular acceleration and gravity, whatever they are. Returns (T_a, V_a, V_w)."""
+    cases a_i and alpha_i: S_i = E_(a_i), R_i = E_(alpha_i) in planar.root_load_energy, whose
+    Lagrange equations are the load (a - g).dS/dq + alpha.dR/dq of the frame's actual
+    acceleration, angular acceleration and gravity, whatever they are. Returns (T_a, V_a, V_w)."""
     d = der.spatial[b.name]
     P, sym, symd, keys, modes = d["P"], d["sym"], d["symd"], d["keys"], d["modes"]
     g = der.spatial["frames"][b.name].g
@@ -319,8 +314,8 @@ def _load_case_energy(der, b: FlexibleBeam, spin: sp.Matrix, om: sp.Matrix, vf: 
         return sum(sp.diff(e, sym[n]) * symd[n] for n in sym)
     S = sp.Matrix([forms.get(f"a_{c}", 0) for c in "xyz"])
     R = sp.Matrix([forms.get(f"al_{c}", 0) for c in "xyz"])
-    Ta = vf.dot(S.applyfunc(rate) + cross(om, S)) + om.dot(R.applyfunc(rate))
-    return sp.expand(Ta), sp.expand(-g.dot(S)), sp.expand(Vw)
+    Ta, Va = planar.root_load_energy(S, S.applyfunc(rate), R, R.applyfunc(rate), om, vf, g)
+    return sp.expand(Ta), sp.expand(Va), sp.expand(Vw)
 
 
 def _load_case_axial_force(der, b: FlexibleBeam, fr: Frame, x: float) -> sp.Expr:
