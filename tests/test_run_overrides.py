@@ -61,6 +61,11 @@ def test_overrides_equal_an_edited_scene_and_are_recorded(tmp_path, monkeypatch,
     (["--rho-inf", "0.5"], "--rho-inf: applies to genalpha and genalpha3, not to integrator ali3p"),
     (["--ws", "3"], "--ws given with a system scene: set the driver's omega in the scene"),
     (["--param", "L=0.4"], "--param given with a scene file: it does not combine with a scene file"),
+    (["--elements", "4"], "--elements does not combine with a scene file: set it in the scene's [model] "
+                          "table (--elements goes with --model ef)"),
+    (["--model", "m3", "--elements", "4"], "--elements: applies to --model ef, not to 'm3'"),
+    (["--model", "ef", "--elements", "0"], "--elements: must be in 1..512 (got 0)"),
+    (["--model", "ef", "--elements", "4.5"], "--elements: '4.5' is not a whole number"),
 ])
 def test_a_bad_override_is_refused_before_any_work(tmp_path, monkeypatch, capsys, flags, says):
     monkeypatch.chdir(tmp_path)
@@ -71,3 +76,26 @@ def test_a_bad_override_is_refused_before_any_work(tmp_path, monkeypatch, capsys
     assert len(err) == 1 and err[0].startswith("flexsym: error: s.toml: ") and says in err[0], err
     assert (tmp_path / "earlier.csv").read_text() == "t,x_s\n0,0\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["earlier.csv", "s.toml"]
+
+
+@pytest.mark.parametrize("text, edits", [
+    (SLIDER, (('model = "m2"', 'model = { variant = "ef", elements = 3 }'),)),
+    (PAPER, (('variant = "m3"', 'variant = "ef"\nelements = 3'),)),
+], ids=["system scene", "one-beam scene"])
+def test_model_ef_with_elements_equals_an_edited_scene(tmp_path, monkeypatch, text, edits):
+    """`--model ef --elements 3` runs the scene's beams as ef on 3 elements: the rows of the
+    scene edited to say so, bit for bit (a finer reference without editing the file)."""
+    monkeypatch.chdir(tmp_path)
+    edited = text
+    for old, new in edits:
+        assert old in edited, old
+        edited = edited.replace(old, new, 1)
+    (tmp_path / "given.toml").write_text(text)
+    (tmp_path / "edited.toml").write_text(edited)
+    short = ["--t-end", "0.02"]
+    assert main(["run", "edited.toml", "--out", "edited.csv", *short]) in (0, 4)
+    assert main(["run", "given.toml", "--out", "given.csv", "--model", "ef", "--elements", "3", *short]) in (0, 4)
+    cols_e, data_e, _ = rows(tmp_path / "edited.csv")
+    cols_g, data_g, _ = rows(tmp_path / "given.csv")
+    assert cols_g == cols_e and any(c.endswith("dx3") for c in cols_g) and not any(c.endswith("dx4") for c in cols_g)
+    assert np.array_equal(data_g, data_e)

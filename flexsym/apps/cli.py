@@ -31,7 +31,8 @@ def _variant_args(p: argparse.ArgumentParser) -> None:
                    help="axial force from the axial strain (default) or from the axial inertial forces")
     g.add_argument("--moment", choices=("constitutive", "equilibrium"),
                    help="bending moment from the curvature (default) or from the inertial loads")
-    g.add_argument("--elements", help="number of finite elements (variant ef)")
+    g.add_argument("--elements", help="number of finite elements (variant ef; with a scene file, "
+                   "after --model ef)")
     g.add_argument("--name", help="name of the custom variant (default: derived from the base)")
 
 
@@ -54,6 +55,21 @@ def _elements(text):
         raise SpecError(f"--elements: '{text}' is not a whole number") from None
 
 
+def _mesh(scene: str, text, variant: str) -> int:
+    """--elements with a scene file and --model: the ef variant's elements (1..512)."""
+    from flexsym.model.variant import builtin
+
+    try:
+        if builtin(variant).kind != "fe":
+            raise SpecError(f"--elements: applies to --model ef, not to '{variant}'")
+        n = _elements(text)
+        if not 1 <= n <= 512:
+            raise SpecError(f"--elements: must be in 1..512 (got {n})")
+    except SpecError as exc:
+        raise SpecError(f"{scene}: {exc}") from None
+    return n
+
+
 def resolve(args, systems: bool = False):
     """(spec, scene or None) from a variant name with overrides, or from a scene file; with
     systems, a system scene gives (None, SystemScene)."""
@@ -63,10 +79,14 @@ def resolve(args, systems: bool = False):
         from flexsym.scenes.scene import load_scene
 
         given = _given(args, _OVERRIDES)
-        if given:
+        model = getattr(args, "model", None)
+        if given == ["elements"] and model is not None:  # ef's mesh with --model ef
+            model = {"variant": model, "elements": _mesh(args.variant, args.elements, model)}
+        elif given:
             raise SpecError(f"{args.variant}: --{given[0].replace('_', '-')} does not combine with a "
-                            "scene file: set it in the scene's [model] table")
-        scene = load_scene(args.variant, model=getattr(args, "model", None))
+                            "scene file: set it in the scene's [model] table"
+                            + (" (--elements goes with --model ef)" if given[0] == "elements" else ""))
+        scene = load_scene(args.variant, model=model)
         if getattr(scene, "system", None) is not None:  # a mechanism: only run and inspect take it
             if not systems:
                 raise SpecError(f"{args.variant}: a system scene ([[body]] entries): this command takes "

@@ -137,9 +137,10 @@ class _Reader:
         return val
 
 
-def load_scene(path, model: str | None = None):
+def load_scene(path, model: str | dict | None = None):
     """A Scene, or a SystemScene for a mechanism. model: a variant name that replaces the
-    scene's [model] (flexsym run --model), or every flexible body's model in a system."""
+    scene's [model] (flexsym run --model), or every flexible body's model in a system; or
+    {"variant": "ef", "elements": n} (--model ef --elements n)."""
     if not isinstance(path, (str, Path)):
         raise SpecError(f"load_scene(): path must be the path of a .toml scene (got "
                         f"{type(path).__name__} {path!r})")
@@ -161,9 +162,11 @@ def load_scene(path, model: str | None = None):
     if unknown:
         r.fail(unknown[0], f"unknown table (known: {', '.join(TABLES)})")
     if model is not None:
+        mesh = dict(model) if isinstance(model, dict) else {"variant": model}
+        model = mesh.pop("variant", None)
         if not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model):
             r.fail("--model", f"'{model}' is not a variant name")
-        data["model"] = {"variant": model, "name": f"{_default_name(path)}_{model}"[:48]}
+        data["model"] = {"variant": model, **mesh, "name": f"{_default_name(path)}_{model}"[:48]}
         from flexsym.model.output_names import axial_force_available
         from flexsym.model.variant import builtin
 

@@ -110,7 +110,7 @@ class SystemScene:
     system: System
     options: RunOptions
     output_file: Path | None
-    model: str | None = None  # the --model that replaced every beam's deformation model
+    model: str | dict | None = None  # the --model that replaced every beam's model (load_system_scene)
     assembly: Assembly = Assembly()  # what the assembly at t = 0 moved (system: assembled)
     given: dict = field(default_factory=dict)  # run options as the scene gives them (None: not)
 
@@ -187,7 +187,7 @@ def _label(kind: str, k: int, tab: dict) -> str:
     return f"[[{kind}]] '{name}'" if isinstance(name, str) else f"[[{kind}]] #{k + 1}"
 
 
-def system_from_data(data: dict, prefix: str = "", name: str = "system", model: str | None = None,
+def system_from_data(data: dict, prefix: str = "", name: str = "system", model: str | dict | None = None,
                      base: Path = Path(".")):
     """(System, given run options, output file or None) from parsed scene data. prefix names
     the source in every message ("scenes/hub.toml: "); model replaces every beam's model; base:
@@ -262,7 +262,7 @@ def _markers(r, where, tab, beam: bool, dim: int = 2) -> tuple[Marker, ...]:
     return tuple(out)
 
 
-def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path, dim: int = 2):
+def _body(r: _Items, k: int, tab: dict, model: str | dict | None, base: Path, dim: int = 2):
     where = _label("body", k, tab)
     kind = tab.get("kind")
     if kind not in ("rigid", "beam"):
@@ -303,7 +303,7 @@ def _body(r: _Items, k: int, tab: dict, model: str | None, base: Path, dim: int 
                f"system is {'spatial' if dim == 3 else 'planar'} (dimension = {dim})")
     ref = body.reference
     if spec.kind == "fe":  # ef: the body remeshed, as the one-beam scene's --model ef
-        given = tab.get("model") if model is None else None
+        given = tab.get("model") if model is None else model  # --model ef [--elements n]
         n = given["elements"] if isinstance(given, dict) and "elements" in given else \
             tab.get("ef_elements", EF_ELEMENTS)
         mesh = body.remeshed(n)
@@ -700,12 +700,14 @@ def _check_universal_axes(system: System) -> None:
 
 
 # ----- the scene ------------------------------------------------------------------------------
-def load_system_scene(path: Path, data: dict, name: str, model: str | None = None) -> SystemScene:
+def load_system_scene(path: Path, data: dict, name: str, model: str | dict | None = None) -> SystemScene:
     """A system scene, checked completely (path names the file in every message); name: the
-    system's name when the scene gives none (from the file name, as for one-beam scenes)."""
+    system's name when the scene gives none (from the file name, as for one-beam scenes);
+    model: --model's variant name, or {"variant": "ef", "elements": n} (scene.load_scene)."""
     prefix = f"{path}: "
-    if model is not None and (not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model)):
-        raise SpecError(f"{prefix}--model: '{model}' is not a variant name")
+    variant = model.get("variant") if isinstance(model, dict) else model
+    if model is not None and (not isinstance(variant, str) or not re.match(r"^[a-z][a-z0-9_]*$", variant)):
+        raise SpecError(f"{prefix}--model: '{variant}' is not a variant name")
     system, given, output_file = system_from_data(data, prefix, name, model, Path(path).parent)
     options = validate(given, Where("scene", path))
     try:
