@@ -84,7 +84,8 @@ def test_a_bad_override_is_refused_before_any_work(tmp_path, monkeypatch, capsys
 ], ids=["system scene", "one-beam scene"])
 def test_model_ef_with_elements_equals_an_edited_scene(tmp_path, monkeypatch, text, edits):
     """`--model ef --elements 3` runs the scene's beams as ef on 3 elements: the rows of the
-    scene edited to say so, bit for bit (a finer reference without editing the file)."""
+    scene edited to say so, bit for bit (a finer reference without editing the file), and the
+    CSV header says what replaced the scene's model."""
     monkeypatch.chdir(tmp_path)
     edited = text
     for old, new in edits:
@@ -96,6 +97,8 @@ def test_model_ef_with_elements_equals_an_edited_scene(tmp_path, monkeypatch, te
     assert main(["run", "edited.toml", "--out", "edited.csv", *short]) in (0, 4)
     assert main(["run", "given.toml", "--out", "given.csv", "--model", "ef", "--elements", "3", *short]) in (0, 4)
     cols_e, data_e, _ = rows(tmp_path / "edited.csv")
-    cols_g, data_g, _ = rows(tmp_path / "given.csv")
+    cols_g, data_g, header = rows(tmp_path / "given.csv")
     assert cols_g == cols_e and any(c.endswith("dx3") for c in cols_g) and not any(c.endswith("dx4") for c in cols_g)
     assert np.array_equal(data_g, data_e)
+    assert header[-1] == ("# model: ef on 3 elements, in place of the scene's (from the command line: "
+                          "--model, --elements)")

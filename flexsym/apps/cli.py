@@ -308,13 +308,19 @@ def _units_line(units: dict) -> str:
 
 
 def _options_header(args, scene, options) -> list[str]:
-    """The CSV header's record of the effective options when the command line replaced some of
-    a scene's."""
-    given = given_options(args, RUN_OPTIONS)
-    if scene is None or not given:
+    """The CSV header's record of what the command line replaced in a scene: its run options
+    (the effective ones), its model (--model, --elements)."""
+    if scene is None:
         return []
-    flags = ", ".join(BY_NAME[n].flag for n in given)
-    return [f"run options: {options.describe()} (from the command line: {flags})"]
+    given = given_options(args, RUN_OPTIONS)
+    lines = [f"run options: {options.describe()} (from the command line: "
+             f"{', '.join(BY_NAME[n].flag for n in given)})"] if given else []
+    model = getattr(args, "model", None)
+    if model is not None:
+        mesh = f" on {int(args.elements)} elements" if getattr(args, "elements", None) is not None else ""
+        lines.append(f"model: {model}{mesh}, in place of the scene's (from the command line: --model"
+                     f"{', --elements' if mesh else ''})")
+    return lines
 
 
 def _run_system(args, scene) -> int:
