@@ -11,6 +11,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from flexsym.core.errors import FlexsymError, SpecError
+from flexsym.model.limits import MAX_EF_ELEMENTS
 from flexsym.model.options import (BY_NAME, CLI, OPTIONS, RUNTIME_DEFAULTS, Where, add_arguments,
                                   given_options, validate, with_overrides)
 
@@ -56,15 +57,15 @@ def _elements(text):
 
 
 def _mesh(scene: str, text, variant: str) -> int:
-    """--elements with a scene file and --model: the ef variant's elements (1..512)."""
+    """--elements with a scene file and --model: the ef variant's elements (1..MAX_EF_ELEMENTS)."""
     from flexsym.model.variant import builtin
 
     try:
         if builtin(variant).kind != "fe":
             raise SpecError(f"--elements: applies to --model ef, not to '{variant}'")
         n = _elements(text)
-        if not 1 <= n <= 512:
-            raise SpecError(f"--elements: must be in 1..512 (got {n})")
+        if not 1 <= n <= MAX_EF_ELEMENTS:
+            raise SpecError(f"--elements: must be in 1..{MAX_EF_ELEMENTS} (got {n})")
     except SpecError as exc:
         raise SpecError(f"{scene}: {exc}") from None
     return n
@@ -566,8 +567,8 @@ def cmd_paper(args) -> int:
     o = validate(given_options(args, SPINUP_OPTIONS[:4] + ("repeat",)), CLI, builtin("m3"))
     ref_dt = replace(BY_NAME["dt"], flag="--ref-dt").convert(args.ref_dt, CLI)
     elements = _elements(args.ref_elements)
-    if not 1 <= elements <= 512:
-        raise SpecError(f"--ref-elements: must be in 1..512 (got {elements})")
+    if not 1 <= elements <= MAX_EF_ELEMENTS:
+        raise SpecError(f"--ref-elements: must be in 1..{MAX_EF_ELEMENTS} (got {elements})")
     out = check_output_dir(args.out, "--out")
     run_paper(out, ws=o.params["ws"], ts=o.params["ts"], t_end=o.t_end, dt=o.dt,
               repeat=o.repeat, end_to_end=not args.no_end_to_end, ref_elements=elements,

@@ -17,6 +17,8 @@ MIN_AXIS: a prismatic axis is a direction (normalised); a shorter one is a typo,
 squared length underflows.
 MAX_FILE_BYTES: a scene file, body.toml or a Matrix Market file larger than this is refused
 before it is read (and so is anything but a regular file: a FIFO or /dev/zero never ends).
+MAX_EF_ELEMENTS: an ef beam's elements (a variant's, --elements, --ref-elements): the converged
+references take 16 to 64, and the derivation's cost grows with each element.
 """
 from __future__ import annotations
 
@@ -31,6 +33,7 @@ MAX_JOINTS = 24
 MIN_POSITIVE = 1e-20  # masses, inertias, lengths, section values: their reciprocals appear
 MIN_AXIS = 1e-6
 MAX_FILE_BYTES = 64 * 2**20
+MAX_EF_ELEMENTS = 512
 
 
 def is_real(v) -> bool:

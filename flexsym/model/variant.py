@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 import sympy as sp
 
 from flexsym.core.errors import SpecError
+from flexsym.model.limits import MAX_EF_ELEMENTS
 from flexsym.model.maneuver import maneuver_of
 from flexsym.model.modes import ModeRef, mode, parse_mode_token, root_slope_free
 from flexsym.model.output_names import (STRESS_OUTPUTS, canonical_output, check_output_names, default_outputs,
@@ -180,8 +181,8 @@ class FESpec:
     def validate(self) -> "FESpec":
         if not NAME_RE.match(self.name):
             raise SpecError(f"variant name '{self.name}': use lower-case letters, digits and _")
-        if not isinstance(self.elements, int) or not 1 <= self.elements <= 512:
-            raise SpecError(f"variant '{self.name}': elements must be an integer in 1..512 "
+        if not isinstance(self.elements, int) or not 1 <= self.elements <= MAX_EF_ELEMENTS:
+            raise SpecError(f"variant '{self.name}': elements must be an integer in 1..{MAX_EF_ELEMENTS} "
                             f"(got {self.elements!r})")
         if self.body is not None:
             if self.body.elements != self.elements:
@@ -260,8 +261,8 @@ def customize(base, *, name=None, strain=None, axial=None, bending=None, outputs
         raise SpecError(f"outputs {','.join(outputs)!r}: empty name in the list (give at least one "
                         "output, e.g. v_tip)")
     if elements is not None and (isinstance(elements, bool) or not isinstance(elements, int)
-                                 or not 1 <= elements <= 512):
-        raise SpecError(f"elements must be a whole number in 1..512 (got {elements!r})")
+                                 or not 1 <= elements <= MAX_EF_ELEMENTS):
+        raise SpecError(f"elements must be a whole number in 1..{MAX_EF_ELEMENTS} (got {elements!r})")
     if base.kind == "fe":
         modal_only = {"strain": strain, "axial": axial, "bending": bending, "stress": stress,
                       "axial_force": axial_force, "moment": moment}
