@@ -75,10 +75,10 @@ def root_load_energy(S, S_dot, R, R_dot, omega, V, g) -> tuple[sp.Expr, sp.Expr]
     T_a = V.(S' + omega x S) + omega.R', V_a = -g.S. Lagrange's equations make them the load
     (a_0 - g).dS/dq + alpha.dR/dq of the origin's acceleration, the angular acceleration and
     gravity: on a straight beam the stiffening of the axial load rho A (a_0x - g_x)(L - x),
-    which the centrifugal N-hat leaves out (a blade clamped 0.5 m off a link's axis: w_mid 0.37
-    of its peak off m3; S3's pendulum 0.34 off ef, as m3 0.11). Written into T and V as m3
-    holds them, T + V stays conserved and no force reads q''. Zero for a root on the axis of a
-    frame turning about a fixed point, without gravity along the beam."""
+    which the centrifugal N-hat alone leaves out (a blade clamped 0.5 m off a link's axis was
+    0.37 of w_mid's peak off m3; S3's pendulum 0.34 off ef, where m3 is 0.11). Written into T
+    and V as m3 holds them, T + V stays conserved and no force reads q''. Zero for a root on
+    the axis of a frame turning about a fixed point, without gravity along the beam."""
     return V.dot(S_dot + omega.cross(S)) + omega.dot(R_dot), -g.dot(S)
 
 
