@@ -66,6 +66,7 @@ def test_overrides_equal_an_edited_scene_and_are_recorded(tmp_path, monkeypatch,
     (["--model", "m3", "--elements", "4"], "--elements: applies to --model ef, not to 'm3'"),
     (["--model", "ef", "--elements", "0"], "--elements: must be in 1..512 (got 0)"),
     (["--model", "ef", "--elements", "4.5"], "--elements: '4.5' is not a whole number"),
+    (["--model", "M3"], "--model: 'M3' is not a variant name"),
 ])
 def test_a_bad_override_is_refused_before_any_work(tmp_path, monkeypatch, capsys, flags, says):
     monkeypatch.chdir(tmp_path)

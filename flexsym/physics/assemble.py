@@ -38,8 +38,9 @@ with phi' the frame's actual rate: a potential that varies in time under a guide
 on a frame that joints spin -V_p joins T (it is the part of m3's T linear in the
 foreshortening), so the joints' equations take its rate dependence and T + V is conserved;
 its sections, momentum and reactions then read the foreshortened fields (FlexPart.
-inertial_fields). The frame's translational acceleration and gravity are NOT in this N(x):
-use #1-#3 when they matter (S2, S3).
+inertial_fields). The axial load of the frame origin's acceleration and of gravity along the
+beam, rho A (a_0x - g_x)(L - x), is in T and V as m3 holds it (body_kinds.modal.
+root_load_energy). A beam loaded axially beyond its root (S2's coupler) is refused.
 Outputs of q, q', q'', the drive and lambda: joint reactions (joint_reaction: a cut joint's
 from lambda, a tree joint's from the momentum balance of the subtree beyond it), N and M from
 equilibrium (_equilibrium_stress: the part of the beam beyond the station with the frame's

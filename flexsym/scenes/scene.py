@@ -155,6 +155,11 @@ def load_scene(path, model: str | dict | None = None):
         raise SpecError(f"{path}: not valid TOML: {exc}") from None
     from flexsym.scenes.system_scene import is_system_scene, load_system_scene
 
+    if model is not None:  # --model (and --elements), checked once for either kind of scene
+        mesh = dict(model) if isinstance(model, dict) else {"variant": model}
+        variant = mesh.pop("variant", None)
+        if not isinstance(variant, str) or not re.match(r"^[a-z][a-z0-9_]*$", variant):
+            raise SpecError(f"{path}: --model: '{variant}' is not a variant name")
     if is_system_scene(data):  # a mechanism ([[body]] entries): flexsym/scenes/system_scene.py
         return load_system_scene(path, data, _default_name(path), model)
     r = _Reader(path, data)
@@ -162,10 +167,7 @@ def load_scene(path, model: str | dict | None = None):
     if unknown:
         r.fail(unknown[0], f"unknown table (known: {', '.join(TABLES)})")
     if model is not None:
-        mesh = dict(model) if isinstance(model, dict) else {"variant": model}
-        model = mesh.pop("variant", None)
-        if not isinstance(model, str) or not re.match(r"^[a-z][a-z0-9_]*$", model):
-            r.fail("--model", f"'{model}' is not a variant name")
+        model = variant
         data["model"] = {"variant": model, **mesh, "name": f"{_default_name(path)}_{model}"[:48]}
         from flexsym.model.output_names import axial_force_available
         from flexsym.model.variant import builtin

@@ -57,7 +57,6 @@ axis at t = 0).
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -703,11 +702,9 @@ def _check_universal_axes(system: System) -> None:
 def load_system_scene(path: Path, data: dict, name: str, model: str | dict | None = None) -> SystemScene:
     """A system scene, checked completely (path names the file in every message); name: the
     system's name when the scene gives none (from the file name, as for one-beam scenes);
-    model: --model's variant name, or {"variant": "ef", "elements": n} (scene.load_scene)."""
+    model: --model's variant name, or {"variant": "ef", "elements": n}, as scene.load_scene
+    checked it."""
     prefix = f"{path}: "
-    variant = model.get("variant") if isinstance(model, dict) else model
-    if model is not None and (not isinstance(variant, str) or not re.match(r"^[a-z][a-z0-9_]*$", variant)):
-        raise SpecError(f"{prefix}--model: '{variant}' is not a variant name")
     system, given, output_file = system_from_data(data, prefix, name, model, Path(path).parent)
     options = validate(given, Where("scene", path))
     try:

@@ -194,12 +194,12 @@ class Modal(BeamKind):
                 der.V_grav += Va
                 if Ta != 0 or Va != 0:  # (a root on a fixed axis without gravity: none)
                     der.terms.append((b.name, ROOT_LOAD_TERM, wrt, Ta - Va, sp.zeros(len(der.q), 1)))
-            if term_name == "prestress" and prestress_in_T(der.system, b):
-                # as a potential read at the current spin, S3's T + V drifted 1.4e-6 of V's peak
-                der.T -= V
-                der.terms.append((b.name, term_name + " (centrifugal, in T: the joints' spin)", wrt, V,
-                                  sp.zeros(len(der.q), 1)))
-                continue
+                if prestress_in_T(der.system, b):
+                    # as a potential read at the current spin, S3's T + V drifted 1.4e-6 of V's peak
+                    der.T -= V
+                    der.terms.append((b.name, term_name + " (centrifugal, in T: the joints' spin)", wrt, V,
+                                      sp.zeros(len(der.q), 1)))
+                    continue
             Qk = generalized_force(V, der.q, [c.body == b.name and c.group in wrt for c in der.coords])
             der.terms.append((b.name, term_name, wrt, V, Qk))
             der.V += V

@@ -81,6 +81,7 @@ class Modal(SpatialBeam):
                                      + rho * (P["Iy"] + P["I"]) * L / 2 * w("ip") * spin**2), actual))
         der.V_grav += (-integral(rho * A * L * w("mu")) * gvec.dot(fr.R)
                        - integral(rho * A * L * w("mu") * fr.g.dot(r)))
+        spun = planar.prestress_in_T(der.system, b)
         for term_name, wrt in strain.terms + (("torsion", ("torsion",)),):
             if term_name == "prestress":
                 # in T when the joints spin the frame (planar.prestress_in_T): as a potential
@@ -88,7 +89,6 @@ class Modal(SpatialBeam):
                 # hinge's T + V drifted 47 %). The root's acceleration and gravity: in T and V
                 # always, as m3 holds them (a mesh's acceleration load cases as a potential read
                 # q'', and a tilted hinge's T + V drifted 1.6e-4 of V's peak).
-                spun = planar.prestress_in_T(der.system, b)
                 turn = om if spun else fr.omega  # the frame's placeholders, or its actual motion
                 if b.model.body is None:  # the foreshortening along the beam (planar.root_load_density)
                     Vp = integral(_strain_density(term_name, F, P, turn, w))
@@ -119,7 +119,7 @@ class Modal(SpatialBeam):
             energies = _rate_energies(b, P, table, integral, keys)
             der.dissipation[b.name] = damping_dissipation(b.damping, *energies)
             der.Q -= sp.Matrix([sp.diff(der.dissipation[b.name], x) for x in qd])
-        if planar.prestress_in_T(der.system, b):
+        if spun:
             # -V_p in T is m3's T to second order in the deflection: the sections, momentum and
             # reactions take the foreshortening's inertia as m3's do (as in the plane,
             # FlexPart.inertial_fields), so they balance the motion T gives
