@@ -22,7 +22,7 @@ def _latex_names(der: Derivation) -> dict:
         tex = m.name.replace("_", r"\_")
         names[sp.Symbol(m.name, real=True)] = r"q_{\mathrm{" + tex + "}}"
     for sym in der.table.symbols:
-        a, b, s_pow, factors = der.table.monomial(sym)
+        a, b, s_pow, factors = der.table.monomial(sym)[:4]
         parts = ([f"s^{{{s_pow}}}"] if s_pow > 1 else ["s"] if s_pow == 1 else [])
         for f in factors:
             if f.kind == "fs":

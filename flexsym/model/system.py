@@ -63,6 +63,9 @@ OUTPUT_SCALARS = ("T", "V", "momentum", "violation", "dissipation", "Hx", "Hy", 
 # axial_force (N) / moment (the moments): one run can carry both (output_beam)
 RECOVERABLE = ("N", "M", "Mx", "My", "Mz")
 OUTPUT_RECOVERIES = ("equilibrium", "constitutive")
+# a section force, moment or stress may name the side of its station, x- or x+ (step-, 5.0+):
+# where they jump (a step of the section, a point mass, a load at a marker), one side's value
+SIDED = ("N", "M", "sigma")
 # reaction(joint, c) per dimension: the force's ground components, then the moment about the
 # joint's child point (the plane's one, or its ground components)
 REACTION_COMPONENTS = {2: ("x", "y", "moment"), 3: ("x", "y", "z", "mx", "my", "mz")}
@@ -1123,8 +1126,19 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
         if b is None or not b.flexible:
             raise SpecError(f"{where}: '{args[0]}' is not a flexible body")
         x = beam_station(system, b, args[1], where)
+        side = station_side(args[1])
+        if side and system.dimension == 3:
+            raise SpecError(f"{where}: a side of the station ({args[1]}) is planar only for now")
+        if side and fn not in SIDED:
+            raise SpecError(f"{where}: a side of the station ({args[1]}) applies to "
+                            f"{', '.join(SIDED)} (section forces and stresses jump; {fn} does not)")
+        if (side < 0 and x == 0) or (side > 0 and x == b.length):
+            raise SpecError(f"{where}: no beam on that side of x = {x:g} m ({args[1]})")
         if fn == "sigma":
-            section_point(b, x, args[2:], where)
+            if not side and section_at(b, x, -1) != section_at(b, x, 1):
+                raise SpecError(f"{where}: the section steps at x = {x:g} m, so sigma has a value "
+                                f"on either side: name one, {args[1]}- or {args[1]}+")
+            section_point(b, x, args[2:], where, side)
     return fn, args
 
 
@@ -1138,27 +1152,29 @@ def output_beam(system: System, fn: str, args: tuple[str, ...]) -> FlexibleBeam:
     return beam
 
 
-def section_at(beam: FlexibleBeam, x: float) -> tuple[float, float, float | None]:
+def section_at(beam: FlexibleBeam, x: float, side: int = 0) -> tuple[float, float, float | None]:
     """(A, I, Iy) of the section at station x (Iy: a spatial beam's, else None): the beam's, or
-    for a body from finite-element data its element's there (at a node, the element beyond
-    it; at the tip, the last one), the beam's section scaled as the run-time parameters are."""
+    for a body from finite-element data its element's there (at a node, the element before it
+    for side -1, else the one beyond; at the tip, the last one), the beam's section scaled as
+    the run-time parameters are."""
     body = getattr(beam.model, "body", None)
     sec = beam.section
     if body is None:
         return sec.A, sec.I, sec.Iy
     L = beam.length
-    k = next((e for e in range(len(body.sections)) if x < body.nodes[e + 1] * L / body.length),
-             len(body.sections) - 1)
+    before = (lambda e: x <= body.nodes[e + 1] * L / body.length) if side < 0 else \
+        (lambda e: x < body.nodes[e + 1] * L / body.length)
+    k = next((e for e in range(len(body.sections)) if before(e)), len(body.sections) - 1)
     ref, here = body.sections[0], body.sections[k]
     return (sec.A * here.A / ref.A, sec.I * here.I / ref.I,
             sec.Iy * here.Iy / ref.Iy if here.Iy is not None else sec.Iy)
 
 
-def section_point(beam: FlexibleBeam, x: float, texts, where: str) -> tuple[float, ...]:
+def section_point(beam: FlexibleBeam, x: float, texts, where: str, side: int = 0) -> tuple[float, ...]:
     """(y,) of sigma(beam, x, y) or (y, z) of sigma(beam, x, y, z): numbers (m), each within
     SIGMA_REACH radii of gyration of the axis in its bending plane, sqrt(I/A) for y (I_z in 3D)
     and sqrt(I_y/A) for z (farther is outside any section with this A and I: a typing error)."""
-    A, I, Iy = section_at(beam, x)
+    A, I, Iy = section_at(beam, x, side)
     point = []
     names = ("I",) if len(texts) == 1 else ("Iz", "Iy")  # the planar I is the spatial I_z
     for axis, text, Ik, name in zip("yz", texts, (I, Iy), names):
@@ -1197,8 +1213,24 @@ def output_unit(system: System, quantity: str) -> str:
             "V": "J", "momentum": "kg m^2/s", "violation": "1 (of the size)", "dissipation": "W"}[fn]
 
 
+def station_side(text: str) -> int:
+    """The side a station names: -1 for x- (the element before it), +1 for x+ (beyond), else 0."""
+    return {"-": -1, "+": 1}.get(text[-1:], 0) if len(text) > 1 else 0
+
+
+def loads_at(beam: FlexibleBeam, x: float, side: int) -> bool:
+    """Whether the loads exactly at station x (a point mass, a marker's joint, force or spring)
+    belong to the part beyond it, whose equilibrium gives N and M there: for x- (side -1) and
+    at the tip (its only side); not for x+, nor for x without a side inside the beam or at the
+    root (the section just beyond x)."""
+    return side < 0 or x >= beam.length
+
+
 def beam_station(system: System, beam: FlexibleBeam, text: str, where: str) -> float:
-    """A station on a beam: a marker name or a number (m), 0 <= x <= length."""
+    """A station on a beam: a marker name or a number (m), 0 <= x <= length, with or without
+    a side (station_side)."""
+    if station_side(text):
+        text = text[:-1]
     for m in beam.all_markers:
         if m.name == text:
             return float(m.x)

@@ -65,8 +65,8 @@ from flexsym.physics.lagrange import equations_of_motion, jacobi_integral
 from flexsym.model.joint_kinds import KINDS, planar_cut_rows, planar_frame
 from flexsym.model.maneuver import Param, maneuver_of, parse_expression, parse_theta, t
 from flexsym.model.system import (GROUND, Gravity, PointForce, SpringDamper, System, Torque,
-                     beam_station, length_scale, output_beam, parse_output,
-                     section_at, section_point)
+                     beam_station, length_scale, loads_at, output_beam, parse_output,
+                     section_at, section_point, station_side)
 
 SECTION_PARAMS = ("rho", "E", "A", "I", "L")  # per flexible body, the order of BEAM_PARAMS
 
@@ -527,7 +527,7 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
         return violation(der)
     if fn in ("v", "u", "w", "N", "M"):
         beam = output_beam(system, fn, args)  # N, M: with the output's recovery, if it names one
-        x = beam_station(system, beam, args[1], where)
+        x, side = beam_station(system, beam, args[1], where), station_side(args[1])
         u, v, _ = beam_fields_at(der, beam.name, x)
         if fn == "u":
             return u
@@ -540,27 +540,29 @@ def output_of(der: SystemDerivation, quantity: str) -> sp.Expr:
             d = sp.Matrix([station(der, beam.name, beam.length) + ut, vt]) - p0
             r = sp.Matrix([station(der, beam.name, x) + u, v]) - p0
             return cross(d, r) / sp.sqrt(d.dot(d))
-        return _stress(der, beam, x, fn, where)
+        return _stress(der, beam, x, fn, where, side)
     if fn == "sigma":  # sigma = N/A - M y/I (M = EI v'' > 0 shortens the fibres at y > 0)
         beam = system.body(args[0])
-        x = beam_station(system, beam, args[1], where)
-        y = exact(section_point(beam, x, args[2:], where)[0])
-        A_x, I_x, _ = section_at(beam, x)  # the section there, as run-time parameters A, I scaled
+        x, side = beam_station(system, beam, args[1], where), station_side(args[1])
+        y = exact(section_point(beam, x, args[2:], where, side)[0])
+        A_x, I_x, _ = section_at(beam, x, side)  # the section there, as run-time parameters A, I scaled
         A_ = BEAM_PARAMS[2].symbol * exact(A_x / beam.section.A)
         I_ = BEAM_PARAMS[3].symbol * exact(I_x / beam.section.I)
         psyms = der.flex[beam.name].psyms
-        N, M = (_stress(der, beam, x, q, where) for q in ("N", "M"))
+        N, M = (_stress(der, beam, x, q, where, side) for q in ("N", "M"))
         return N / A_.xreplace(psyms) - M * y / I_.xreplace(psyms)
     raise SpecError(f"{where}: '{fn}' is not derived for systems yet")
 
 
-def _stress(der, beam, x, fn, where):
+def _stress(der, beam, x, fn, where, side=0):
     """N or M at station x: from the equilibrium of the part beyond it, or the kind's own
-    (its strain's: EA eps, EI kappa)."""
+    (its strain's: EA eps, EI kappa). side: the station's (system.station_side); the kinds
+    read it at a node of their elements, and the loads exactly at x (a point mass, a marker's)
+    belong to the part beyond for side -1 and at the tip (loads_at)."""
     kind = kind_of(beam)
     if kind.from_equilibrium(beam, fn):
-        return _equilibrium_stress(der, beam, x, fn)
-    return kind.own_stress(der, beam, x, fn, where)
+        return _equilibrium_stress(der, beam, x, fn, side)
+    return kind.own_stress(der, beam, x, fn, where, side)
 
 
 def length_param(der: SystemDerivation) -> int:
@@ -699,18 +701,18 @@ def _joint_reaction(der: SystemDerivation, joint) -> tuple[sp.Matrix, sp.Expr, s
     return F, M, P
 
 
-def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix, sp.Expr, sp.Matrix]]:
-    """(F, tau, at) of the loads on beam's markers beyond station x (at the tip, x = L, those
-    at the tip): joints (a cut joint's multipliers, a child tree joint's reaction, with the
-    sign for the side the beam is on), point forces, spring-dampers (ground frame)."""
+def _loads_beyond(der: SystemDerivation, beam, x: float, side: int = 0) -> list[tuple[sp.Matrix, sp.Expr, sp.Matrix]]:
+    """(F, tau, at) of the loads on beam's markers beyond station x (and at x where loads_at):
+    joints (a cut joint's multipliers, a child tree joint's reaction, with the sign for the
+    side the beam is on), point forces, spring-dampers (ground frame)."""
     system, out = der.system, []
-    L = beam.length
+    at_x = loads_at(beam, x, side)
 
     def beyond(ref):
         if ref == GROUND:
             return False
         body, m = system.marker(ref)
-        return body == beam.name and (m.x > x or (x >= L and m.x >= L))
+        return body == beam.name and (m.x > x or (at_x and m.x >= x))
 
     for j in system.joints:
         if j.name != der.tree.joint_of(beam.name) and (beyond(j.parent) or beyond(j.child)):
@@ -733,7 +735,7 @@ def _loads_beyond(der: SystemDerivation, beam, x: float) -> list[tuple[sp.Matrix
     return out
 
 
-def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Expr:
+def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str, side: int = 0) -> sp.Expr:
     """N or M at station x from the equilibrium of the part of the beam beyond x, with the
     frame's actual motion and gravity: the inertial loads -rho A (a - g) (a in frame
     components: A^T R'' + the relative, Coriolis, angular and centripetal terms, as
@@ -741,8 +743,8 @@ def _equilibrium_stress(der: SystemDerivation, beam, x: float, fn: str) -> sp.Ex
     reactions, point forces). N: their component along the section's axis (tension > 0), M:
     their moment about the section point (point rotary inertias' couples included). The
     inertial part is the kind's (inertial_stress)."""
-    out, section, axis = kind_of(beam).inertial_stress(der, beam, x, fn)
+    out, section, axis = kind_of(beam).inertial_stress(der, beam, x, fn, loads_at(beam, x, side))
     Arot = rot(der.poses[beam.name].angle)
-    for F, tau, P in _loads_beyond(der, beam, x):
+    for F, tau, P in _loads_beyond(der, beam, x, side):
         out += (Arot.T * F).dot(axis) if fn == "N" else cross(P - section, F) + tau
     return out

@@ -209,13 +209,16 @@ class EfPart:
         return sp.Add(*[V_el.xreplace(self._element_subs(e)).xreplace(self._section(e))
                         for e in range(self.n)]).xreplace(self.psyms)
 
-    def _locate(self, x: float) -> list[tuple[int, sp.Expr, float]]:
-        """(element, xi, weight): at an interior node the two adjacent element ends, averaged."""
+    def _locate(self, x: float, side: int = 0) -> list[tuple[int, sp.Expr, float]]:
+        """(element, xi, weight): at an interior node the end of the element on the side
+        asked (-1 before, +1 beyond), or the two adjacent ends averaged (0)."""
         at = exact(x) / exact(self.beam.length)
         f = self.fractions
         e = max(k for k in range(self.n) if f[k] <= at)
         if at == f[e] and e > 0:
-            return [(e - 1, sp.Integer(1), 0.5), (e, sp.Integer(0), 0.5)]
+            ends = [(e - 1, sp.Integer(1)), (e, sp.Integer(0))]
+            return [(k, xk, 1.0) for k, xk in ends[side > 0:][:1]] if side else \
+                [(k, xk, 0.5) for k, xk in ends]
         if at >= f[self.n]:
             return [(self.n - 1, sp.Integer(1), 1.0)]
         return [(e, (at - f[e]) / (f[e + 1] - f[e]), 1.0)]
@@ -228,7 +231,7 @@ class EfPart:
         dx, dy = (sp.diff(c, xi).xreplace({xi: at}).xreplace(sub).xreplace(self.psyms) for c in _shape(_E))
         return rx, ry, sp.atan2(dy, dx)
 
-    def inertial(self, fn: str, x: float, qdd: dict, alpha=0):
+    def inertial(self, fn: str, x: float, qdd: dict, alpha=0, closed=False):
         """(N or M of the inertial loads and gravity on the part beyond station x, the section
         point, the section's unit tangent), in frame components and the placeholders OM, AL,
         A0X, A0Y, GX, GY of the frame's motion and gravity (their actual values: the body kind).
@@ -238,26 +241,26 @@ class EfPart:
         -alpha rho A r' (r' relative to the frame; -alpha m r'_k): the dissipation function's
         force, external to the section (the strain-rate damping is internal: no load). N is
         their component along the tangent, M their moment about the section point.
-        qdd: coordinate name -> q''."""
-        F, M, section, tangent = self._beyond(x, qdd, alpha)
+        qdd: coordinate name -> q''; closed: a point mass at x is beyond (system.loads_at)."""
+        F, M, section, tangent = self._beyond(x, qdd, alpha, closed)
         return (F.dot(tangent) if fn == "N" else M), section, tangent
 
     def damping_load(self, alpha):
         """The mass-proportional damping's force -alpha int rho A r' (frame components; point
         masses -alpha m r'_k) and its moment about the frame's origin (the clamped root)."""
-        F, M, _, _ = self._beyond(0.0, None, alpha)
+        F, M, _, _ = self._beyond(0.0, None, alpha, False)
         return F, M
 
-    def _beyond(self, x: float, qdd: dict | None, alpha):
+    def _beyond(self, x: float, qdd: dict | None, alpha, closed: bool):
         """(force, moment about the section point, section point, unit tangent) of the loads on
         the part beyond station x (inertial() says which; qdd None: the damping's alone); once
         per station (N and M share it)."""
-        key = (x, qdd is None, alpha)
+        key = (x, qdd is None, alpha, closed)
         if key not in self.memo:
-            self.memo[key] = self._loads_beyond(x, qdd, alpha)
+            self.memo[key] = self._loads_beyond(x, qdd, alpha, closed)
         return self.memo[key]
 
-    def _loads_beyond(self, x: float, qdd: dict | None, alpha):
+    def _loads_beyond(self, x: float, qdd: dict | None, alpha, closed: bool):
         at = exact(x) / exact(self.beam.length)
         f, nodes, rates = self.fractions, self.nodes(self.q), self.rates()
         accel = None if qdd is None else (
@@ -293,18 +296,19 @@ class EfPart:
             out += sum(((1 - start) * wk * dens.xreplace({xi: start + (1 - start) * xk})
                         for xk, wk in zip(xg, wg)), sp.zeros(3, 1))
         for k, m in self.point_masses:
-            if f[k] > at:
+            if f[k] > at or (closed and f[k] == at):
                 out += load(m, nodes[k][:2], rates[k][:2], None if accel is None else accel[k][:2])
         out = out.xreplace(self.psyms)
         tangent = sp.Matrix([tx / norm, ty / norm]).xreplace(self.psyms)
         return out[:2, 0], out[2], sp.Matrix([sx, sy]).xreplace(self.psyms), tangent
 
-    def stress(self, fn: str, x: float):
-        """N = EA eps |r_x| or M = EI kappa at x (the mean of the two ends at a node)."""
+    def stress(self, fn: str, x: float, side: int = 0):
+        """N = EA eps |r_x| or M = EI kappa at x (at a node: _locate's side, or the mean of
+        the two ends)."""
         _, _, _, _, eps, kappa, stretch = generic_element()
         expr = E * A * eps * stretch if fn == "N" else E * I * kappa
         out = sp.Integer(0)
-        for e, at, wt in self._locate(x):
+        for e, at, wt in self._locate(x, side):
             out += wt * expr.xreplace({xi: at}).xreplace(self._element_subs(e)).xreplace(self._section(e))
         return out.xreplace(self.psyms)
 

@@ -173,16 +173,19 @@ def exact_residual(bodies, tr, x, ddot):
     return r_all
 
 
-def inertial_section_load(part, outputs: dict, x: float, fn: str) -> sp.Symbol:
+def inertial_section_load(part, outputs: dict, x: float, fn: str, closed: bool = False) -> sp.Symbol:
     """A placeholder for what the inertial loads beyond station x give the section there:
     N = -sum m_i (a_i - g) . t(x) (tension > 0), M = -sum (r_i - r(x)) x m_i (a_i - g) (the
-    modal beam's signs), over the quadrature weights from x to the tip; the loads on the
-    beam's markers beyond x are added in sympy (assemble._equilibrium_stress)."""
+    modal beam's signs), over the quadrature weights from x to the tip (a point mass at x with
+    them if closed: system.loads_at); the loads on the beam's markers beyond x are added in
+    sympy (assemble._equilibrium_stress)."""
     at = float(exact(x) / exact(part.beam.length))
-    sym = sp.Symbol(f"{fn}_inertial_{part.beam.name}_{at!r}_", real=True)
+    side = "_left" if closed and at < 1.0 else ""  # (at the tip the only side)
+    sym = sp.Symbol(f"{fn}_inertial_{part.beam.name}_{at!r}{side}_", real=True)
     if sym in outputs:
         return sym
-    wb, w0 = ca.DM(part.mass_weights(part.quad, at, 1.0)), ca.DM(part.quad.weights_between(0.0, at))
+    wb = ca.DM(part.mass_weights(part.quad, at, 1.0, closed))
+    w0 = ca.DM(part.quad.weights_between(0.0, at))
 
     def value(tr, xx):
         k, mA, _, _, L = _loads(part, tr, xx, xx["ddot"])

@@ -155,16 +155,17 @@ class ExactKinematics:
         r = body.reference
         return [(pm.x / body.length, pm.mass / (r.rho * r.A * body.length)) for pm in body.masses]
 
-    def mass_weights(self, quad: Quadrature, a: float = 0.0, b: float = 1.0) -> np.ndarray:
+    def mass_weights(self, quad: Quadrature, a: float = 0.0, b: float = 1.0, closed: bool = True) -> np.ndarray:
         """Mass per rho A L of the root section of the nodes, then of the point masses, between
-        a and b (a point mass at a or b included): the rule's weights times the section's rho A
-        relative to the root's (constant on each piece), and m / (rho A L)."""
+        a and b (a point mass at b included, at a if closed): the rule's weights times the
+        section's rho A relative to the root's (constant on each piece), and m / (rho A L)."""
         w = quad.weights if (a, b) == (0.0, 1.0) else quad.weights_between(a, b)
         body = self.fe_body
         if body is None:
             return w
         mu = body.ratios()["mu"][locate(body, quad.nodes)]
-        return np.concatenate([w * mu, [c if a <= sk <= b else 0.0 for sk, c in self.point_masses()]])
+        return np.concatenate([w * mu, [c if a < sk <= b or (closed and sk == a) else 0.0
+                                        for sk, c in self.point_masses()]])
 
     def _with_points(self, quad: Quadrature, cum, g, L):
         """A cumulative field at the nodes (N x c), the integral of g (N x c) at the point

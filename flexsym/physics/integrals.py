@@ -135,9 +135,11 @@ class IntegralTable:
         return UNIFORM_WEIGHTS[kind].subs(s, at) if kind == "nhat" else UNIFORM_WEIGHTS[kind]
 
     # ----- integration of a density ---------------------------------------------------
-    def integrate(self, density: sp.Expr, a=0, b=1) -> sp.Expr:
-        """int_a^b density ds, with each factor monomial replaced by its integral symbol."""
-        return sp.Add(*[k * sp.Add(*v) for k, v in self._grouped(density, a, b).items()])
+    def integrate(self, density: sp.Expr, a=0, b=1, closed=None) -> sp.Expr:
+        """int_a^b density ds, with each factor monomial replaced by its integral symbol. A
+        body's point masses count in (a, b], and at a = 0; closed (True, False) says whether
+        one at a counts instead (a section's side: system.loads_at)."""
+        return sp.Add(*[k * sp.Add(*v) for k, v in self._grouped(density, a, b, closed).items()])
 
     def integrate_values(self, density: sp.Expr, a=0, b=1) -> sp.Expr:
         """integrate() with each integral symbol's value in place: the same expression as
@@ -147,12 +149,12 @@ class IntegralTable:
         values = self.substitutions()
         return sp.Add(*[values.get(k, k) * sp.Add(*v) for k, v in groups.items()])
 
-    def _grouped(self, density: sp.Expr, a, b) -> dict[sp.Expr, list[sp.Expr]]:
+    def _grouped(self, density: sp.Expr, a, b, closed=None) -> dict[sp.Expr, list[sp.Expr]]:
         """The rest of each term of the density, grouped by its monomial's integral symbol."""
         a, b = exact(a), exact(b)
         groups: dict[sp.Expr, list[sp.Expr]] = {}
         for key_parts, rest in self._terms(density):
-            groups.setdefault(self.monomial_symbol(key_parts, a, b), []).append(rest)
+            groups.setdefault(self.monomial_symbol(key_parts, a, b, closed), []).append(rest)
         return groups
 
     def _terms(self, density: sp.Expr) -> list[tuple[list, sp.Expr]]:
@@ -173,8 +175,9 @@ class IntegralTable:
             memo[density] = terms
         return memo[density]
 
-    def monomial_symbol(self, parts, a=0, b=1) -> sp.Expr:
-        """The symbol of int_a^b s^k * prod(factors) ds (a, b exact fractions of the length)."""
+    def monomial_symbol(self, parts, a=0, b=1, closed=None) -> sp.Expr:
+        """The symbol of int_a^b s^k * prod(factors) ds (a, b exact fractions of the length);
+        closed: integrate's."""
         a, b = exact(a), exact(b)
         s_pow = 0
         factors: list[Factor] = []
@@ -186,11 +189,14 @@ class IntegralTable:
         if not factors:
             return (b**(s_pow + 1) - a**(s_pow + 1)) / (s_pow + 1)
         key = (a, b, s_pow, tuple(sorted(factors)))
+        if closed is not None and closed != (a == 0):  # the point masses at a otherwise than by default
+            key += (closed,)
         sym = self._symbols.get(key)
         if sym is None:
             label = "*".join(([f"s^{s_pow}"] if s_pow > 1 else ["s"] if s_pow == 1 else [])
                              + [f.label for f in key[3]])
-            interval = "" if (a, b) == (0, 1) else f"({a},{b})"
+            interval = ("" if (a, b) == (0, 1) else f"({a},{b})") if len(key) == 4 else \
+                f"{'[' if closed else '('}{a},{b}]"
             sym = sp.Symbol(f"J{interval}[{label}]", real=True)
             self._symbols[key] = sym
             self._monomial_of[sym] = key
@@ -233,8 +239,8 @@ class IntegralTable:
         integrand = (sp.diff(ma.expr, s) * sp.diff(mb.expr, s)).subs(s, sig)
         return _integrate_exact(integrand, sig, 0, s)
 
-    def _evaluate(self, a, b, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
-        exact = [self._exact_factor(f) for f in factors]
+    def _evaluate(self, a, b, s_pow: int, factors: tuple[Factor, ...], closed=None) -> IntegralValue:
+        exact = [self._exact_factor(f) for f in factors]  # (no point masses: closed changes nothing)
         if all(e is not None for e in exact):
             expr = _integrate_exact(s**s_pow * sp.Mul(*exact), s, a, b)
             with mpmath.workdps(QUAD_DPS):
@@ -377,7 +383,7 @@ class BodyIntegralTable(IntegralTable):
               * fedata.evaluate(body, mb.shape, 1, sub.ravel(), es)).reshape(len(pts), -1)
         return start[elem] + (p2 * gw[None, :]).sum(axis=1) * (pts - s0)
 
-    def _evaluate(self, a, b, s_pow: int, factors: tuple[Factor, ...]) -> IntegralValue:
+    def _evaluate(self, a, b, s_pow: int, factors: tuple[Factor, ...], closed=None) -> IntegralValue:
         import numpy as np
 
         from flexsym.model import fedata
@@ -392,16 +398,18 @@ class BodyIntegralTable(IntegralTable):
         wts = ((hi - lo)[elems, None] * gw[None, :]).ravel()
         elem = np.repeat(elems, len(gx))
         terms = wts * pts**s_pow
-        for f in factors:
+        for f in factors if len(pts) else ():  # (a = b: no element, the point masses alone)
             terms = terms * self._factor_values(f, elem, pts)
         total, scale = float(terms.sum()), float(np.abs(terms).sum())
-        # point masses (Dirac terms of mu and rot) in (a, b], or at a = 0
+        # point masses (Dirac terms of mu and rot) in (a, b], and at a if closed (by default
+        # at a = 0)
         weights = [f.a for f in factors if f.kind == "weight" and f.a in ("mu", "rot")]
+        at_a = a == 0.0 if closed is None else closed
         if weights:
             ref, L = body.reference, body.length
             for pm in body.masses:
                 sk = pm.x / L
-                if not (a < sk <= b or sk == a == 0.0):
+                if not (a < sk <= b or (sk == a and at_a)):
                     continue
                 c = (pm.mass / (ref.rho * ref.A * L) if weights[0] == "mu"
                      else pm.rotary / (ref.rho * ref.A * L**3))

@@ -132,12 +132,14 @@ class BodyKind:
     def from_equilibrium(self, beam, fn: str) -> bool:
         return False
 
-    def own_stress(self, der, beam, x: float, fn: str, where: str) -> sp.Expr:
+    def own_stress(self, der, beam, x: float, fn: str, where: str, side: int = 0) -> sp.Expr:
+        """side: the station's (system.station_side): which element at a node, or the mean."""
         raise NotImplementedError
 
-    def inertial_stress(self, der, beam, x: float, fn: str) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
+    def inertial_stress(self, der, beam, x: float, fn: str, closed: bool = False) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
         """(N or M of the inertial loads and gravity beyond x, the section point in ground,
-        the section's axis in frame components: the direction N is taken along)."""
+        the section's axis in frame components: the direction N is taken along). closed: a
+        point mass at x is on the part beyond (system.loads_at)."""
         raise NotImplementedError
 
     def damping_load(self, der, body) -> tuple[sp.Matrix, sp.Expr] | None:

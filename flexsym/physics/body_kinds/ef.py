@@ -67,20 +67,20 @@ class Ef(BeamKind):
         rx, ry, slope = der.flex[body].position(x)
         return rx - station(der, body, x), ry, slope
 
-    def own_stress(self, der, beam, x: float, fn: str, where: str) -> sp.Expr:
-        return der.flex[beam.name].stress(fn, x)
+    def own_stress(self, der, beam, x: float, fn: str, where: str, side: int = 0) -> sp.Expr:
+        return der.flex[beam.name].stress(fn, x, side)
 
     def from_equilibrium(self, beam, fn: str) -> bool:
         return (beam.model.axial_force if fn == "N" else beam.model.moment) != "constitutive"
 
-    def inertial_stress(self, der, beam, x: float, fn: str):
+    def inertial_stress(self, der, beam, x: float, fn: str, closed: bool = False):
         """The elements' and point masses' inertial loads and gravity beyond x (efbody's
         EfPart.inertial) with the frame's actual motion; N along the section's tangent."""
         part = der.flex[beam.name]
         index = {sym: i for i, sym in enumerate(der.q)}
         qdd = {c: der.qdd[index[sym]] for c, sym in part.q.items()}
         alpha = der.ef_damping.get(beam.name, (0, 0))[0]
-        out, section, axis = part.inertial(fn, x, qdd, alpha)
+        out, section, axis = part.inertial(fn, x, qdd, alpha, closed)
         Arot, motion = frame_acceleration(der, beam.name)
         actual = dict(zip((OM, AL, A0X, A0Y, GX, GY), motion))
         return out.xreplace(actual), der.poses[beam.name].R + Arot * section, axis

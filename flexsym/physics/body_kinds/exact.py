@@ -109,7 +109,7 @@ class Exact(Modal):
             rx, ry = position_symbols(part, der.casadi_outputs, x)
         return rx - station(der, body, x), ry, fa(part.fields.v_s) / L_
 
-    def inertial_stress(self, der, beam, x: float, fn: str):
+    def inertial_stress(self, der, beam, x: float, fn: str, closed: bool = False):
         """The inertial loads over its quadrature (casadi); N along the section's tangent."""
         part = der.flex[beam.name]
         pose = der.poses[beam.name]
@@ -117,7 +117,7 @@ class Exact(Modal):
         u, v, slope = self.fields_at(der, beam.name, x)
         tangent = sp.Matrix([sp.cos(slope), sp.sin(slope)])  # the section's axis, frame components
         section = pose.R + Arot * sp.Matrix([station(der, beam.name, x) + u, v])
-        return inertial_section_load(part, der.casadi_outputs, x, fn), section, tangent
+        return inertial_section_load(part, der.casadi_outputs, x, fn, closed), section, tangent
 
 
 KIND = Exact()

@@ -231,25 +231,29 @@ class Modal(BeamKind):
     def from_equilibrium(self, beam, fn: str) -> bool:
         return (beam.model.axial_force if fn == "N" else beam.model.moment) == "equilibrium"
 
-    def own_stress(self, der, beam, x: float, fn: str, where: str) -> sp.Expr:
-        """N = EA eps (or the prestress model's), M = EI v'' (outputs.output_expression)."""
+    def own_stress(self, der, beam, x: float, fn: str, where: str, side: int = 0) -> sp.Expr:
+        """N = EA eps (or the prestress model's), M = EI v'' (outputs.output_expression; at a
+        node of a body from finite-element data, the element on the station's side, or the
+        mean of both)."""
         part = der.flex[beam.name]
         frac = exact(x) / exact(beam.length)
-        spec = replace(beam.model, points=(("o", str(frac)),))
+        label = "o" + {-1: "_left", 0: "", 1: "_right"}[side]
+        spec = replace(beam.model, points=((label, str(frac)),))
         if fn == "N" and not spec.axial and spec.strain != "prestress":
             raise SpecError(f"{where}: strain model '{spec.strain}' has no axial coordinate to carry "
                             "an axial force")
         view = SimpleNamespace(spec=spec, table=part.table, modes=part.modes, fields=part.fields)
-        expr = output_expression(view, f"{fn}_o")
+        expr = output_expression(view, f"{fn}_{label}")
         _, (omega, _, a0x, _, gx, _) = frame_acceleration(der, beam.name)
         if fn == "N" and spec.strain == "prestress":  # the root's acceleration and gravity (root_load_density)
             expr -= rho * A * L * part.table.integrate(part.fields.weights["mu"], frac, 1) * (a0x - gx)
         return expr.xreplace(part.table.substitutions()).xreplace(part.psyms).xreplace({w: omega})
 
-    def inertial_stress(self, der, beam, x: float, fn: str):
+    def inertial_stress(self, der, beam, x: float, fn: str, closed: bool = False):
         """The inertial loads -rho A (a - g) beyond x (a in frame components: A^T R'' + the
         relative, Coriolis, angular and centripetal terms, as outputs._equilibrium_* for a
-        guided hub) integrated by the table; N along the frame's x axis."""
+        guided hub) integrated by the table, a point mass at x with them if closed
+        (system.loads_at); N along the frame's x axis."""
         part = der.flex[beam.name]
         rho_, A_, L_ = (BEAM_PARAMS[k].symbol for k in (0, 2, 4))
         f, tab = part.inertial_fields(der.system), part.table
@@ -263,13 +267,13 @@ class Modal(BeamKind):
             ax, ay = ax + damp[0], ay + damp[1]
         view = part.view()
         if fn == "N":
-            out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * ax, at, 1)
+            out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * ax, at, 1, closed)
         else:
             dx = X - L_ * at - field_at(view, f.u, at)
             dy = f.v - field_at(view, f.v, at)
-            out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * (dx * ay - dy * ax), at, 1)
+            out = -rho_ * A_ * L_ * tab.integrate(f.weights["mu"] * (dx * ay - dy * ax), at, 1, closed)
             if f.weights["rot"] != 0:
-                out -= rho_ * A_ * L_**3 * tab.integrate(f.weights["rot"] * (al + f.v_ddot_s / L_), at, 1)
+                out -= rho_ * A_ * L_**3 * tab.integrate(f.weights["rot"] * (al + f.v_ddot_s / L_), at, 1, closed)
         Arot, motion = frame_acceleration(der, beam.name)
         actual = dict(zip((om, al, a0x, a0y, gx, gy), motion))
         out = out.xreplace(tab.substitutions()).xreplace(part.psyms).xreplace(actual)
