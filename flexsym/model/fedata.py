@@ -603,19 +603,20 @@ class BodyMode:
             bc.append(B(0, 1, 0))
         return tuple(bc)
 
-    def numeric(self, order: int, at: float) -> float:
-        """The value at s = at; at a node, derivatives that jump are averaged over both sides."""
-        left = evaluate(self.body, self.shape, order, at, locate(self.body, np.array([at]), -1)[0])
-        right = evaluate(self.body, self.shape, order, at, locate(self.body, np.array([at]), +1)[0])
-        return float((left[0] + right[0]) / 2)
+    def numeric(self, order: int, at: float, side: int = 0) -> float:
+        """The value at s = at; at a node, derivatives that jump are averaged over both sides
+        (side 0), or the element's before (-1) or beyond (+1)."""
+        ends = [evaluate(self.body, self.shape, order, at, locate(self.body, np.array([at]), k)[0])[0]
+                for k in ((-1, 1) if side == 0 else (side,))]
+        return float(sum(ends) / len(ends))
 
-    def value_at(self, order: int, at):
+    def value_at(self, order: int, at, side: int = 0):
         import sympy as sp
 
         for bc in self.bcs:
             if bc.order == order and bc.at == at:
                 return sp.Integer(bc.value)
-        return sp.Float(repr(round_sig(self.numeric(order, float(at)))), 17)
+        return sp.Float(repr(round_sig(self.numeric(order, float(at), side))), 17)
 
 
 def body_mode(body: BeamBody, ref) -> BodyMode:

@@ -75,8 +75,9 @@ class Mode:
     def derivative(self, order: int) -> sp.Expr:
         return _derivative(self, order) if order else self.expr
 
-    def value_at(self, order: int, at) -> sp.Expr:
-        """d^order/ds^order at s = at; a boundary condition gives the exact value."""
+    def value_at(self, order: int, at, side: int = 0) -> sp.Expr:
+        """d^order/ds^order at s = at; a boundary condition gives the exact value (side: a
+        mode from finite-element data's, fedata.BodyMode; an analytic shape is smooth)."""
         return _value_at(self, order, at)
 
     def _value_at(self, order: int, at) -> sp.Expr:

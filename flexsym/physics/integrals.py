@@ -131,7 +131,8 @@ class IntegralTable:
         spatial beam's eiy = E I_y, gj = G J, ip = rho (I_y + I_z): 1."""
         return UNIFORM_WEIGHTS[kind]
 
-    def weight_at(self, kind: str, at) -> sp.Expr:
+    def weight_at(self, kind: str, at, side: int = 0) -> sp.Expr:
+        """The weight at s = at (side: a body's, BodyIntegralTable.weight_at)."""
         return UNIFORM_WEIGHTS[kind].subs(s, at) if kind == "nhat" else UNIFORM_WEIGHTS[kind]
 
     # ----- integration of a density ---------------------------------------------------
@@ -335,7 +336,9 @@ class BodyIntegralTable(IntegralTable):
             return sp.Integer(0)
         return self.factor(Factor("weight", kind))
 
-    def weight_at(self, kind: str, at) -> sp.Expr:
+    def weight_at(self, kind: str, at, side: int = 0) -> sp.Expr:
+        """The weight at s = at: at a node, the element's beyond it for side +1, else the
+        one before."""
         import numpy as np
 
         from flexsym.model import fedata
@@ -345,7 +348,7 @@ class BodyIntegralTable(IntegralTable):
             return sp.Float(repr(fedata.round_sig(float(fedata.nhat(body, x)[0]))), 17)
         if kind == "rot":
             return sp.Integer(0)
-        e = int(fedata.locate(body, np.array([x]))[0])
+        e = int(fedata.locate(body, np.array([x]), 1 if side > 0 else -1)[0])
         return sp.Float(repr(float(body.ratios()[kind][e])), 17)
 
     def _factor_values(self, f: Factor, elem, pts):

@@ -29,16 +29,18 @@ from flexsym.model.modes import s
 from flexsym.model.output_names import point_of, stress_method
 
 
-def field_at(der, expr: sp.Expr, at) -> sp.Expr:
-    """Replace every factor placeholder in a field expression by its value at s = at."""
+def field_at(der, expr: sp.Expr, at, side: int = 0) -> sp.Expr:
+    """Replace every factor placeholder in a field expression by its value at s = at (at a
+    node of a body from finite-element data: side -1 / +1 the element's before / beyond it; 0,
+    the modes' mean of both and the weights' before)."""
     subs = {}
     table = der.table
     for ph in table.placeholders:
         f: Factor = table._factor_of[ph]
         if f.kind == "mode":
-            subs[ph] = der.modes[f.a].value_at(f.order, at)
+            subs[ph] = der.modes[f.a].value_at(f.order, at, side)
         elif f.kind == "weight":
-            subs[ph] = table.weight_at(f.a, at)
+            subs[ph] = table.weight_at(f.a, at, side)
         elif at == 0:
             subs[ph] = sp.Integer(0)
         else:  # H_ab(at) = int_0^at a' b' ds: an ordinary modal integral on [0, at]

@@ -404,8 +404,8 @@ def _section_angles(der, beam: str, x: float) -> sp.Matrix:
     return sp.Matrix([_at(der, beam, x, "phi"), -_at(der, beam, x, "vz_s") / L, _at(der, beam, x, "v_s") / L])
 
 
-def _at(der, body: str, x: float, what: str):
-    """A field of a beam at station x (the table's values substituted)."""
+def _at(der, body: str, x: float, what: str, side: int = 0):
+    """A field of a beam at station x (the table's values substituted; side: field_at's)."""
     d = der.spatial[body]
     beam = der.system.body(body)
     at = exact(x) / exact(beam.length)
@@ -413,7 +413,7 @@ def _at(der, body: str, x: float, what: str):
     generic = {gp.symbol: d["P"][gp.name] for gp in BEAM_PARAMS}
 
     def fa(e):  # field_at leaves s (in L s) alone: the station is s = at
-        e = field_at(view, e, at).xreplace({s: at})
+        e = field_at(view, e, at, side).xreplace({s: at})
         return e.xreplace(d["table"].substitutions()).xreplace(generic)
     if what in ("r", "inertial r"):  # the axis point; or the fields' the inertia reads (contribute)
         return sp.Matrix([fa(e) for e in (d["r"] if what == "r" else d["inertial"][1])])
@@ -447,7 +447,12 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, l
     if source != "equilibrium":
         L = P["L"]
         at = exact(x) / exact(beam.length)
-        w = lambda kind: d["table"].weight_at(kind, at)  # noqa: E731 (the section there)
+        body = beam.model.body
+        node = body is not None and 0 < x < beam.length and body.node_index(x * body.length / beam.length) is not None
+
+        def own(kind, what):  # stiffness x strain: at a node the mean of its two elements'
+            return sum(d["table"].weight_at(kind, at, k) * _at(der, beam.name, x, what, k)
+                       for k in ((-1, 1) if node else (0,))) / (2 if node else 1)
         if fn == "N":
             if beam.model.strain == "prestress":
                 fr = der.spatial["frames"][beam.name]
@@ -458,10 +463,11 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, l
             if not beam.model.axial:
                 raise SpecError(f"system '{der.system.name}': body '{beam.name}': strain model "
                                 f"'{beam.model.strain}' has no axial coordinate to carry N")
-            return P["E"] * P["A"] * w("ea") / L * _at(der, beam.name, x, "u_stretch_s")
-        return {"Mx": P["G"] * P["J"] * w("gj") / L * _at(der, beam.name, x, "phi_s"),
-                "My": -P["E"] * P["Iy"] * w("eiy") / L**2 * _at(der, beam.name, x, "vz_ss"),
-                "Mz": P["E"] * P["I"] * w("ei") / L**2 * _at(der, beam.name, x, "v_ss")}[fn]
+            return P["E"] * P["A"] * own("ea", "u_stretch_s") / L
+        kind, what, scale = {"Mx": ("gj", "phi_s", P["G"] * P["J"] / L),
+                             "My": ("eiy", "vz_ss", -P["E"] * P["Iy"] / L**2),
+                             "Mz": ("ei", "v_ss", P["E"] * P["I"] / L**2)}[fn]
+        return scale * own(kind, what)
     # equilibrium of the part beyond x: S = int (g - a) rho A dx + loads on its markers,
     # M = int (r - r_x) x rho A (g - a) dx - d/dt int rho (I_y + I_z) spin t dx + load moments
     # the acceleration in the frame's components, a = a_0 + alpha x r + omega x (omega x r)
