@@ -156,11 +156,12 @@ BAD = [  # (scene, output, what the one line says)
     (FLAP, "Qy(blade, 1.0, constitutive)", "needs (beam, x) with x a marker name"),
     (FLAP, "My(blade, 1.0, equilibrium, 2)", "needs (beam, x) or (beam, x, recovery)"),
     # a station's side (tests/test_station_sides.py)
-    (PLANAR, "v(beam, mid-)", "a side of the station (mid-) applies to N, M, sigma"),
+    (PLANAR, "v(beam, mid-)", "a side of the station (mid-) applies to section forces, moments and stresses"),
+    (FLAP, "vz(blade, 1.0+)", "a side of the station (1.0+) applies to section forces"),
     (PLANAR, "N(beam, 0.0-)", "no beam on that side of x = 0 m"),
     (PLANAR, "M(beam, tip+, constitutive)", "no beam on that side of x = 1 m"),
     (PLANAR, "M(beam, mid*)", "'mid*' is neither a marker of 'beam' nor a number"),
-    (FLAP, "N(blade, 1.0-)", "a side of the station (1.0-) is planar only for now"),
+    (FLAP, "Qz(blade, 0.0-)", "no beam on that side of x = 0 m"),
 ]
 
 

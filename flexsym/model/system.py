@@ -65,7 +65,7 @@ RECOVERABLE = ("N", "M", "Mx", "My", "Mz")
 OUTPUT_RECOVERIES = ("equilibrium", "constitutive")
 # a section force, moment or stress may name the side of its station, x- or x+ (step-, 5.0+):
 # where they jump (a step of the section, a point mass, a load at a marker), one side's value
-SIDED = ("N", "M", "sigma")
+SIDED = ("N", "M", "sigma", "Mx", "My", "Mz", "Qy", "Qz")
 # reaction(joint, c) per dimension: the force's ground components, then the moment about the
 # joint's child point (the plane's one, or its ground components)
 REACTION_COMPONENTS = {2: ("x", "y", "moment"), 3: ("x", "y", "z", "mx", "my", "mz")}
@@ -1127,11 +1127,9 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
             raise SpecError(f"{where}: '{args[0]}' is not a flexible body")
         x = beam_station(system, b, args[1], where)
         side = station_side(args[1])
-        if side and system.dimension == 3:
-            raise SpecError(f"{where}: a side of the station ({args[1]}) is planar only for now")
         if side and fn not in SIDED:
-            raise SpecError(f"{where}: a side of the station ({args[1]}) applies to "
-                            f"{', '.join(SIDED)} (section forces and stresses jump; {fn} does not)")
+            raise SpecError(f"{where}: a side of the station ({args[1]}) applies to section "
+                            f"forces, moments and stresses (they jump; {fn} does not)")
         if (side < 0 and x == 0) or (side > 0 and x == b.length):
             raise SpecError(f"{where}: no beam on that side of x = {x:g} m ({args[1]})")
         if fn == "sigma":

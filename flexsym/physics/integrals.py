@@ -142,11 +142,11 @@ class IntegralTable:
         one at a counts instead (a section's side: system.loads_at)."""
         return sp.Add(*[k * sp.Add(*v) for k, v in self._grouped(density, a, b, closed).items()])
 
-    def integrate_values(self, density: sp.Expr, a=0, b=1) -> sp.Expr:
+    def integrate_values(self, density: sp.Expr, a=0, b=1, closed=None) -> sp.Expr:
         """integrate() with each integral symbol's value in place: the same expression as
         integrate(...).xreplace(substitutions()), built without rebuilding its whole tree
         (which took a spatial beam's section outputs a third of their time)."""
-        groups = self._grouped(density, a, b)
+        groups = self._grouped(density, a, b, closed)
         values = self.substitutions()
         return sp.Add(*[values.get(k, k) * sp.Add(*v) for k, v in groups.items()])
 

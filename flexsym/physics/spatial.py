@@ -82,8 +82,8 @@ from flexsym.model.exact_numbers import exact
 from flexsym.model.joint_kinds import KINDS
 from flexsym.model.parameters import BEAM_PARAMS, SPATIAL_BEAM_PARAMS
 from flexsym.model.system import (GROUND, SECOND, FlexibleBeam, Gravity, PointForce, SpringDamper,
-                                  System, Torque, beam_station, length_scale, output_beam,
-                                  parse_output, section_at, section_point)
+                                  System, Torque, beam_station, length_scale, loads_at, output_beam,
+                                  parse_output, section_at, section_point, station_side)
 from flexsym.physics.assemble import (EF_T, Coordinate, SystemDerivation, _guided, add_spring,
                                       joint_coordinate, motor_torque, spring_force_on_a, start_of,
                                       violation)
@@ -596,9 +596,9 @@ def _output(der, quantity: str) -> sp.Expr:
         F, M = joint_reaction(der, system.joint(args[0]))
         return (F if len(args[1]) == 1 else M)["xyz".index(args[1][-1])]
     beam = output_beam(system, fn, args)  # N and the moments: with the output's recovery, if named
-    x = beam_station(system, beam, args[1], where)
+    x, side = beam_station(system, beam, args[1], where), station_side(args[1])
     if fn == "sigma":
-        return _sigma(der, beam, x, args[2:], where)
+        return _sigma(der, beam, x, args[2:], where, side)
     kind = kind_of(beam)
     if fn in ("u", "v", "vz"):
         return kind.displacement(der, beam, x, fn)
@@ -607,32 +607,36 @@ def _output(der, quantity: str) -> sp.Expr:
         d = p1 - p0
         c = cross(d, px - p0)
         return sp.sqrt(c.dot(c) / d.dot(d))
-    return _section(der, beam, x, fn)
+    return _section(der, beam, x, fn, side)
 
 
-def _sigma(der, beam: FlexibleBeam, x: float, point, where: str) -> sp.Expr:
+def _sigma(der, beam: FlexibleBeam, x: float, point, where: str, side: int = 0) -> sp.Expr:
     """The normal stress at the section point (y, z): E eps with eps = u' - y v'' - z vz'',
     and Mz = E I_z v'', My = -E I_y vz'' (a fibre at y > 0 shortens under Mz > 0, as in the
     plane; one at z > 0 stretches under My > 0), so sigma = N/A - Mz y/I_z + My z/I_y, with the
     beam's N, My and Mz (constitutive or from equilibrium, modal or ef)."""
-    y, z = (exact(c) for c in section_point(beam, x, point, where))
+    y, z = (exact(c) for c in section_point(beam, x, point, where, side))
     P = der.spatial[beam.name]["P"]
-    N, My, Mz = (_section(der, beam, x, f) for f in ("N", "My", "Mz"))
+    N, My, Mz = (_section(der, beam, x, f, side) for f in ("N", "My", "Mz"))
     sec = beam.section  # the section at x, as the run-time parameters scaled (section_at)
-    A, Iz, Iy = (P[k] * exact(v / getattr(sec, k)) for k, v in zip(("A", "I", "Iy"), section_at(beam, x)))
+    A, Iz, Iy = (P[k] * exact(v / getattr(sec, k)) for k, v in zip(("A", "I", "Iy"), section_at(beam, x, side)))
     return N / A - Mz * y / Iz + My * z / Iy
 
 
-def _section(der, beam: FlexibleBeam, x: float, fn: str) -> sp.Expr:
+def _section(der, beam: FlexibleBeam, x: float, fn: str, side: int = 0) -> sp.Expr:
     """N, Qy, Qz, Mx, My, Mz at station x in the deformed section's axes (its kind's: from its
-    elements, constitutive or from the equilibrium of the part beyond x with _loads_beyond)."""
-    return kind_of(beam).section(der, beam, x, fn, _loads_beyond)
+    elements, constitutive or from the equilibrium of the part beyond x with _loads_beyond),
+    on the station's side (system.station_side; the planar assemble._stress's)."""
+    return kind_of(beam).section(der, beam, x, fn, _loads_beyond, side)
 
 
-def _loads_beyond(der, beam: FlexibleBeam, x: float, fn: str, out: sp.Expr, section: sp.Matrix) -> sp.Expr:
+def _loads_beyond(der, beam: FlexibleBeam, x: float, fn: str, out: sp.Expr, section: sp.Matrix,
+                  side: int = 0) -> sp.Expr:
     """out plus the loads on the part of `beam` beyond station x (frame components): the force
     Sx, Sy, Sz or the moment Mx, My, Mz about the section point (frame components) of the
-    cut joints', the hung bodies', the point forces' and the spring ends' loads there."""
+    cut joints', the hung bodies', the point forces' and the spring ends' loads there (and at
+    x where system.loads_at)."""
+    at_x = loads_at(beam, x, side)
     fr = der.spatial["frames"][beam.name]
     kind = kind_of(beam)
     force, k = fn[0] == "S", "xyz".index(fn[1])
@@ -641,7 +645,7 @@ def _loads_beyond(der, beam: FlexibleBeam, x: float, fn: str, out: sp.Expr, sect
         if ref == GROUND:
             return None
         body, m = der.system.marker(ref)
-        on = body == beam.name and (m.x > x or (x >= beam.length and m.x >= beam.length))
+        on = body == beam.name and (m.x > x or (at_x and m.x >= x))
         return m if on else None
 
     hung = [(-F, -M, j.parent) for j in der.system.joints  # bodies hung from markers beyond x

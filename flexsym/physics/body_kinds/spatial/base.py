@@ -137,10 +137,11 @@ class SpatialKind:
         """u, v or vz at station x of a beam (frame components)."""
         raise SpecError(f"body '{beam.name}' has no fields (not a beam)")
 
-    def section(self, der, beam, x: float, fn: str, frame_section) -> sp.Expr:
-        """N, Qy, Qz, Mx, My, Mz at station x in the deformed section's axes; frame_section(der,
-        beam, x, fn): N, M from equilibrium or constitutive, S from equilibrium, in the frame's
-        components (physics/spatial.py: equilibrium takes the loads on the part beyond x)."""
+    def section(self, der, beam, x: float, fn: str, loads_beyond, side: int = 0) -> sp.Expr:
+        """N, Qy, Qz, Mx, My, Mz at station x in the deformed section's axes, constitutive or
+        from equilibrium; loads_beyond(der, beam, x, fn, out, section, side): out plus the
+        loads on the beam's markers beyond x (physics/spatial.py). side: the station's
+        (system.station_side)."""
         raise SpecError(f"body '{beam.name}' has no sections (not a beam)")
 
 

@@ -94,15 +94,15 @@ class Ef(SpatialBeam):
         k = ("u", "v", "vz").index(fn)
         return r[k] - (exact(x) / exact(beam.length) * der.spatial[beam.name]["P"]["L"] if k == 0 else 0)
 
-    def section(self, der, beam, x: float, fn: str, loads_beyond) -> sp.Expr:
+    def section(self, der, beam, x: float, fn: str, loads_beyond, side: int = 0) -> sp.Expr:
         """Those of the part beyond x (_equilibrium), in the deformed section's axes, unless
         `moment` / `axial_force` (Q and the moments / N) say "constitutive": then rod3d's own
         (strains, shear included), which converge from a larger start (S5's T_A on 32
         elements: 6.1e-3 of its peak off 64 against 6.2e-5, docs/validation/spatial.md)."""
         source = beam.model.axial_force if fn == "N" else beam.model.moment
-        if source == "constitutive":
+        if source == "constitutive":  # (continuous: a side reads the same)
             return ef_section(der, beam, x, fn)
-        S, M = _equilibrium(der, beam, x, loads_beyond)
+        S, M = _equilibrium(der, beam, x, loads_beyond, side)
         turn = euler_rotation(ef_station_quaternion(der, beam.name, x)).T  # frame -> section
         return (turn * (S if fn in ("N", "Qy", "Qz") else M))[("N", "Qy", "Qz", "Mx", "My", "Mz").index(fn) % 3]
 
@@ -156,7 +156,7 @@ def _node_rotation(der, body: str, k: int) -> tuple[sp.Matrix, sp.Matrix]:
     return euler_rotation(e), 2 * euler_G(e) * der.ddt(e)
 
 
-def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
+def _equilibrium(der, b, x: float, loads_beyond, side: int = 0) -> tuple[sp.Matrix, sp.Matrix]:
     """(S, M): the force and the moment about the section's axis point of every load on the part
     of the beam beyond station x, inertia included (frame components), once per station. Per
     element the part beyond x of rho A (g - a - alpha r') with the linear element's position r,
@@ -166,10 +166,11 @@ def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
     plus omega x h_k) and alpha Lambda_k J W_rel,k, weighted by the part of its tributary
     length (l_e/2 each side, as rod3d's T lumps it) beyond x; then the loads on its markers
     beyond x (loads_beyond). At the root this is the whole beam's momentum balance, which a
-    tree joint's reaction takes by another path (_moment_of_rates, along_motion)."""
+    tree joint's reaction takes by another path (_moment_of_rates, along_motion). side: the
+    station's, for the loads on markers at x (system.loads_at)."""
     memo = der.spatial[b.name].setdefault("equilibrium", {})
-    if x in memo:
-        return memo[x]
+    if (x, side) in memo:
+        return memo[(x, side)]
     info = der.spatial[b.name]
     n, node, P = info["n"], info["node"], info["P"]
     fr = der.spatial["frames"][b.name]
@@ -205,10 +206,10 @@ def _equilibrium(der, b, x: float, loads_beyond) -> tuple[sp.Matrix, sp.Matrix]:
         Lam, W_rel = _node_rotation(der, b.name, k)
         h = Lam * J * (Lam.T * om + W_rel)
         M -= (hi - lo) * le * (along_motion(der, h, 1) + cross(om, h) + alpha * Lam * J * W_rel)
-    S = sp.Matrix([loads_beyond(der, b, x, "S" + c, S[i], section) for i, c in enumerate("xyz")])
-    M = sp.Matrix([loads_beyond(der, b, x, "M" + c, M[i], section) for i, c in enumerate("xyz")])
-    memo[x] = (S, M)
-    return memo[x]
+    S = sp.Matrix([loads_beyond(der, b, x, "S" + c, S[i], section, side) for i, c in enumerate("xyz")])
+    M = sp.Matrix([loads_beyond(der, b, x, "M" + c, M[i], section, side) for i, c in enumerate("xyz")])
+    memo[(x, side)] = (S, M)
+    return memo[(x, side)]
 
 
 KIND = Ef()

@@ -18,7 +18,7 @@ from flexsym.model.fedata import (body_mode, load_case_forces, load_case_scale, 
 from flexsym.model.modes import mode, s
 from flexsym.model.parameters import BEAM_PARAMS
 from flexsym.model.strain_models import STRAIN_MODELS
-from flexsym.model.system import FlexibleBeam, beam_coordinates
+from flexsym.model.system import FlexibleBeam, beam_coordinates, loads_at
 from flexsym.physics.assemble import Coordinate
 from flexsym.physics.body_kinds import modal as planar
 from flexsym.physics.body_kinds.modal import damping_dissipation
@@ -73,9 +73,9 @@ class Modal(SpatialBeam):
         vel = vf + rd + cross(om, r)  # in the placeholders: short expansions, short integrals
         spin = F["phi_d"] + om[0] + (om[1] * F["v_s"] + om[2] * F["vz_s"]) / L
 
-        def integral(density, a=0, b_=1, table=table, P=P):
+        def integral(density, a=0, b_=1, closed=None, table=table, P=P):
             generic = {gp.symbol: P[gp.name] for gp in BEAM_PARAMS}
-            return table.integrate_values(density, a, b_).xreplace(generic)
+            return table.integrate_values(density, a, b_, closed).xreplace(generic)
 
         der.frame_T.append((integral(rho * A * L / 2 * w("mu") * vel.dot(vel)
                                      + rho * (P["Iy"] + P["I"]) * L / 2 * w("ip") * spin**2), actual))
@@ -184,20 +184,20 @@ class Modal(SpatialBeam):
     def displacement(self, der, beam, x: float, fn: str) -> sp.Expr:
         return _at(der, beam.name, x, fn)
 
-    def section(self, der, beam, x: float, fn: str, loads_beyond) -> sp.Expr:
+    def section(self, der, beam, x: float, fn: str, loads_beyond, side: int = 0) -> sp.Expr:
         """N (along the frame's x, as in the plane), Qy, Qz, Mx, My, Mz at station x in the
         deformed section's axes, constitutive or from equilibrium (Q: always from equilibrium,
         the Euler-Bernoulli beam has no shear strain). The equilibrium force S and moment M,
         found in the frame's components, are turned by the section's rotation theta = (phi,
         -vz_x, v_x) to first order, X_section = X - theta x X, the order of the modal
         kinematics; N stays S_x (the planar N; the turn would add v_x S_y + vz_x S_z, slope
-        times shear). loads_beyond(der, beam, x, fn, out, section): out plus the loads on the
-        part beyond x (physics/spatial.py)."""
+        times shear). loads_beyond(der, beam, x, fn, out, section, side): out plus the loads on
+        the part beyond x (physics/spatial.py). side: the station's (system.station_side)."""
         if fn[0] == "Q" or (fn != "N" and beam.model.moment == "equilibrium"):
-            X = sp.Matrix([_frame_section(der, beam, x, ("S" if fn[0] == "Q" else "M") + k, loads_beyond)
+            X = sp.Matrix([_frame_section(der, beam, x, ("S" if fn[0] == "Q" else "M") + k, loads_beyond, side)
                            for k in "xyz"])
             return (X - cross(_section_angles(der, beam.name, x), X))["xyz".index(fn[1])]
-        return _frame_section(der, beam, x, fn, loads_beyond)
+        return _frame_section(der, beam, x, fn, loads_beyond, side)
 
 
 KIND = Modal()
@@ -426,7 +426,7 @@ class _View:
     modes: dict
 
 
-def _frame_section(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) -> sp.Expr:
+def _frame_section(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond, side: int = 0) -> sp.Expr:
     """N, Mx, My, Mz at station x: constitutive, or from equilibrium in the frame's components;
     Sx, Sy, Sz: the force of the part beyond x, from equilibrium (N from equilibrium is Sx).
     Each once per derivation: the turned moments, Q and sigma at one station share them (the
@@ -436,12 +436,14 @@ def _frame_section(der, beam: FlexibleBeam, x: float, fn: str, loads_beyond) -> 
     # an output may name its own recovery (system.output_beam): the key holds the one asked for
     source = "equilibrium" if fn[0] == "S" else beam.model.axial_force if fn == "N" else beam.model.moment
     memo = der.spatial[beam.name].setdefault("sections", {})
-    if (x, fn, source) not in memo:
-        memo[(x, fn, source)] = _frame_section_of(der, beam, x, fn, source, loads_beyond)
-    return memo[(x, fn, source)]
+    key = (x, fn, source, side)
+    if key not in memo:
+        memo[key] = _frame_section_of(der, beam, x, fn, source, loads_beyond, side)
+    return memo[key]
 
 
-def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, loads_beyond) -> sp.Expr:
+def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, loads_beyond,
+                      side: int) -> sp.Expr:
     d = der.spatial[beam.name]
     P = d["P"]
     if source != "equilibrium":
@@ -450,9 +452,11 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, l
         body = beam.model.body
         node = body is not None and 0 < x < beam.length and body.node_index(x * body.length / beam.length) is not None
 
-        def own(kind, what):  # stiffness x strain: at a node the mean of its two elements'
+        sides = ((side,) if side else (-1, 1)) if node else (0,)
+
+        def own(kind, what):  # stiffness x strain: at a node its side's element's, or the mean of both
             return sum(d["table"].weight_at(kind, at, k) * _at(der, beam.name, x, what, k)
-                       for k in ((-1, 1) if node else (0,))) / (2 if node else 1)
+                       for k in sides) / len(sides)
         if fn == "N":
             if beam.model.strain == "prestress":
                 fr = der.spatial["frames"][beam.name]
@@ -489,8 +493,9 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, l
     load = rho * A * L * w("mu") * (gl - acc)
     force, k = fn[0] == "S", "xyz".index(fn[1])
     section = _at(der, beam.name, x, "inertial r")  # the moments' point, of the fields r is
+    closed = loads_at(beam, x, side)  # a point mass at x on the part beyond
     if force:
-        out = d["integral"](load[k], at, 1)
+        out = d["integral"](load[k], at, 1, closed)
     else:
         # int (r - r_x) x load = int r x load - r_x x int load (r_x is the station's, constant
         # along the part): the densities are the same at every station, so each is expanded
@@ -506,10 +511,10 @@ def _frame_section_of(der, beam: FlexibleBeam, x: float, fn: str, source: str, l
         tangent = sp.Matrix([1, F["v_s"] / L, F["vz_s"] / L])
         h_rate = (spin_rate * tangent + d["spin"] * sp.Matrix([0, F["v_d_s"] / L, F["vz_d_s"] / L])
                   + cross(om, d["spin"] * tangent))
-        out = d["integral"](mom[k] - rho * (P["Iy"] + P["I"]) * L * w("ip") * h_rate[k], at, 1) \
-            - cross(section, sp.Matrix([d["integral"](load[j], at, 1) for j in range(3)]))[k]
+        out = d["integral"](mom[k] - rho * (P["Iy"] + P["I"]) * L * w("ip") * h_rate[k], at, 1, closed) \
+            - cross(section, sp.Matrix([d["integral"](load[j], at, 1, closed) for j in range(3)]))[k]
     omega = fr.omega
     now = (d["actual"] | dict(zip(al, der.ddt(omega))) | dict(zip(gl, fr.g))
            | dict(zip(a0, der.ddt(fr.V) + cross(omega, fr.V))))
     out = out.xreplace(now)
-    return loads_beyond(der, beam, x, fn, out, section)
+    return loads_beyond(der, beam, x, fn, out, section, side)
