@@ -1228,7 +1228,7 @@ def beam_station(system: System, beam: FlexibleBeam, text: str, where: str) -> f
     """A station on a beam: a marker name or a number (m), 0 <= x <= length, with or without
     a side (station_side)."""
     if station_side(text):
-        text = text[:-1]
+        text = text[:-1].rstrip()
     for m in beam.all_markers:
         if m.name == text:
             return float(m.x)
