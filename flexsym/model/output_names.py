@@ -62,6 +62,29 @@ def point_of(name: str, points=()):
     return m.group(1), frac
 
 
+def system_alias(name: str, labels=()) -> tuple[str, object, int] | None:
+    """A one-beam output name read in the system grammar: (function, station, side), the station
+    a fraction of the length (a sympy Rational: A, B, C, s<fraction>, @<fraction>) or one of
+    `labels` (the beam's markers), side -1 / +1 for a label's *_left / *_right (the element
+    before / beyond a node), else 0. None: not a one-beam name that the system grammar spells
+    (ef's clamp reactions N_A_clamp, M_A_clamp are the hub's, not the beam's)."""
+    name = canonical_output(name)
+    if name in ("v_tip", "u_tip"):
+        return name[0], sp.Integer(1), 0
+    fixed = _POINT_RE.fullmatch(name)
+    if fixed:  # A, B, C and fractions before any label: what the one-beam grammar reserves
+        q, at = point_of(name)
+        return q, at, 0
+    if len(name) < 3 or name[0] not in "NM" or name[1] != "_":
+        return None
+    label, side = name[2:], 0
+    for suffix, s in (("_left", -1), ("_right", 1)):
+        if label.endswith(suffix):
+            base = label[:-len(suffix)]
+            label, side = (label, s) if label in labels else (base, s)
+    return (name[0], label, side) if label in labels else None
+
+
 def info(name: str, points=()) -> OutputInfo:
     if name == "v_tip":
         return OutputInfo(name, "m", "transverse tip deflection v_o(L) in the moving frame")

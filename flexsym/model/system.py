@@ -25,6 +25,7 @@ from flexsym.core.errors import SpecError
 from flexsym.model.joint_kinds import KINDS
 from flexsym.model.limits import MAX_BODIES, MAX_JOINTS, MIN_AXIS, check_number, check_positive, is_real
 from flexsym.model.modes import ModeRef, root_slope_free
+from flexsym.model.output_names import system_alias
 from flexsym.model.variant import NAME_RE, TORSION_MODES  # one name rule for variants and systems (names become C identifiers)
 
 GROUND = "ground"
@@ -1057,6 +1058,9 @@ def spanning_tree(system: System) -> Tree:
 def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
     """'fn(a, b)' or a scalar name -> (fn, args), checking that the names exist."""
     where = f"system '{system.name}': output '{quantity}'"
+    alias = one_beam_alias(system, quantity, where) if isinstance(quantity, str) else None
+    if alias is not None:
+        return parse_output(system, alias)
     m = _OUTPUT_RE.match(quantity) if isinstance(quantity, str) else None
     if not m:
         raise SpecError(f"{where}: not of the form name(args)")
@@ -1064,7 +1068,8 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
     if argtext is None:
         if fn not in OUTPUT_SCALARS:
             raise SpecError(f"{where}: unknown quantity (known: {', '.join(OUTPUT_SCALARS)}, "
-                            f"{', '.join(f + '(...)' for f in OUTPUT_FUNCTIONS)})")
+                            f"{', '.join(f + '(...)' for f in OUTPUT_FUNCTIONS)}; and on a system's "
+                            "one flexible beam v_tip, u_tip, N_A, M_B, M@0.25, M_<marker>)")
         return fn, ()
     if fn not in OUTPUT_FUNCTIONS:
         raise SpecError(f"{where}: unknown function '{fn}' (known: {', '.join(OUTPUT_FUNCTIONS)})")
@@ -1138,6 +1143,33 @@ def parse_output(system: System, quantity: str) -> tuple[str, tuple[str, ...]]:
                                 f"on either side: name one, {args[1]}- or {args[1]}+")
             section_point(b, x, args[2:], where, side)
     return fn, args
+
+
+def one_beam_alias(system: System, text: str, where: str) -> str | None:
+    """The system spelling of a one-beam output name on the system's one flexible beam B
+    (output_names.system_alias): v_tip -> v(B, L), u_tip -> u(B, L), N_A -> N(B, 0),
+    M@0.25 -> M(B, 0.25 L), M_B -> M(B, L/2), N_<marker> -> N(B, <marker>), M_<marker>_left ->
+    M(B, <marker>-); None when text is not such a name. The recovery is the beam model's, as
+    for M(B, x)."""
+    text = text.strip()
+    if "(" in text or text in OUTPUT_SCALARS:
+        return None
+    beams = [b for b in system.bodies if getattr(b, "flexible", False)]
+    labels = tuple(m.name for m in beams[0].all_markers) if len(beams) == 1 else ()
+    try:
+        hit = system_alias(text, labels)
+    except SpecError as exc:  # M@1.5: its position, in the system's words
+        raise SpecError(f"{where}: {str(exc).split(': ', 1)[-1]}") from None
+    if hit is None:
+        return None
+    fn, at, side = hit
+    if len(beams) != 1:
+        raise SpecError(f"{where}: a one-beam output name reads the system's one flexible beam, "
+                        f"and it has {len(beams)}{': ' if beams else ''}"
+                        f"{', '.join(b.name for b in beams)} (write {fn}(beam, x))")
+    beam = beams[0]
+    station = at if isinstance(at, str) else repr(beam.length if at == 1 else float(at) * beam.length)
+    return f"{fn}({beam.name}, {station}{'-' if side < 0 else '+' if side > 0 else ''})"
 
 
 def output_beam(system: System, fn: str, args: tuple[str, ...]) -> FlexibleBeam:
