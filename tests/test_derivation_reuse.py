@@ -9,7 +9,6 @@ from __future__ import annotations
 import difflib
 import json
 import shutil
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -135,3 +134,40 @@ def test_a_derivation_kept_in_a_damaged_file_is_derived_again():
     built = prepare_system(third, log=said.append)
     assert any("deriving the equations" in s for s in said), said
     assert run_built(built, t_end=0.01, dt=1e-3, integrator="genalpha").ok
+
+
+def test_rare_kernels_built_apart_at_O0_give_the_same_rows(monkeypatch):
+    """A system whose rarely called kernels (sysgen.RARE_KERNELS: the energies, the Newton
+    matrix's residual_jac) exceed their size go to kernels_rare.c, compiled at -O0: here forced
+    by thresholds of 0 on the pendulum. The rows, with the energy columns that read them and
+    the Newton matrix that genalpha builds, are those of the folder without the split, bit for
+    bit; and a second section's folder links both kept kernel objects."""
+    from flexsym.codegen import sysgen
+
+    plain, split = _system(_pendulum(name="tiers_plain")), _system(_pendulum(name="tiers_split"))
+    split2 = _system(_pendulum(name="tiers_split", **OTHER_2D))
+    for s in (plain, split, split2):
+        _forget(s)
+    one = prepare_system(plain, log=lambda m: None)
+    monkeypatch.setattr(sysgen, "RARE_KERNELS", {"energy": 0, "residual_jac": 0})
+    two = prepare_system(split, log=lambda m: None)
+    three = prepare_system(split2, log=lambda m: None)
+    monkeypatch.undo()
+    folder = system_folder(split)
+    rare, hot = (folder / "kernels_rare.c").read_text(), (folder / "kernels.c").read_text()
+    assert "fsm_tiers_split_energy(" in rare and "fsm_tiers_split_residual_jac(" in rare
+    assert "fsm_tiers_split_energy(" not in hot and "fsm_tiers_split_force(" in hot
+    assert "kernels_rare.c PROPERTIES COMPILE_OPTIONS -O0" in (folder / "CMakeLists.txt").read_text()
+    assert "kernels_rare.c" in json.loads((folder / "manifest.json").read_text())["kernels_inputs"]
+    assert not (system_folder(plain) / "kernels_rare.c").exists()
+    options = dict(t_end=0.3, dt=1e-4, integrator="genalpha", energy=True, newton="full")
+    a, b = run_ok(one, **options), run_ok(two, **options)
+    assert a.columns == b.columns and "h" in a.columns
+    for c in a.columns:
+        assert np.array_equal(a[c], b[c]), c
+    assert a.summary["jacobian_evaluations"] >= 3000  # residual_jac ran every step (full Newton)
+    assert not list(three.build_dir.rglob("kernels*.c.o"))  # both objects linked from the kept build
+    params = {"rho": 7800.0, "E": 2.1e11, "A": 1.3e-4, "I": 3.1e-10}
+    c, d = run_ok(three, **options), run_ok(one, params=params, **options)
+    for col in c.columns:
+        assert np.array_equal(c[col], d[col]), col

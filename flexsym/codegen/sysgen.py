@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import re
 import time
 
@@ -52,6 +53,16 @@ _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.ro
 
 
 LARGE_KERNELS = 40_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)
+# Kernels a run calls rarely, compiled apart at -O0 (RARE_FILE) above a size each: the
+# energies (an output row's, and only when asked) and the Newton matrix's residual_jac (a few
+# times a run with the default modified Newton; every step with --newton full, which then runs
+# up to 2x slower). gcc's register allocation can grow much faster than a straight-line
+# function's length: a planar exact FE body's residual_jac of 141 k operations takes 121 s at
+# -O1 (113 s with the reload limit of CMakeLists.txt.j2), its energy of 52 k 48 s, the whole
+# folder at -O0 8 s (docs/reference/generated-code.md). A spatial ef rod's Jacobian (88 k, 226
+# evaluations in 2686 steps of S6) stays optimised: it builds in seconds and dominates the run.
+RARE_KERNELS = {"energy": 20_000, "residual_jac": 100_000}
+RARE_FILE = "kernels_rare.c"
 # A beam section's values: run-time parameters p (their names: assemble.param_layout,
 # spatial.spatial_params), never numbers of the derivation (derivation_fingerprint)
 RUN_TIME_SECTION = ("rho", "E", "A", "I", "Iy", "J", "G")
@@ -692,6 +703,8 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
     }
     ctx["bandwidth"], ctx["band_first"], ctx["band_end"] = _band(der, kernels)
     ctx["large_kernels"] = ctx["kernel_ops"] > LARGE_KERNELS
+    rare = [k for k in emitted if k.total_ops > RARE_KERNELS.get(k.kernel.name, math.inf)]
+    ctx["rare_kernels"] = [k.kernel.name for k in rare]
     if ctx["static_start"]:
         ctx["static_free"], ctx["static_rows"] = _static_unknowns(system, der, kernels)
     env = _environment()
@@ -701,10 +714,13 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
     header = f"fsm_{system.name}.h"
     files = {
         header: env.get_template("system/system.h.j2").render(shared),
-        "kernels.c": env.get_template("kernels.c.j2").render(shared),
+        "kernels.c": env.get_template("kernels.c.j2").render(
+            shared | {"kernels": [k for k in emitted if k not in rare]}),
         "system.c": env.get_template("system/system.c.j2").render(ctx),
         "CMakeLists.txt": env.get_template("system/CMakeLists.txt.j2").render(shared),
     }
+    if rare:
+        files[RARE_FILE] = env.get_template("kernels.c.j2").render(shared | {"kernels": rare})
     manifest = {
         "kind": "system", "generator": ctx["generator"], "versions": versions,
         "fingerprint": "@flexsym-fingerprint@", "derivation": "@flexsym-derivation@",
@@ -731,7 +747,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
                     for k in emitted},
         # what the compiled kernels depend on: folders with the same files share them (build.py)
-        "kernels_inputs": sorted(("CMakeLists.txt", header, "kernels.c")),
+        "kernels_inputs": sorted(("CMakeLists.txt", header, "kernels.c") + ((RARE_FILE,) if rare else ())),
         "files": None,
     }
     return {"files": files, "manifest": manifest}
