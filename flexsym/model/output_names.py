@@ -15,6 +15,7 @@ import sympy as sp
 from flexsym.core.errors import SpecError
 
 POINTS = {"A": sp.Integer(0), "B": sp.Rational(1, 2), "C": sp.Integer(1)}
+CLAMP_OUTPUTS = ("N_A_clamp", "M_A_clamp")  # ef: N and M at the root from the clamp reaction
 STRESS_OUTPUTS = tuple(f"{q}_{p}" for q in "NM" for p in "ABC")
 _POINT_RE = re.compile(r"^([NM])_(A|B|C|s(\d+)(?:p(\d+))?)$")
 _AT_RE = re.compile(r"^([NM])@([0-9]*\.?[0-9]+)$")
@@ -62,19 +63,22 @@ def point_of(name: str, points=()):
     return m.group(1), frac
 
 
-def system_alias(name: str, labels=()) -> tuple[str, object, int] | None:
-    """A one-beam output name read in the system grammar: (function, station, side), the station
-    a fraction of the length (a sympy Rational: A, B, C, s<fraction>, @<fraction>) or one of
-    `labels` (the beam's markers), side -1 / +1 for a label's *_left / *_right (the element
-    before / beyond a node), else 0. None: not a one-beam name that the system grammar spells
-    (ef's clamp reactions N_A_clamp, M_A_clamp are the hub's, not the beam's)."""
+def system_alias(name: str, labels=()) -> tuple[str, object, int, str] | None:
+    """A one-beam output name read in the system grammar: (function, station, side, recovery),
+    the station a fraction of the length (a sympy Rational: A, B, C, s<fraction>, @<fraction>)
+    or one of `labels` (the beam's markers), side -1 / +1 for a label's *_left / *_right (the
+    element before / beyond a node), else 0; recovery "" (the beam's own) or "equilibrium" for
+    ef's clamp reactions N_A_clamp, M_A_clamp (the section force at the root that balances the
+    whole beam). None: not a one-beam output name."""
     name = canonical_output(name)
     if name in ("v_tip", "u_tip"):
-        return name[0], sp.Integer(1), 0
+        return name[0], sp.Integer(1), 0, ""
+    if name in CLAMP_OUTPUTS:
+        return name[0], sp.Integer(0), 0, "equilibrium"
     fixed = _POINT_RE.fullmatch(name)
     if fixed:  # A, B, C and fractions before any label: what the one-beam grammar reserves
         q, at = point_of(name)
-        return q, at, 0
+        return q, at, 0, ""
     if len(name) < 3 or name[0] not in "NM" or name[1] != "_":
         return None
     label, side = name[2:], 0
@@ -82,7 +86,7 @@ def system_alias(name: str, labels=()) -> tuple[str, object, int] | None:
         if label.endswith(suffix):
             base = label[:-len(suffix)]
             label, side = (label, s) if label in labels else (base, s)
-    return (name[0], label, side) if label in labels else None
+    return (name[0], label, side, "") if label in labels else None
 
 
 def info(name: str, points=()) -> OutputInfo:

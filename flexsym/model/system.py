@@ -1149,8 +1149,8 @@ def one_beam_alias(system: System, text: str, where: str) -> str | None:
     """The system spelling of a one-beam output name on the system's one flexible beam B
     (output_names.system_alias): v_tip -> v(B, L), u_tip -> u(B, L), N_A -> N(B, 0),
     M@0.25 -> M(B, 0.25 L), M_B -> M(B, L/2), N_<marker> -> N(B, <marker>), M_<marker>_left ->
-    M(B, <marker>-); None when text is not such a name. The recovery is the beam model's, as
-    for M(B, x)."""
+    M(B, <marker>-), ef's clamp reactions M_A_clamp -> M(B, 0, equilibrium); None when text is
+    not such a name. The recovery is otherwise the beam model's, as for M(B, x)."""
     text = text.strip()
     if "(" in text or text in OUTPUT_SCALARS:
         return None
@@ -1162,14 +1162,15 @@ def one_beam_alias(system: System, text: str, where: str) -> str | None:
         raise SpecError(f"{where}: {str(exc).split(': ', 1)[-1]}") from None
     if hit is None:
         return None
-    fn, at, side = hit
+    fn, at, side, recovery = hit
     if len(beams) != 1:
         raise SpecError(f"{where}: a one-beam output name reads the system's one flexible beam, "
                         f"and it has {len(beams)}{': ' if beams else ''}"
                         f"{', '.join(b.name for b in beams)} (write {fn}(beam, x))")
     beam = beams[0]
     station = at if isinstance(at, str) else repr(beam.length if at == 1 else float(at) * beam.length)
-    return f"{fn}({beam.name}, {station}{'-' if side < 0 else '+' if side > 0 else ''})"
+    return (f"{fn}({beam.name}, {station}{'-' if side < 0 else '+' if side > 0 else ''}"
+            + (f", {recovery})" if recovery else ")"))
 
 
 def output_beam(system: System, fn: str, args: tuple[str, ...]) -> FlexibleBeam:

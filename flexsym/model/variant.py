@@ -18,14 +18,13 @@ from flexsym.core.errors import SpecError
 from flexsym.model.limits import MAX_EF_ELEMENTS
 from flexsym.model.maneuver import maneuver_of
 from flexsym.model.modes import ModeRef, mode, parse_mode_token, root_slope_free
-from flexsym.model.output_names import (STRESS_OUTPUTS, canonical_output, check_output_names, default_outputs,
-                           stress_method)
+from flexsym.model.output_names import (CLAMP_OUTPUTS, STRESS_OUTPUTS, canonical_output, check_output_names,
+                                        default_outputs, stress_method)
 from flexsym.model.strain_models import STRAIN_MODELS
 
 NAME_RE = re.compile(r"[a-z][a-z0-9_]{0,47}\Z")  # used with match: \Z, not $ (a trailing newline)
 QUAD_POINTS = 5  # ef: Gauss points per element (exact for EA eps^2, degree 8 in xi; kappa^2 is rational)
 RECOVERIES = ("auto", "constitutive", "equilibrium")
-CLAMP_OUTPUTS = ("N_A_clamp", "M_A_clamp")  # ef: N and M at the root from the clamp reaction
 # A spatial beam's torsion modes (the bar's shapes: St Venant torsion is the bar's equation):
 # one by default; a scene may give more, or none where nothing reads the twist and its stiff
 # mode would only cap the step (model = { ..., torsion = [] })
