@@ -109,3 +109,39 @@ def test_constrained_fmu_refuses_a_parameter_set_between_steps(exported, tmp_pat
         fmu.doStep(0.001, 0.001)
     assert any("retuning is not available yet" in m for m in messages)
     fmu.freeInstance()
+
+
+def test_an_fmu_compiles_its_kernels_as_the_model_does(tmp_path, monkeypatch):
+    """A folder whose kernels have flags of their own (kernels.cmake: large kernels at -O1,
+    the rarely called ones in kernels_rare.c at -O0; forced here by thresholds of 0) exports an
+    FMU built from the same files with the same flags: it links, and it steps the driver's rows
+    bit for bit."""
+    from flexsym.codegen import sysgen
+    from flexsym.scenes.system_scene import system_from_dict
+    from flexsym.sim.fmu import FmuOptions, export_fmu
+    from flexsym.toolchain.pipeline import prepare_system, system_folder
+    from flexsym.toolchain.run import run_built
+
+    data = {"system": {"name": "tiers_fmu"}, "gravity": {"g": [0.0, -9.81]},
+            "body": [{"name": "beam", "kind": "beam", "length": 1.0, "model": "m3", "density": 2700.0,
+                      "youngs_modulus": 7e10, "area": 1e-4, "inertia": 2e-10}],
+            "joint": [{"name": "pin", "kind": "revolute", "parent": "ground", "point": [0.0, 0.0],
+                       "child": "beam.root", "initial": 0.6}],
+            "output": {"columns": {"w_mid": "w(beam, 0.5)", "M_mid": "M(beam, 0.5)"}}}
+    system = system_from_dict(data, name="tiers_fmu")
+    monkeypatch.setattr(sysgen, "RARE_KERNELS", {"energy": 0, "residual_jac": 0})
+    monkeypatch.setattr(sysgen, "LARGE_KERNELS", 0)
+    built = prepare_system(system, log=lambda m: None)
+    monkeypatch.undo()
+    folder = system_folder(system)
+    cmake = (folder / "kernels.cmake").read_text()
+    assert "kernels_rare.c\" PROPERTIES COMPILE_OPTIONS -O0" in cmake and "\"-O1;" in cmake
+    opts = FmuOptions(integrator="genalpha", dt=1e-4, step=None, tol=None, t_end=0.2, interval=1e-3,
+                      params={})
+    fmu = export_fmu(folder, opts, tmp_path / "tiers.fmu")
+    res = fmpy.simulate_fmu(str(fmu), output_interval=1e-3)
+    rows = run_built(built, t_end=0.2, dt=1e-4, integrator="genalpha", interval=1e-3)
+    assert rows.ok and len(res) == len(rows.t)
+    for name in ("w_mid", "M_mid"):
+        np.testing.assert_array_equal(res[name], rows[name], err_msg=name)
+    assert np.max(np.abs(rows["w_mid"])) > 1e-5

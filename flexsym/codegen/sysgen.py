@@ -52,17 +52,18 @@ _OWN = ("physics.assemble", "physics.spatial", "physics.spatial_ef", "physics.ro
         "physics.exact_kinematics", "physics.exact_body", *BODY_KIND_MODULES, "model.system", "codegen.sysgen")
 
 
-LARGE_KERNELS = 40_000  # operations above which kernels.c is compiled at -O1 (CMakeLists.txt.j2)
+LARGE_KERNELS = 40_000  # operations above which kernels.c is compiled at -O1 (kernels.cmake.j2)
 # Kernels a run calls rarely, compiled apart at -O0 (RARE_FILE) above a size each: the
 # energies (an output row's, and only when asked) and the Newton matrix's residual_jac (a few
 # times a run with the default modified Newton; every step with --newton full, which then runs
 # up to 2x slower). gcc's register allocation can grow much faster than a straight-line
 # function's length: a planar exact FE body's residual_jac of 141 k operations takes 121 s at
-# -O1 (113 s with the reload limit of CMakeLists.txt.j2), its energy of 52 k 48 s, the whole
+# -O1 (113 s with the reload limit of kernels.cmake.j2), its energy of 52 k 48 s, the whole
 # folder at -O0 8 s (docs/reference/generated-code.md). A spatial ef rod's Jacobian (88 k, 226
 # evaluations in 2686 steps of S6) stays optimised: it builds in seconds and dominates the run.
 RARE_KERNELS = {"energy": 20_000, "residual_jac": 100_000}
 RARE_FILE = "kernels_rare.c"
+KERNELS_CMAKE = "kernels.cmake"  # the kernels' sources and flags, when they have flags of their own
 # A beam section's values: run-time parameters p (their names: assemble.param_layout,
 # spatial.spatial_params), never numbers of the derivation (derivation_fingerprint)
 RUN_TIME_SECTION = ("rho", "E", "A", "I", "Iy", "J", "G")
@@ -705,6 +706,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
     ctx["large_kernels"] = ctx["kernel_ops"] > LARGE_KERNELS
     rare = [k for k in emitted if k.total_ops > RARE_KERNELS.get(k.kernel.name, math.inf)]
     ctx["rare_kernels"] = [k.kernel.name for k in rare]
+    ctx["kernels_cmake"] = ctx["large_kernels"] or bool(rare)  # flags the FMU's build needs too
     if ctx["static_start"]:
         ctx["static_free"], ctx["static_rows"] = _static_unknowns(system, der, kernels)
     env = _environment()
@@ -721,6 +723,8 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
     }
     if rare:
         files[RARE_FILE] = env.get_template("kernels.c.j2").render(shared | {"kernels": rare})
+    if ctx["kernels_cmake"]:
+        files[KERNELS_CMAKE] = env.get_template("system/kernels.cmake.j2").render(shared)
     manifest = {
         "kind": "system", "generator": ctx["generator"], "versions": versions,
         "fingerprint": "@flexsym-fingerprint@", "derivation": "@flexsym-derivation@",
@@ -747,7 +751,8 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
                     for k in emitted},
         # what the compiled kernels depend on: folders with the same files share them (build.py)
-        "kernels_inputs": sorted(("CMakeLists.txt", header, "kernels.c") + ((RARE_FILE,) if rare else ())),
+        "kernels_inputs": sorted(("CMakeLists.txt", header, "kernels.c") + ((RARE_FILE,) if rare else ())
+                                 + ((KERNELS_CMAKE,) if ctx["kernels_cmake"] else ())),
         "files": None,
     }
     return {"files": files, "manifest": manifest}
