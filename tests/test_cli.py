@@ -1,10 +1,14 @@
 """The command line: inspect, custom mode sets, and clear errors for bad input."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from flexsym.apps.cli import main
 from flexsym.core.paths import generated_dir
+
+SCENES = Path(__file__).resolve().parent.parent / "scenes"
 
 
 def run_cli(capsys, *argv):
@@ -98,3 +102,23 @@ def test_variants_listing(capsys):
     assert code == 0
     for word in ("geometric", "m3", "foreshortening", "clamped-pinned", "cp"):
         assert word in out
+
+
+def test_generate_and_build_take_a_system_scene(capsys, tmp_path):
+    """`flexsym generate` / `build` take a system scene as `run` does (issue 17: every command
+    takes the model): the folder is a system's, written to --out when given, and built; a
+    one-beam override flag is refused in one line, nothing written."""
+    import json
+
+    scene = str(SCENES / "pendulum.toml")
+    code, out, err = run_cli(capsys, "generate", scene, "--out", str(tmp_path / "gen"))
+    assert code == 0, err
+    manifest = json.loads((tmp_path / "gen" / "manifest.json").read_text())
+    assert manifest["kind"] == "system" and manifest["spec"]["name"] == "pendulum"
+    assert "generated system 'pendulum'" in out and "ops: mass" in out
+    code, out, err = run_cli(capsys, "build", scene, "--model", "m1")
+    assert code == 0, err
+    assert out.startswith("built 'pendulum': ") and Path(out.split(": ", 1)[1].strip()).is_file()
+    code, out, err = run_cli(capsys, "generate", scene, "--strain", "linear", "--out", str(tmp_path / "no"))
+    assert code == 2 and "--strain does not combine with a scene file" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "no").exists()

@@ -71,9 +71,9 @@ def _mesh(scene: str, text, variant: str) -> int:
     return n
 
 
-def resolve(args, systems: bool = False):
-    """(spec, scene or None) from a variant name with overrides, or from a scene file; with
-    systems, a system scene gives (None, SystemScene)."""
+def resolve(args):
+    """(spec, scene or None) from a variant name with overrides, or from a scene file; a system
+    scene gives (None, SystemScene)."""
     from flexsym.model.variant import customize
 
     if args.variant.endswith(".toml"):
@@ -88,10 +88,7 @@ def resolve(args, systems: bool = False):
                             "scene file: set it in the scene's [model] table"
                             + (" (--elements goes with --model ef)" if given[0] == "elements" else ""))
         scene = load_scene(args.variant, model=model)
-        if getattr(scene, "system", None) is not None:  # a mechanism: only run and inspect take it
-            if not systems:
-                raise SpecError(f"{args.variant}: a system scene ([[body]] entries): this command takes "
-                                "one-beam variants and scenes; use flexsym run or flexsym inspect")
+        if getattr(scene, "system", None) is not None:  # a mechanism: every command takes it
             return None, scene
         return scene.spec, scene
     if getattr(args, "model", None) is not None:
@@ -138,10 +135,6 @@ def _base_variant(name: str):
     return customize(builtin(base), name=name, **overrides) if overrides else builtin(name)
 
 
-def resolve_spec(args):
-    return resolve(args)[0]
-
-
 def cmd_generate(args) -> int:
     from flexsym.codegen.generate import generate
     from flexsym.toolchain.pipeline import cache_folder, checked_in_folder, is_builtin
@@ -159,11 +152,13 @@ def cmd_generate(args) -> int:
             write_folder(generate_system_files(system), golden_system_folder(name))
             print(f"generated system '{name}' in {golden_system_folder(name)}")
         return 0
-    spec = resolve_spec(args)
+    spec, scene = resolve(args)
     if args.out is not None:
         from flexsym.toolchain.run import check_output_dir
 
         check_output_dir(args.out, "--out")
+    if spec is None:  # a system scene: its folder in the cache, or in --out
+        return _generate_system(scene.system, args.out)
     dest = Path(args.out) if args.out else (checked_in_folder(spec) if is_builtin(spec) else cache_folder(spec))
     g = generate(spec, dest)
     if getattr(args, "name", None) is not None:  # `flexsym run NAME` finds it again
@@ -175,10 +170,34 @@ def cmd_generate(args) -> int:
     return 0
 
 
-def cmd_build(args) -> int:
-    from flexsym.toolchain.pipeline import prepare
+def _generate_system(system, out) -> int:
+    """flexsym generate SYSTEM_SCENE [--out DIR]: the system's generated folder."""
+    import json
 
-    built = prepare(resolve_spec(args))
+    from flexsym.codegen.generate import MANIFEST, write_folder
+    from flexsym.toolchain.pipeline import generated_system_folder
+
+    say = lambda msg: print(f"flexsym: system '{system.name}': {msg}", file=sys.stderr, flush=True)
+    folder = generated_system_folder(system, say)
+    if out is not None:
+        write_folder({f.name: f.read_text(encoding="utf-8") for f in sorted(folder.iterdir()) if f.is_file()},
+                     Path(out))
+        folder = Path(out)
+    manifest = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+    ops = ", ".join(f"{k} {v['total_ops']}" for k, v in manifest["kernels"].items())
+    print(f"generated system '{system.name}' in {folder}\n  fingerprint {manifest['fingerprint'][:16]}..."
+          f"\n  ops: {ops}")
+    return 0
+
+
+def cmd_build(args) -> int:
+    from flexsym.toolchain.pipeline import prepare, prepare_system
+
+    spec, scene = resolve(args)
+    if spec is None:  # a system scene
+        built = prepare_system(scene.system, log=lambda msg: print(msg, file=sys.stderr, flush=True))
+    else:
+        built = prepare(spec)
     print(f"built '{built.name}': {built.executable}")
     return 0
 
@@ -243,7 +262,7 @@ def cmd_run(args) -> int:
     from flexsym.toolchain.run import run_built
     from flexsym.physics.validity import assess
 
-    spec, scene = resolve(args, systems=True)
+    spec, scene = resolve(args)
     if spec is None:
         return _run_system(args, scene)
     options = _run_options(args, spec, scene, overrides=True)
@@ -404,7 +423,7 @@ def _fmu_request(args, out: Path | None):
     """(spec, FmuOptions) for export-fmu and bench-fmu, checked before any work (one table)."""
     from flexsym.sim.fmu import FmuOptions, check_request, tuning_of
 
-    spec, scene = resolve(args, systems=True)
+    spec, scene = resolve(args)
     o = _run_options(args, spec, scene, overrides=True)  # as `flexsym run` takes them
     if o.energy:  # only a scene can ask for it (export-fmu has no --energy)
         raise SpecError(f"{getattr(scene, 'path', 'energy')}: [output] energy: the FMU's outputs are the scene's columns; "
@@ -491,7 +510,7 @@ def cmd_fe_export(args) -> int:
 def cmd_inspect(args) -> int:
     from flexsym.analysis.inspect_model import SECTIONS, Report
 
-    spec, scene = resolve(args, systems=True)
+    spec, scene = resolve(args)
     if spec is None:  # a system scene: its structure, then its derivation (sysgen.describe)
         from flexsym.scenes.system_scene import summary
 
@@ -663,7 +682,7 @@ def cmd_sweep(args) -> int:
     from flexsym.sim.sweep import (claim_partial, fingerprint_of, make_plan, partial_path, plot, prepare_plan,
                                    read_table, run_sweep)
 
-    spec, scene = resolve(args, systems=True)
+    spec, scene = resolve(args)
     o = _run_options(args, spec, scene)
     if spec is None:  # a system scene: its model is built first (its manifest names what varies)
         from flexsym.sim.sweep import system_target
@@ -773,17 +792,24 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+def _model_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--model", help="with a scene file: replace its model by this variant (m1, m2, "
+                   "m3, prestress, ef, ...; a body's modes are computed from its data)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="flexsym", description=__doc__)
     sub = ap.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    p = sub.add_parser("generate", help="derive and generate C for a variant ('all': every built-in)")
+    p = sub.add_parser("generate", help="derive and generate C for a variant or a scene ('all': every built-in)")
     _variant_args(p)
     p.add_argument("--out", help="target folder (default: generated/NAME for built-ins, the cache otherwise)")
+    _model_arg(p)
     p.set_defaults(func=cmd_generate)
 
-    p = sub.add_parser("build", help="compile a variant (generating it if needed)")
+    p = sub.add_parser("build", help="compile a variant or a scene (generating it if needed)")
     _variant_args(p)
+    _model_arg(p)
     p.set_defaults(func=cmd_build)
 
     p = sub.add_parser("run", help="simulate the spin-up with a variant, or a scene file")
@@ -794,8 +820,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "(rho, E, A, I, L, ws, ts); repeatable")
     p.add_argument("--out", help="CSV file for the results (its directory must exist)")
     p.add_argument("--plot", help="PNG/PDF/SVG file for a plot of v_tip(t) (its directory must exist)")
-    p.add_argument("--model", help="with a scene file: replace its model by this variant (m1, m2, "
-                   "m3, prestress, ef, ...; a body's modes are computed from its data)")
+    _model_arg(p)
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("export-fmu", help="export a variant or scene as an FMI 3.0 Co-Simulation FMU")
