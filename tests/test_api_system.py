@@ -47,11 +47,27 @@ def test_a_system_with_rounded_angles_runs_as_its_scene(four_bar, tmp_path):
     assert list(table["status"]) == ["ok", "ok"]
 
 
-@pytest.mark.parametrize("fn", ["kernels", "inspect", "simulate"])
+@pytest.mark.parametrize("fn", ["kernels", "simulate"])
 def test_the_one_beam_functions_refuse_a_system_in_one_line(four_bar, fn):
     with pytest.raises(SpecError) as e:
         getattr(api, fn)(four_bar.system)
     assert str(e.value).startswith(f"{fn}(): takes a one-beam variant") and "\n" not in str(e.value)
+
+
+def test_inspect_takes_a_system_as_the_command_line_does(four_bar, capsys):
+    """api.inspect of a System (or its scene, or the scene's path) is `flexsym inspect
+    SCENE`'s text; a one-beam section or LaTeX is refused in one line."""
+    from flexsym.apps.cli import main
+
+    text = api.inspect(four_bar.system)
+    assert "coupler" in text and "operations" in text
+    assert api.inspect(SCENES / "four_bar.toml", sections="system") == api.inspect(four_bar, ["system"])
+    assert main(["inspect", str(SCENES / "four_bar.toml")]) == 0
+    assert capsys.readouterr().out == text
+    for kw, message in (({"sections": "modes"}, "a mechanism shows the sections system, derivation"),
+                        ({"latex": True}, "no LaTeX form")):
+        with pytest.raises(SpecError, match=message):
+            api.inspect(four_bar.system, **kw)
 
 
 def test_run_options_are_for_a_system_not_a_scene():

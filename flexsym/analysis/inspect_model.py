@@ -6,6 +6,7 @@ import textwrap
 
 import sympy as sp
 
+from flexsym.core.errors import SpecError
 from flexsym.emit.cemit import emit
 from flexsym.codegen.derive import build_kernels, derive
 from flexsym.codegen.generate import c_prefix, fingerprint
@@ -14,6 +15,23 @@ from flexsym.model.variant import QUAD_POINTS, VariantSpec
 from flexsym.model.strain_models import STRAIN_MODELS
 
 SECTIONS = ("modes", "energy", "integrals", "mass", "stiffness", "equations", "ops")
+
+SYSTEM_SECTIONS = ("system", "derivation")
+
+
+def system_report(system, sections=SYSTEM_SECTIONS) -> str:
+    """A mechanism inspected: its structure (bodies, joints in the tree and cut, coordinates,
+    drivers, loads, outputs) and its derivation (energy terms, operation counts)."""
+    from flexsym.codegen.sysgen import describe
+    from flexsym.scenes.system_scene import summary
+
+    unknown = [s for s in sections if s not in SYSTEM_SECTIONS]
+    if unknown:
+        raise SpecError(f"a mechanism shows the sections {', '.join(SYSTEM_SECTIONS)} "
+                        f"(not {', '.join(map(str, unknown))})")
+    parts = ([summary(system)] if "system" in sections else []) + (
+        [describe(system)] if "derivation" in sections else [])
+    return "\n".join(parts)
 
 
 def _latex_names(der: Derivation) -> dict:

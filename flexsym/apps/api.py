@@ -169,12 +169,24 @@ def simulate(target="m3", *, out=None, **options) -> RunResult:
     return result
 
 
-def inspect(target, sections="modes,energy,integrals,mass,stiffness,equations,ops", latex=False) -> str:
-    from flexsym.analysis.inspect_model import SECTIONS, Report
+def inspect(target, sections=None, latex=False) -> str:
+    """The derivation as text, as `flexsym inspect`: a variant's or one-beam scene's sections
+    (default modes,energy,integrals,mass,stiffness,equations,ops), or a mechanism's (a System,
+    a system scene: system,derivation)."""
+    from flexsym.analysis.inspect_model import SECTIONS, SYSTEM_SECTIONS, Report, system_report
 
-    if not isinstance(sections, (str, list, tuple)):
+    if sections is not None and not isinstance(sections, (str, list, tuple)):
         raise SpecError(f"inspect(): sections must be a string such as 'modes,energy' or a list "
                         f"(got {type(sections).__name__} {sections!r})")
+    target = _loaded(target)
+    system = _system_of(target)
+    if system is not None:
+        if latex:
+            raise SpecError("inspect(): a mechanism has no LaTeX form (latex=False)")
+        chosen = SYSTEM_SECTIONS if sections is None else (
+            sections.split(",") if isinstance(sections, str) else list(sections))
+        return system_report(system, chosen)
+    sections = ",".join(SECTIONS) if sections is None else sections
     chosen = sections.split(",") if isinstance(sections, str) else list(sections)
     for s in chosen:
         if not isinstance(s, str) or s not in SECTIONS:

@@ -511,23 +511,17 @@ def cmd_inspect(args) -> int:
     from flexsym.analysis.inspect_model import SECTIONS, Report
 
     spec, scene = resolve(args)
-    if spec is None:  # a system scene: its structure, then its derivation (sysgen.describe)
-        from flexsym.scenes.system_scene import summary
+    if spec is None:  # a system scene: its structure, then its derivation
+        from flexsym.analysis.inspect_model import SYSTEM_SECTIONS, system_report
 
-        chosen = args.section.split(",") if args.section is not None else ["system", "derivation"]
-        if not set(chosen) <= {"system", "derivation"} or args.plot_modes or args.latex:
+        chosen = args.section.split(",") if args.section is not None else list(SYSTEM_SECTIONS)
+        if not set(chosen) <= set(SYSTEM_SECTIONS) or args.plot_modes or args.latex:
             raise SpecError(f"{scene.path}: a system scene shows --section system,derivation (no "
                             "--latex, --plot-modes)")
-        if "system" in chosen:
-            sys.stdout.write(summary(scene.system))
-        if "derivation" in chosen:
-            from flexsym.codegen.sysgen import describe
-
-            try:
-                text = describe(scene.system)
-            except SpecError as exc:
-                raise SpecError(f"{scene.path}: {exc}") from None
-            sys.stdout.write(("\n" if "system" in chosen else "") + text)
+        try:
+            sys.stdout.write(system_report(scene.system, chosen))
+        except SpecError as exc:
+            raise SpecError(f"{scene.path}: {exc}") from None
         return 0
     sections = args.section.split(",") if args.section is not None else SECTIONS
     for s in sections:
