@@ -87,3 +87,44 @@ def test_s0_gives_each_alias_the_variants_value(variant, recovery, names):
         b = float(new.outputs[name].xreplace(vals))
         assert abs(a) > 1e-6, name  # a value that can disagree
         assert b == pytest.approx(a, rel=1e-12), name
+
+
+def test_the_element_stress_method_is_a_system_beams_too():
+    """A system scene's modal beam with stress = "element:N" gives the paper's element method
+    (outputs._element_method) as the one-beam --stress element:N does, S0 against the variant;
+    in 3D it is refused in one line (the method is the plane's)."""
+    from flexsym.scenes.system_scene import system_from_dict
+
+    model = {"strain": "geometric_stiffness", "axial": ["static"], "bending": ["static", "cp1"],
+             "stress": "element:4", "moment": "constitutive", "axial_force": "constitutive"}
+    data = {"system": {"name": "el"},
+            "body": [{"name": "beam", "kind": "beam", "length": 10.0, "density": 3000.0,
+                      "youngs_modulus": 7e10, "area": 4e-4, "inertia": 2e-7, "model": model}],
+            "joint": [{"name": "hub", "kind": "revolute", "parent": "ground", "point": [0.0, 0.0],
+                       "child": "beam.root"}],
+            "driver": [{"name": "spin", "kind": "guided", "joint": "hub", "maneuver": "spin-up",
+                        "omega": 6.0, "duration": 15.0}],
+            "output": {"columns": {n: n for n in ("N_A", "M_A", "M_s0p3")}}}
+    system = system_from_dict(data, name="el")
+    beam_model = system.bodies[0].model
+    assert beam_model.stress == "element:4"
+    spec = replace(beam_model, outputs=("N_A", "M_A", "M_s0p3"))
+    old, new = derive(spec), derive_system(system)
+    vals = _states(old, new)
+    for name in spec.outputs:
+        a = float(old.numeric(old.outputs[name]).xreplace(vals))
+        assert abs(a) > 1.0 and float(new.outputs[name].xreplace(vals)) == pytest.approx(a, rel=1e-12), name
+    continuum = derive(replace(spec, stress="continuum"))
+    assert float(continuum.numeric(continuum.outputs["M_s0p3"]).xreplace(vals)) != pytest.approx(
+        float(new.outputs["M_s0p3"].xreplace(vals)), rel=1e-3)  # the method took effect
+    flap = dict(data, system={"name": "el3", "dimension": 3})
+    flap["body"] = [dict(data["body"][0], inertia_z=2e-7, inertia_y=2e-7, torsion_constant=4e-7,
+                         shear_modulus=2.6e10)]
+    del flap["body"][0]["inertia"]
+    flap["joint"] = [dict(data["joint"][0], point=[0.0, 0.0, 0.0], axis=[0.0, 0.0, 1.0])]
+    flap["output"] = {"columns": {"v": "v(beam, tip)"}}
+    model3 = dict(model)
+    model3.pop("axial_force"), model3.pop("moment")
+    flap["body"][0]["model"] = model3 | {"strain": "foreshortening", "axial": []}
+    with pytest.raises(SpecError, match="the element stress method .* is the plane's"):
+        system_from_dict(flap, name="el3").validate()

@@ -798,8 +798,10 @@ class System:
             if b.model.strain not in SPATIAL_STRAINS:
                 raise SpecError(f"{where}: body '{b.name}': strain model '{b.model.strain}' is not "
                                 f"derived in 3D (derived: {', '.join(SPATIAL_STRAINS)})")
-            if b.model.axial_force == "equilibrium" or b.model.moment == "equilibrium":
-                pass  # N and the moments from equilibrium are derived in 3D
+            if b.model.stress != "continuum":
+                raise SpecError(f"{where}: body '{b.name}': the element stress method ('{b.model.stress}') "
+                                "is the plane's (the paper's eqs. 22-25); a spatial beam's N and "
+                                "moments are continuum or from equilibrium")
 
     def _check_magnitudes(self) -> None:
         """Every number of the system: a real number (not bool, complex, str, None), finite and

@@ -364,7 +364,8 @@ def _fe_body(r: _Items, where: str, tab: dict, base: Path, spatial: bool = False
 
 def _model(r: _Items, where: str, given, flag: str | None):
     """A deformation model: a variant name, or { variant, elements } or { strain, axial, bending },
-    either table with axial_force / moment = "constitutive" | "equilibrium"."""
+    either table with axial_force / moment = "constitutive" | "equilibrium" (and a modal one's
+    stress = "continuum" | "element:N", torsion = [...])."""
     from flexsym.model.variant import _refs, body_model, builtin, customize
 
     where = flag or where
@@ -376,7 +377,7 @@ def _model(r: _Items, where: str, given, flag: str | None):
         if not isinstance(given, dict):
             r.fail(where, f"must be a variant name or a table (got {given!r})")
         r.table(where, given, {"variant", "elements", "strain", "axial", "bending", "axial_force",
-                               "moment", "torsion"})
+                               "moment", "torsion", "stress"})
         recovery = {}  # what modifies the model the other keys give
         for key in ("axial_force", "moment"):
             if key in given:
@@ -384,6 +385,8 @@ def _model(r: _Items, where: str, given, flag: str | None):
                     r.fail(f"{where} {key}", f"must be \"constitutive\" or \"equilibrium\" "
                            f"(got {given[key]!r})")
                 recovery[key] = given[key]
+        if "stress" in given:  # the constitutive N and M by the paper's element method (variant.py)
+            recovery["stress"] = r.string(where, given, "stress")
         if "torsion" in given:
             val = given["torsion"]
             if not isinstance(val, list) or not all(isinstance(v, str) for v in val):
@@ -397,9 +400,9 @@ def _model(r: _Items, where: str, given, flag: str | None):
         if recovery:
             base = _model(r, where, given if len(given) > 1 or "strain" in given
                           else given.get("variant"), flag)
-            if base.kind != "modal" and (base.kind != "fe" or "torsion" in recovery):
-                r.fail(where, "axial_force / moment apply to modal and ef variants, torsion to "
-                       "modal variants only")
+            if base.kind != "modal" and (base.kind != "fe" or {"torsion", "stress"} & set(recovery)):
+                r.fail(where, "axial_force / moment apply to modal and ef variants, torsion and "
+                       "stress to modal variants only")
             return replace(base, **recovery).validate()
         if "variant" in given:
             base = builtin(r.string(where, given, "variant"))
