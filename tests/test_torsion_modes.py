@@ -125,6 +125,8 @@ def test_the_default_is_one_mode_and_leaves_fingerprints_alone():
     ('{ variant = "m2", torsion = ["ff1", "ff1"] }', "duplicate torsion mode 'ff1'"),
     ('{ variant = "m2", torsion = "ff1" }', "model torsion: must be a list of mode names"),
     ('{ variant = "ef", torsion = [] }', "torsion to modal variants only"),
+    ('{ variant = "ef", stress = "element:4" }', "and stress too"),
+    ('{ variant = "m2", stress = "element:4" }', "the element stress method ('element:4') is the plane's"),
     ('{ variant = "m2", moment = "constitutive", torsion = [] }', "has no torsion modes (torsion = [])"),
 ])
 def test_bad_torsion_sets_are_refused_in_one_line(tmp_path, capsys, model, expected):

@@ -401,8 +401,8 @@ def _model(r: _Items, where: str, given, flag: str | None):
             base = _model(r, where, given if len(given) > 1 or "strain" in given
                           else given.get("variant"), flag)
             if base.kind != "modal" and (base.kind != "fe" or {"torsion", "stress"} & set(recovery)):
-                r.fail(where, "axial_force / moment apply to modal and ef variants, torsion and "
-                       "stress to modal variants only")
+                r.fail(where, "axial_force / moment apply to modal and ef variants, torsion to "
+                       "modal variants only, and stress too")
             return replace(base, **recovery).validate()
         if "variant" in given:
             base = builtin(r.string(where, given, "variant"))
