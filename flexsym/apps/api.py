@@ -180,14 +180,12 @@ def inspect(target, sections=None, latex=False) -> str:
                         f"(got {type(sections).__name__} {sections!r})")
     target = _loaded(target)
     system = _system_of(target)
+    chosen = list(SYSTEM_SECTIONS if system is not None else SECTIONS) if sections is None else (
+        sections.split(",") if isinstance(sections, str) else list(sections))
     if system is not None:
         if latex:
             raise SpecError("inspect(): a mechanism has no LaTeX form (latex=False)")
-        chosen = SYSTEM_SECTIONS if sections is None else (
-            sections.split(",") if isinstance(sections, str) else list(sections))
         return system_report(system, chosen)
-    sections = ",".join(SECTIONS) if sections is None else sections
-    chosen = sections.split(",") if isinstance(sections, str) else list(sections)
     for s in chosen:
         if not isinstance(s, str) or s not in SECTIONS:
             raise SpecError(f"unknown section '{s}' (known: {', '.join(SECTIONS)})")

@@ -751,8 +751,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
                     for k in emitted},
         # what the compiled kernels depend on: folders with the same files share them (build.py)
-        "kernels_inputs": sorted(("CMakeLists.txt", header, "kernels.c") + ((RARE_FILE,) if rare else ())
-                                 + ((KERNELS_CMAKE,) if ctx["kernels_cmake"] else ())),
+        "kernels_inputs": sorted(set(files) - {"system.c"}),
         "files": None,
     }
     return {"files": files, "manifest": manifest}
