@@ -1,6 +1,7 @@
 """Shared fixtures: an isolated build cache, derivations and compiled models per variant."""
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -45,6 +46,28 @@ def derivation():
         if spec.name not in _derivations:
             _derivations[spec.name] = derive(spec)
         return _derivations[spec.name]
+
+    return get
+
+
+_s0_kernels: dict = {}
+
+
+@pytest.fixture(scope="session")
+def s0_kernels():
+    """s0_kernels(variant name or spec) -> {name: emit.kernels.Kernel}: the casadi kernels of
+    the variant's generated folder (its S0's, sysgen.build_system_kernels)."""
+    from flexsym.codegen.sysgen import build_system_kernels
+    from flexsym.model.library import variant_system
+    from flexsym.model.variant import builtin
+    from flexsym.physics.assemble import derive_system
+
+    def get(target):
+        spec = builtin(target) if isinstance(target, str) else target
+        key = json.dumps(spec.to_dict(), sort_keys=True)
+        if key not in _s0_kernels:
+            _s0_kernels[key] = {k.name: k for k in build_system_kernels(derive_system(variant_system(spec)))}
+        return _s0_kernels[key]
 
     return get
 

@@ -333,7 +333,7 @@ def m1_kernels():
     ("force", lambda n, p: (np.zeros(n), np.zeros(n), math.inf), "drive: w has a value that is not finite"),
     ("force", lambda n, p: (np.zeros(n), np.zeros(n), 1.0, 0.0, [1.0]), "fsm_geometric_force: p has 1 values"),
     ("energy", lambda n, p: (np.zeros(n), None, 1.0), "fsm_geometric_energy: qd must hold real numbers"),
-    ("maneuver", lambda n, p: (0.0, [1.0]), "fsm_geometric_maneuver: mp has 1 values"),
+    ("maneuver", lambda n, p: (0.0, [1.0]), "fsm_geometric_drive: mp has 1 values"),
     ("outputs", lambda n, p: (np.zeros(n), None, None, True), "drive: w must hold real numbers (got dtype bool"),
     ("force", lambda n, p: (np.zeros(n), np.zeros(n), [1.0, 2.0]), "drive: w has 2 values, expected 1"),
 ], ids=["q_short", "q_long", "q_nan", "q_complex", "q_bool", "q_str", "p_short", "qd_short", "w_inf",
@@ -424,4 +424,6 @@ def test_build_with_another_artefact_gone_is_rebuilt(tmp_path, gone):
     assert again == built and all(p.is_file() for p in (again.executable, again.library, marker))
     assert runtime_object.is_file()
     assert run_built(again, t_end=0.1, dt=0.01).ok
-    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.endswith(".lock")) == [".runtime", built.build_dir.name]
+    # the runtime's objects, the kernels' objects kept for the derivation, the model's build
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.endswith(".lock")) == [
+        ".kernels", ".runtime", built.build_dir.name]

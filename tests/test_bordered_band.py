@@ -16,6 +16,7 @@ import pytest
 from flexsym.scenes.system_scene import system_from_dict
 from flexsym.sim.inprocess import load_system
 from flexsym.toolchain.build import SANITIZE_FLAGS, find_compiler
+from flexsym.toolchain.native import SystemStruct
 from system_data import with_model
 from test_spatial_ef_free import _s6_ef
 
@@ -69,15 +70,7 @@ def test_a_failed_factorization_says_whether_the_newton_iterations_diverged(tmp_
     assert small_msg == none_msg == "genalpha3: iteration matrix singular at t = 0.25 s"
 
 
-class _System(ctypes.Structure):
-    """flexsym/system.h's fsm_system, whole (pointers as void*)."""
-    _fields_ = ([(f"s{k}", ctypes.c_char_p) for k in range(3)]
-                + [(k, ctypes.c_int) for k in ("nq", "nd", "nc", "ny", "np", "nmp")]
-                + [("length_scale", ctypes.c_double)]
-                + [(k, ctypes.c_int) for k in ("length_param", "mass_constant", "bandwidth",
-                                               "outputs_use_acceleration", "outputs_use_drive")]
-                + [(f"p{k}", ctypes.c_void_p) for k in range(7 + 12 + 2)]
-                + [("band_first", ctypes.c_int), ("band_end", ctypes.c_int), ("coord_held", ctypes.c_void_p)])
+_System = SystemStruct  # flexsym/system.h's fsm_system (its one mirror in Python)
 
 
 def _bordered_and_dense(data: dict, layout: tuple, runs: list) -> None:

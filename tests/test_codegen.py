@@ -11,8 +11,8 @@ import pytest
 import sympy as sp
 
 from flexsym.physics.energy import BEAM_PARAMS, alpha, w
-from flexsym.codegen.generate import MANIFEST, check_folder, generate_files, read_manifest
-from flexsym.codegen.derive import build_kernels
+from flexsym.codegen.folder import MANIFEST, read_manifest
+from flexsym.codegen.generate import check_folder, generate_files
 from flexsym.model.maneuver import t as t_sym
 from flexsym.core.paths import generated_dir
 from flexsym.model.variant import BUILTIN, builtin
@@ -24,31 +24,39 @@ RTOL = 1e-12
 
 def _random_inputs(rng, der):
     n = len(der.coords)
+    w_, a_, t_ = rng.uniform(0.0, 8.0), rng.uniform(-1.0, 1.0), rng.uniform(0.0, 25.0)
     return {
         "q": rng.uniform(-0.5, 0.5, n),
         "qd": rng.uniform(-1.0, 1.0, n),
         "qdd": rng.uniform(-2.0, 2.0, n),
-        "drive": np.array([rng.uniform(0.0, 8.0), rng.uniform(-1.0, 1.0)]),
+        "lambda": np.zeros(0),
+        "w": w_, "alpha": a_,
+        # the S0 kernels' drive d = [t, theta, theta', theta'']: a guided root without gravity,
+        # so t and theta enter no kernel but the drive's
+        "d": np.array([t_, rng.uniform(-3.0, 3.0), w_, a_]),
         "p": np.array([p.default for p in BEAM_PARAMS]) * rng.uniform(0.5, 2.0, len(BEAM_PARAMS)),
-        "t": np.array([rng.uniform(0.0, 25.0)]),
+        "t": np.array([t_]),
         "mp": np.array([rng.uniform(1.0, 10.0), rng.uniform(2.0, 20.0)])[:len(der.maneuver.params)],
     }
 
 
 def _sympy_reference(der):
-    """Each kernel's outputs as sympy matrices (Jacobians differentiated in sympy, not casadi)."""
+    """The kernels of the variant's folder (its S0's) as sympy matrices of the one-beam
+    derivation (coordinates without the body prefix, the hub's rate and acceleration w, alpha;
+    its outputs from physics/outputs.py, not the system grammar; Jacobians differentiated in
+    sympy, not casadi)."""
     T, V, h = der.energies()
     r = der.M * der.qdd - der.f
     man = der.maneuver
     return {
         "mass": [der.M], "force": [der.f], "residual_jac": [r.jacobian(der.q), r.jacobian(der.qd)],
         "outputs": [sp.Matrix(list(der.outputs.values()))], "energy": [sp.Matrix([T, V, h])],
-        "maneuver": [sp.Matrix([man.theta, man.rate, man.acceleration])],
+        "drive": [sp.Matrix([t_sym, man.theta, man.rate, man.acceleration])],
     }
 
 
 def _sympy_eval(der, expr, x):
-    subs = {w: x["drive"][0], alpha: x["drive"][1], t_sym: x["t"][0]}
+    subs = {w: x["w"], alpha: x["alpha"], t_sym: x["t"][0]}
     for i, ps in enumerate(der.params):
         subs[ps] = x["p"][i]
     for i, mp in enumerate(der.maneuver.params):
@@ -60,27 +68,31 @@ def _sympy_eval(der, expr, x):
     return np.array(fn(*subs.values()).tolist(), dtype=float)
 
 
-@pytest.mark.parametrize("name", BUILTIN_NAMES)
-def test_c_matches_casadi_and_sympy(derivation, model, name):
-    der = derivation(name)
-    lib = model(name)
-    kernels = {k.name: k for k in build_kernels(der)}
+def check_c_casadi_sympy(der, lib, kernels, rng, trials: int) -> None:
+    """A variant's compiled kernels (its S0's, the system path) against their casadi functions
+    and against the one-beam sympy derivation, at random states."""
     reference = _sympy_reference(der)
-    rng = np.random.default_rng(20261122)
-    for trial in range(5):
+    for trial in range(trials):
         x = _random_inputs(rng, der)
-        for kname, kernel in kernels.items():
+        for kname, sym_outs in reference.items():
+            kernel = kernels[kname]
             ins = [x[p.name] for p in kernel.inputs]
             c_out = lib.call(kname, *ins)
             res = kernel.function(*ins)
             ca_out = [o.full() for o in (res if isinstance(res, (list, tuple)) else [res])]
-            for port, c_val, ca_val, sym in zip(kernel.outputs, c_out, ca_out, reference[kname]):
+            for port, c_val, ca_val, sym in zip(kernel.outputs, c_out, ca_out, sym_outs):
                 c_val = np.asarray(c_val).reshape(port.rows, port.cols)
                 ca_val = ca_val.reshape(port.rows, port.cols)
                 sp_val = _sympy_eval(der, sym, x).reshape(port.rows, port.cols)
                 scale = max(np.max(np.abs(sp_val)), 1e-300)
                 assert np.max(np.abs(c_val - ca_val)) <= RTOL * scale, (kname, port.name, "C vs casadi")
                 assert np.max(np.abs(c_val - sp_val)) <= RTOL * scale, (kname, port.name, "C vs sympy")
+
+
+@pytest.mark.parametrize("name", BUILTIN_NAMES)
+def test_c_matches_casadi_and_sympy(derivation, model, s0_kernels, name):
+    check_c_casadi_sympy(derivation(name), model(name), s0_kernels(name),
+                         np.random.default_rng(20261122), 5)
 
 
 @pytest.mark.parametrize("name", BUILTIN_NAMES + ["prestress"])
@@ -168,9 +180,12 @@ def test_stale_or_edited_folders_are_detected(tmp_path):
 def test_generated_files_carry_do_not_edit_header_and_op_counts():
     folder = generated_dir() / "geometric"
     manifest = read_manifest(folder)
-    for name in ("kernels.c", "model.c", "fsm_geometric.h", "CMakeLists.txt"):
+    # the kernels, their header and build carry the derivation's fingerprint (shared by every
+    # folder of the derivation), system.c the folder's
+    for name, fp in (("kernels.c", "derivation"), ("fsm_geometric.h", "derivation"),
+                     ("CMakeLists.txt", "derivation"), ("system.c", "fingerprint")):
         text = (folder / name).read_text()
-        assert "DO NOT EDIT" in text and manifest["fingerprint"] in text, name
+        assert "DO NOT EDIT" in text and manifest[fp] in text, name
     kernels_c = (folder / "kernels.c").read_text()
     for k, info in manifest["kernels"].items():
         assert f" * ops: {info['total_ops']} */" in kernels_c, k

@@ -58,10 +58,11 @@ def test_a_rule_in_pieces_is_the_rule_with_the_same_nodes():
 def test_sections_and_a_point_mass_in_the_kinetic_energy():
     """Undeformed (q = 0) in a frame turning at omega with origin velocity V: T is
     1/2 int rho A(x) |V + omega z x x|^2 dx + 1/2 m |V + omega z x L|^2, by hand, and V_g
-    is -g.(m_total R + first moment); the stepped body's rule breaks at its step."""
+    is -g.(m_total R + first moment); the stepped body's rule breaks at its nodes (its step
+    among them: the modes are polynomials per element)."""
     body = BeamBody.from_segments([(5.0, INNER), (5.0, OUTER)], 10, (PointMass(10.0, 0.5),))
     part = Part(body)
-    assert part.edges() == (0.0, 0.5, 1.0) and part.point_masses() == [(1.0, 0.5 / (3000.0 * 4e-4 * 10.0))]
+    assert part.edges() == tuple(k / 10 for k in range(11)) and part.point_masses() == [(1.0, 0.5 / (3000.0 * 4e-4 * 10.0))]
     om, Vx, Vy, gx, gy, Rx, Ry = STATE[2]
     T, V = part.energies(np.zeros(3), np.zeros(3), STATE[2])
 

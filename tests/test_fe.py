@@ -7,7 +7,7 @@ import scipy.linalg as sl
 import sympy as sp
 
 from flexsym.physics.energy import alpha, w
-from flexsym.physics.fe import build_element_kernels, derive_element
+from flexsym.physics.fe import derive_element
 from flexsym.toolchain.pipeline import compiled, prepare
 from flexsym.toolchain.run import run_built
 from flexsym.model.variant import builtin
@@ -21,32 +21,37 @@ def ef(n):
     return replace(builtin("ef"), name=f"ef_n{n}", elements=n, aliases=())
 
 
-def test_element_kernels_match_sympy(model):
-    """Compiled element kernels against sympy (elastic forces differentiated by sympy here,
-    by casadi AD in the generator) at random deformed states."""
-    der = derive_element(builtin("ef"))
+def test_compiled_ef_matches_the_element_derivation(model):
+    """The compiled ef variant (its S0's body: efbody's frame terms, the ef_elastic kernel by
+    casadi AD, assembled by system.c) against fe.py's element derivation, assembled here: M^e
+    and the inertial forces of T^e with the hub's rate w and acceleration alpha, the elastic
+    forces -dV^e/de differentiated by sympy, at random deformed states."""
+    spec = builtin("ef")
+    der = derive_element(spec)
     lib = model("ef")
+    n, l = spec.elements, L / spec.elements
+    symbols = list(der.e) + list(der.ed) + [w, alpha] + der.params
+    f_e = sp.lambdify(symbols, der.f_inertial - sp.Matrix([sp.diff(der.V, x) for x in der.e]), "numpy")
+    M_e = sp.lambdify(symbols, der.M, "numpy")
+    # the variant's coordinates q: dx0, then (ux, uy, dx, dy) of nodes 1..n, displacements
+    # from the straight beam (node k at x = k l, slope (1, 0)); the root's x, y, dy are held
+    free = [2] + list(range(4, 4 * (n + 1)))
     rng = np.random.default_rng(3)
-    pe_syms = der.params
     for _ in range(3):
-        l = rng.uniform(0.3, 1.0)
-        e = np.array([0, 0, 1, 0, l, 0, 1, 0]) + rng.uniform(-0.05, 0.05, 8)
-        ed, edd = rng.uniform(-1, 1, 8), rng.uniform(-1, 1, 8)
-        drive = np.array([rng.uniform(0, 6), rng.uniform(-1, 1)])
-        pe = np.array([RHO, E, A, I, l])
-        subs = {w: drive[0], alpha: drive[1]} | dict(zip(pe_syms, pe))
-        subs |= dict(zip(der.e, e)) | dict(zip(der.ed, ed)) | dict(zip(der.edd, edd))
-        f_ref = (der.f_inertial - sp.Matrix([sp.diff(der.V, x) for x in der.e])).xreplace(subs)
-        f_ref = np.array(f_ref.evalf(30).tolist(), dtype=float).ravel()
-        f_c = lib.call("elem_force", e, ed, drive, pe)[0]
-        assert np.max(np.abs(f_c - f_ref)) <= 1e-11 * np.max(np.abs(f_ref))
-        M_ref = np.array(der.M.xreplace(subs).evalf(30).tolist(), dtype=float)
-        assert np.allclose(lib.call("elem_mass", pe)[0], M_ref, rtol=1e-13, atol=0)
-        kernels = {k.name: k for k in build_element_kernels(der)}
-        jq, jv = lib.call("elem_residual_jac", e, ed, edd, drive, pe)
-        ca_jq, ca_jv = (x.full() for x in kernels["elem_residual_jac"].function(e, ed, edd, drive, pe))
-        assert np.max(np.abs(jq - ca_jq)) <= 1e-12 * np.max(np.abs(ca_jq))
-        assert np.max(np.abs(jv - ca_jv)) <= 1e-12 * max(np.max(np.abs(ca_jv)), 1e-300)
+        q, qd = rng.uniform(-0.05, 0.05, lib.nq), rng.uniform(-1, 1, lib.nq)
+        omega, acc = rng.uniform(0, 6), rng.uniform(-1, 1)
+        e, ed = np.zeros(4 * (n + 1)), np.zeros(4 * (n + 1))
+        e[free], ed[free] = q, qd
+        e += np.concatenate([[k * l, 0.0, 1.0, 0.0] for k in range(n + 1)])
+        f, M = np.zeros(4 * (n + 1)), np.zeros((4 * (n + 1),) * 2)
+        for k in range(n):
+            dofs = slice(4 * k, 4 * k + 8)
+            args = [*e[dofs], *ed[dofs], omega, acc, RHO, E, A, I, l]
+            f[dofs] += np.ravel(f_e(*args))
+            M[dofs, dofs] += np.array(M_e(*args), dtype=float)
+        f_ref, M_ref = f[free], M[np.ix_(free, free)]
+        assert np.max(np.abs(lib.force(q, qd, omega, acc) - f_ref)) <= 1e-10 * np.max(np.abs(f_ref))
+        assert np.max(np.abs(lib.mass(q) - M_ref)) <= 1e-13 * np.max(np.abs(M_ref))
 
 
 def _frequencies(n):

@@ -326,8 +326,7 @@ def test_generation_from_fe_data_is_deterministic_and_records_its_tools():
     assert generate_files(spec) == first
     manifest = json.loads(first["manifest.json"])
     assert {"numpy", "scipy"} <= set(manifest["versions"])
-    assert {i["method"] for i in manifest["modal_integrals"]} == {"fe_gauss"}
-    assert manifest["params"][0]["default"] == PAPER.rho and manifest["body"]["masses"]
+    assert manifest["params"][0]["default"] == PAPER.rho and manifest["variant"]["body"]["masses"]
 
 
 def test_model_option_needs_a_scene_and_a_known_variant(capsys):
@@ -338,10 +337,9 @@ def test_model_option_needs_a_scene_and_a_known_variant(capsys):
     assert len(err.splitlines()) == 1 and "--model" in err and "unknown variant 'm9'" in err
 
 
-def test_fe_data_variant_c_matches_casadi_and_sympy():
-    from test_codegen import RTOL, _random_inputs, _sympy_eval, _sympy_reference
+def test_fe_data_variant_c_matches_casadi_and_sympy(s0_kernels):
+    from test_codegen import check_c_casadi_sympy
 
-    from flexsym.codegen.derive import build_kernels
     from flexsym.toolchain.pipeline import compiled
 
     body = BeamBody.from_segments([(5.0, PAPER), (5.0, OUTER)], 6,
@@ -350,23 +348,7 @@ def test_fe_data_variant_c_matches_casadi_and_sympy():
                      outputs="v_tip,u_tip,N_A,M_A,M@0.5,N@0.25")
     der = derive(spec)
     assert any(str(sym).startswith("J[rot") or "rot" in str(sym) for sym in der.table.symbols)
-    lib = compiled(spec)
-    kernels = {k.name: k for k in build_kernels(der)}
-    reference = _sympy_reference(der)
-    rng = np.random.default_rng(11)
-    for _ in range(3):
-        x = _random_inputs(rng, der)
-        for kname, kernel in kernels.items():
-            ins = [x[p.name] for p in kernel.inputs]
-            c_out = lib.call(kname, *ins)
-            res = kernel.function(*ins)
-            ca_out = [o.full() for o in (res if isinstance(res, (list, tuple)) else [res])]
-            for port, c_val, ca_val, sym in zip(kernel.outputs, c_out, ca_out, reference[kname]):
-                c_val = np.asarray(c_val).reshape(port.rows, port.cols)
-                sp_val = _sympy_eval(der, sym, x).reshape(port.rows, port.cols)
-                scale = max(np.max(np.abs(sp_val)), 1e-300)
-                assert np.max(np.abs(c_val - ca_val.reshape(port.rows, port.cols))) <= RTOL * scale
-                assert np.max(np.abs(c_val - sp_val)) <= RTOL * scale, (kname, port.name)
+    check_c_casadi_sympy(der, compiled(spec), s0_kernels(spec), np.random.default_rng(11), 3)
 
 
 def _run(spec, t_end, dt=1e-3):

@@ -12,7 +12,7 @@ import pytest
 from flexsym.apps import api
 from flexsym.apps.cli import main
 from flexsym.core.errors import SpecError
-from flexsym.codegen.generate import read_manifest
+from flexsym.codegen.folder import read_manifest
 from flexsym.core.paths import PACKAGE_DIR
 from flexsym.scenes.scene import load_scene
 
@@ -234,7 +234,9 @@ def test_concurrent_builds_of_one_variant_are_safe(tmp_path):
     exes = {o[0].strip().split(": ")[-1] for o in outs}
     assert len(exes) == 1
     builds = [d for d in (tmp_path / "cache" / "build").iterdir() if d.is_dir()]
-    assert sorted(d.name.startswith(".") for d in builds) == [False, True]  # the model, .runtime
+    # the model, .kernels (its kernels' objects, kept for its derivation), .runtime
+    assert sorted(d.name for d in builds if d.name.startswith(".")) == [".kernels", ".runtime"]
+    assert len(builds) == 3
     runtimes = [d for d in (tmp_path / "cache" / "build" / ".runtime").iterdir() if d.is_dir()]
     assert len(runtimes) == 1 and not runtimes[0].name.startswith(".")  # the runtime's objects
     variants = [d for d in (tmp_path / "cache" / "variants").iterdir() if d.is_dir()]

@@ -103,7 +103,7 @@ def test_s6_ef_c_path_against_the_whole_system_ad_path(s6ef):
     both paths, added here by casadi) at random states, to 1e-10 of each result's largest
     entry (the bending rotary inertia at 0.37 of the physical). Measured at n = 2: 4e-17 .. 3e-16."""
 
-    from flexsym.codegen.generate import model_accessor
+    from flexsym.codegen.folder import model_accessor
 
     system = system_from_dict(_s6_ef(N, **S6EF_COLUMNS), name="spherical_pendulum")
     der, ad = _ad_path(system, "strip", N)
@@ -221,7 +221,7 @@ def test_s7_ef_c_path_against_the_whole_system_ad_path():
     energies of the C path against the whole-system AD path at random states and drives, as
     for S6. Measured: 3e-18 .. 2.6e-16 (a build of about 2 minutes)."""
 
-    from flexsym.codegen.generate import model_accessor
+    from flexsym.codegen.folder import model_accessor
 
     n = 2
     data = with_model(tomllib.loads((ROOT / "scenes" / "spatial_slider_crank.toml").read_text()),

@@ -100,7 +100,7 @@ def test_flap_ef_c_kernels_against_casadi(flap_ef8):
                     + [("drive", ctypes.c_void_p), ("mass", fn4), ("force", fn5), ("residual_jac", fn7)]
                     + [("c%d" % k, ctypes.c_void_p) for k in range(5)] + [("energy", fn5)])
 
-    from flexsym.codegen.generate import model_accessor
+    from flexsym.codegen.folder import model_accessor
     acc = getattr(lib, model_accessor("flap"))
     acc.restype = ctypes.POINTER(System)
     s = acc().contents

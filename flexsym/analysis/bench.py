@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from flexsym.toolchain.build import build
-from flexsym.codegen.generate import generate_files, write_folder
+from flexsym.codegen.folder import write_folder
+from flexsym.codegen.generate import generate_files
 from flexsym.toolchain.pipeline import prepare
 from flexsym.core.progress import Progress
 from flexsym.toolchain.run import run_built

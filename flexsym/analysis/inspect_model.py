@@ -7,9 +7,8 @@ import textwrap
 import sympy as sp
 
 from flexsym.core.errors import SpecError
-from flexsym.emit.cemit import emit
-from flexsym.codegen.derive import build_kernels, derive
-from flexsym.codegen.generate import c_prefix, fingerprint
+from flexsym.codegen.derive import derive
+from flexsym.codegen.generate import fingerprint
 from flexsym.physics.modal import Derivation
 from flexsym.model.variant import QUAD_POINTS, VariantSpec
 from flexsym.model.strain_models import STRAIN_MODELS
@@ -211,14 +210,13 @@ class Report:
 
     def _ops(self) -> None:
         self.title("Generated kernels: operation counts after CSE (add/mul/div/fun/other)")
-        for k in build_kernels(self.der):
-            e = emit(k, c_prefix(self.spec.name))
+        for e in variant_kernels(self.spec):
             o = e.ops
             self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")
 
     # ----- the finite-element reference ------------------------------------------------
     def _render_fe(self, sections) -> str:
-        from flexsym.physics.fe import build_element_kernels, hermite, le
+        from flexsym.physics.fe import hermite, le
 
         d, s = self.der, self.spec
         self.add(f"variant {s.name}: {s.description}")
@@ -246,21 +244,21 @@ class Report:
             self.title("Element inertial forces (the elastic forces are -dV^e/de by casadi AD)")
             self.add(self.fmt(d.f_inertial))
         if "ops" in sections:
-            self.title("Generated element kernels: operation counts after CSE (add/mul/div/fun/other)")
-            for k in build_element_kernels(d):
-                e = emit(k, c_prefix(s.name))
-                o = e.ops
-                self.add(f"{e.c_name:22s} {e.total_ops:6d}  ({o['add']}/{o['mul']}/{o['div']}/{o['fun']}/{o['other']})")
+            self._ops()
         return "\n".join(self.lines) + "\n"
+
+
+def variant_kernels(spec) -> list:
+    """The emitted C kernels of a variant's generated folder (its S0's, sysgen)."""
+    from flexsym.codegen.sysgen import emitted_kernels
+    from flexsym.model.library import variant_system
+
+    return emitted_kernels(variant_system(spec))[2]
 
 
 def op_counts(spec) -> dict[str, int]:
     """Operations per generated kernel of a variant (after CSE)."""
-    if spec.kind == "fe":
-        from flexsym.physics.fe import build_element_kernels, derive_element
-
-        return {k.name: emit(k, c_prefix(spec.name)).total_ops for k in build_element_kernels(derive_element(spec))}
-    return {k.name: emit(k, c_prefix(spec.name)).total_ops for k in build_kernels(derive(spec))}
+    return {e.kernel.name: e.total_ops for e in variant_kernels(spec)}
 
 
 def savings(spec, full) -> str:

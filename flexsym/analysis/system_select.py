@@ -41,7 +41,7 @@ from flexsym.model.variant import builtin
 from flexsym.physics.spatial_ef import bending_inertia_param
 from flexsym.physics.validity import system_range_notes
 from flexsym.scenes.system_scene import checked_system
-from flexsym.codegen.generate import MANIFEST
+from flexsym.codegen.folder import MANIFEST
 from flexsym.toolchain.pipeline import prepare_system, system_folder
 
 MODELS = ("m1", "m2", "m3", "prestress")

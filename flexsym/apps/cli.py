@@ -141,7 +141,7 @@ def cmd_generate(args) -> int:
     from flexsym.model.variant import BUILTIN
 
     if args.variant == "all":  # every built-in variant and the mechanisms S1-S3 into generated/
-        from flexsym.codegen.generate import write_folder
+        from flexsym.codegen.folder import write_folder
         from flexsym.codegen.sysgen import generate_system_files
         from flexsym.toolchain.pipeline import golden_system_folder, golden_systems
 
@@ -174,7 +174,7 @@ def _generate_system(system, out) -> int:
     """flexsym generate SYSTEM_SCENE [--out DIR]: the system's generated folder."""
     import json
 
-    from flexsym.codegen.generate import MANIFEST, write_folder
+    from flexsym.codegen.folder import MANIFEST, write_folder
     from flexsym.toolchain.pipeline import generated_system_folder
 
     say = lambda msg: print(f"flexsym: system '{system.name}': {msg}", file=sys.stderr, flush=True)
@@ -309,7 +309,7 @@ def _static_start_line(system) -> str:
     deformation (the generated model's manifest says, sysgen._static_unknowns)."""
     import json
 
-    from flexsym.codegen.generate import MANIFEST
+    from flexsym.codegen.folder import MANIFEST
     from flexsym.toolchain.pipeline import system_folder
 
     manifest = json.loads((system_folder(system) / MANIFEST).read_text())

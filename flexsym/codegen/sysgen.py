@@ -39,7 +39,7 @@ from flexsym.emit.cemit import c_double, emit
 from flexsym.physics.efbody import _E, _ED, EA, EI, OM, RA, VX, VY, EfPart, generic_dissipation, generic_element
 from flexsym.physics.energy import A, E, I, L, rho
 from flexsym.physics.fe import le
-from flexsym.codegen.generate import MANIFEST, _environment, c_prefix, model_accessor
+from flexsym.codegen.folder import MANIFEST, c_prefix, environment, model_accessor
 from flexsym.physics.lagrange import equations_of_motion_sx
 from flexsym.emit.kernels import SympyToCasadi, group_by_parameters, make_kernels, matrix_sx
 from flexsym.model.maneuver import t as t_sym
@@ -89,11 +89,22 @@ def derivation_fingerprint(system: System) -> str:
     return _fingerprint(content)
 
 
+def _versions(content: dict) -> dict[str, str]:
+    """Tool versions; a body from finite-element data adds numpy and scipy (its eigenvectors)."""
+    versions = tool_versions()
+    if any("body" in (b.get("model") or {}) for b in content["bodies"]):
+        import numpy
+        import scipy
+
+        versions |= {"numpy": numpy.__version__, "scipy": scipy.__version__}
+    return versions
+
+
 def _fingerprint(content: dict) -> str:
     h = hashlib.sha256(generator_hash().encode())
     for f in [module_file(m) for m in _OWN] + sorted((templates_dir() / "system").glob("*.j2")):
         h.update(f.name.encode() + b"\0" + f.read_bytes().replace(b"\r\n", b"\n"))
-    payload = {"system": content, "generator": h.hexdigest(), "versions": tool_versions()}
+    payload = {"system": content, "generator": h.hexdigest(), "versions": _versions(content)}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
@@ -616,6 +627,12 @@ def ef_elements(der: SystemDerivation) -> list[dict]:
     return out
 
 
+def coordinate_label(system: System, c) -> str:
+    """A coordinate's name in the model's columns and manifest: its derivation's (a body's
+    carry the body's name), or a one-beam variant's own (System.one_beam)."""
+    return c.name.removeprefix(f"{c.body}_") if system.one_beam and c.body else c.name
+
+
 def _unbounded(system: System, c) -> bool:
     """A coordinate the runtime's blow-up limit (blowup x the length scale, in m) does not
     bound: a joint's angle (a revolute, cylindrical or universal joint's turn: it may turn
@@ -642,10 +659,8 @@ def runtime_parameters(system: System) -> list[tuple[str, float]]:
 _TOKEN = re.compile(r"@flexsym-(fingerprint|derivation|p[0-9]+)@")
 
 
-def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
-    """The derivation of a generated folder: its files and manifest with the fingerprints and
-    the run-time parameters' values left as placeholders, for folder_files to fill. JSON, so
-    that pipeline.prepare_system keeps it for every system of the same derivation_fingerprint."""
+def emitted_kernels(system: System, log=None, ef_free_ad: bool = False) -> tuple:
+    """(derivation, casadi kernels, emitted C kernels) of a system; log(msg): a line per stage."""
     log = log or (lambda msg: None)
     start = time.perf_counter()
     der = derive_spatial(system, ef_free_ad) if system.dimension == 3 else derive_system(system)
@@ -655,7 +670,15 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
     kernels = build_system_kernels(der)
     emitted = [emit(k, c_prefix(system.name)) for k in kernels]
     log(f"kernels emitted ({sum(k.total_ops for k in emitted)} operations) in {time.perf_counter() - start:.1f} s")
-    versions = tool_versions()
+    return der, kernels, emitted
+
+
+def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
+    """The derivation of a generated folder: its files and manifest with the fingerprints and
+    the run-time parameters' values left as placeholders, for folder_files to fill. JSON, so
+    that pipeline.prepare_system keeps it for every system of the same derivation_fingerprint."""
+    der, kernels, emitted = emitted_kernels(system, log, ef_free_ad)
+    versions = _versions(system_to_dict(system))
     mass = next(k.function for k in kernels if k.name == "mass")
     qs, ds, ps = mass.sx_in()
     mass_constant = not ca.depends_on(mass(qs, ds, ps), ca.vertcat(qs, ds)) and not any(
@@ -680,8 +703,8 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "summary": f"{len(system.bodies)} bodies, {len(der.q)} coordinates, "
                    f"{len(der.guided)} guided joints, {len(der.constraints)} constraint equations.",
         "constraints": [n for n, _ in der.constraints],
-        "banner": "system/banner.j2", "kernels": emitted,
-        "guided": [g.joint for g in der.guided], "coords": [c.name for c in der.coords],
+        "kernels": emitted,
+        "guided": [g.joint for g in der.guided], "coords": [coordinate_label(system, c) for c in der.coords],
         "outputs": list(der.outputs), "nd": len(der.drive_symbols),
         "params": [{"name": n, "c_default": f"@flexsym-p{i}@" if i < sections else c_double(v)}
                    for i, (n, _, v) in enumerate(der.params)],
@@ -709,7 +732,7 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
     ctx["kernels_cmake"] = ctx["large_kernels"] or bool(rare)  # flags the FMU's build needs too
     if ctx["static_start"]:
         ctx["static_free"], ctx["static_rows"] = _static_unknowns(system, der, kernels)
-    env = _environment()
+    env = environment()
     # the kernels, their header and how they compile carry the derivation's fingerprint only:
     # byte for byte the same in every folder of the derivation (build.py compiles them once)
     shared = ctx | {"fingerprint": "@flexsym-derivation@", "of_derivation": True}
@@ -732,7 +755,8 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
         "spec": None,
         "tree": {"order": list(der.tree.order), "tree_joints": dict(der.tree.parent_joint),
                  "cut_joints": list(der.tree.cut)},
-        "coordinates": [{"name": c.name, "group": c.group, "body": c.body} for c in der.coords],
+        "coordinates": [{"name": coordinate_label(system, c), "group": c.group, "body": c.body}
+                        for c in der.coords],
         "drive": ["t"] + [f"{g.joint}{s}" for g in der.guided for s in ("", "'", "''")],
         "drive_params": [{"name": p.name, "default": p.default, "unit": p.unit}
                          for p in der.drive_params],
@@ -747,8 +771,12 @@ def derive_folder(system: System, log=None, ef_free_ad: bool = False) -> dict:
                           if b in der.ef_damping else "modal: -dD/dq' in force")
                       for b in der.dissipation}} if der.dissipation else {}) | {
         "length_scale": scale, "mass_constant": mass_constant,
+        "outputs_use_acceleration": ctx["outputs_use_acceleration"],
+        "outputs_use_drive": ctx["outputs_use_drive"],
         "left_out": der.dropped,
-        "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops}
+        "kernels": {k.kernel.name: {"c_name": k.c_name, "ops": k.ops, "total_ops": k.total_ops,
+                                    "inputs": {p.name: p.size for p in k.kernel.inputs},
+                                    "outputs": {p.name: [p.rows, p.cols] for p in k.kernel.outputs}}
                     for k in emitted},
         # what the compiled kernels depend on: folders with the same files share them (build.py)
         "kernels_inputs": sorted(set(files) - {"system.c"}),

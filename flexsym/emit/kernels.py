@@ -190,10 +190,6 @@ def translator(q_syms, qd_syms, qdd_syms, params, maneuver, drive) -> tuple[Symp
     return SympyToCasadi(symbols, priority), sx
 
 
-def maneuver_sx(tr: SympyToCasadi, man) -> ca.SX:
-    return matrix_sx(tr, sp.Matrix([man.theta, man.rate, man.acceleration]), [])
-
-
 def make_kernels(specs) -> list[Kernel]:
     """specs: (name, doc, [(input name, SX)], [(output name, SX)]); CSE over all outputs."""
     kernels = []

@@ -27,6 +27,29 @@ def spin_up_system(model, section: Section = PAPER_SECTION, length: float = PAPE
     ).validate()
 
 
+def variant_system(spec) -> System:
+    """A one-beam variant (a VariantSpec or an FESpec) as the system its folder is generated
+    from: S0 named after it, its beam the paper's section and length or its finite-element
+    body's, its output positions (points) the beam's markers, its outputs under their one-beam
+    names (aliases of the system grammar), and N and M recovered as the one-beam spin-up
+    recovers them: "auto" is the modes' curvature (the paper's), ef's elements' own, where a
+    mechanism's beam takes equilibrium."""
+    from dataclasses import replace
+
+    import sympy as sp
+
+    model = replace(spec, **{k: "constitutive" for k in ("axial_force", "moment")
+                             if getattr(spec, k) == "auto"})
+    section, length = PAPER_SECTION, PAPER_LENGTH
+    if spec.body is not None:
+        r = spec.body.reference
+        section, length = Section(r.rho, r.E, r.A, r.I), spec.body.length
+    s0 = spin_up_system(model, section, length)
+    markers = tuple(Marker(label, float(sp.Rational(frac)) * length) for label, frac in spec.points)
+    return replace(s0, name=spec.name, bodies=(replace(s0.bodies[0], markers=markers),),
+                   outputs=tuple(Output(o, o) for o in spec.outputs), one_beam=True).validate()
+
+
 def hub_system(model, hub_inertia: float = 40.0) -> System:
     """S1: rigid hub (J_h) on a revolute to ground, beam clamped at the hub centre, motor torque
     tau = (J_h + rho A L^3/3) theta_P''(t), P(t; 6 rad/s, 15 s)."""

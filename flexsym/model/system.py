@@ -546,6 +546,9 @@ class System:
     description: str = field(default="", compare=False)
     start: str = "undeformed"  # or "static": elastic coordinates in equilibrium at t = 0
     dimension: int = 2  # 3: a spatial system (physics/spatial.py)
+    # A one-beam variant's S0 (library.variant_system): its beam's coordinates keep the
+    # variant's names (v_static, ux1; a system's carry the body's: beam_v_static)
+    one_beam: bool = False
 
     # ----- lookups ----------------------------------------------------------------------
     def body(self, name: str):
@@ -987,7 +990,8 @@ class System:
 
 _SPATIAL_DEFAULTS = {"Iy": None, "J": None, "G": None, "z": 0.0, "fz": 0.0, "dimension": 2,
                      "direction": None, "slide": 0.0, "slide_rate": None, "parent_axis": None,
-                     "angle2": 0.0, "rate2": None, "coordinate": ""}
+                     "angle2": 0.0, "rate2": None, "coordinate": "",
+                     "one_beam": False}
 
 
 def system_to_dict(system: System) -> dict:

@@ -63,7 +63,7 @@ from flexsym.physics.exact_body import EXACT_VG
 from flexsym.core.errors import SpecError
 from flexsym.physics.lagrange import equations_of_motion, jacobi_integral
 from flexsym.model.joint_kinds import KINDS, planar_cut_rows, planar_frame
-from flexsym.model.maneuver import Param, maneuver_of, parse_expression, parse_theta, t
+from flexsym.model.maneuver import Maneuver, Param, maneuver_of, parse_expression, parse_theta, t
 from flexsym.model.system import (GROUND, Gravity, PointForce, SpringDamper, System, Torque,
                      beam_station, length_scale, loads_at, output_beam, parse_output,
                      section_at, section_point, station_side)
@@ -355,6 +355,13 @@ def derive_system(system: System, integral_symbols: bool = False) -> SystemDeriv
     der.constraints = [row for name in tree.cut for row in cut_joint_rows(der, system.joint(name))]
     der.lam = sp.Matrix([sp.Symbol(f"lambda_{k}", real=True) for k in range(len(der.constraints))])
     der.outputs = {o.column: output_of(der, o.quantity) for o in system.outputs}
+    for gd in guided:  # at constant speed: the terms in its theta'' are zero, so left out
+        if not Maneuver(gd.driver, gd.params, gd.theta, "").accelerates:
+            zero = {gd.symbols[2]: 0}
+            der.f = der.f.xreplace(zero)
+            der.outputs = {k: v.xreplace(zero) for k, v in der.outputs.items()}
+            der.dropped.append({"what": f"theta'' terms of guided joint '{gd.joint}'",
+                                "why": f"driver '{gd.driver}' has theta'' = 0 identically"})
     return der
 
 

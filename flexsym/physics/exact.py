@@ -42,7 +42,7 @@ from flexsym.core.errors import FlexsymError
 from flexsym.physics.integrals import IntegralTable
 from flexsym.physics.exact_kinematics import (M_POINTS, MAX_SEGMENTS, QUAD_RTOL, ExactKinematics,
                                              Quadrature, _test_state)
-from flexsym.emit.kernels import make_kernels, maneuver_sx, translator
+from flexsym.emit.kernels import translator
 from flexsym.physics.lagrange import equations_of_motion_sx, generalized_force
 from flexsym.model.maneuver import maneuver_of
 from flexsym.physics.modal import Derivation, DerivedTerm
@@ -289,32 +289,3 @@ def quadrature_error(der: ExactDerivation, q_rows, qd_rows, drive_rows, p, finer
     return worst
 
 
-def build_exact_kernels(der: ExactDerivation) -> list:
-    tr, x = _symbolic_inputs(der)
-    q, qd, qdd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
-    quad = der.quadrature
-    V = _potential(der, tr)
-    M, f, en = der.equations(quad, x, V)
-    r = der.residual(quad, x, V)
-    ys = []
-    for name in der.spec.outputs:
-        expr = der.outputs[name]
-        ys.append(der.exact_output(quad, name, x) if expr is None else tr(der.numeric(expr)))
-    return make_kernels([
-        ("mass", "mass matrix M(q) = d2T/dq'2 (exact kinematics, quadrature)",
-         [("q", q), ("p", p)], [("M", M)]),
-        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("drive", drive), ("p", p)],
-         [("f", f)]),
-        ("residual_jac", "Jacobians of r = M(q) q'' - f", [("q", q), ("qd", qd), ("qdd", qdd),
-                                                          ("drive", drive), ("p", p)],
-         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
-        ("residual", "r = M(q) q'' - f in one pass, without forming M (the implicit "
-         "integrators' iterations)", [("q", q), ("qd", qd), ("qdd", qdd), ("drive", drive), ("p", p)],
-         [("r", r)]),
-        ("outputs", "output quantities " + ", ".join(der.spec.outputs),
-         [("q", q), ("qd", qd), ("qdd", qdd), ("drive", drive), ("p", p)], [("y", ca.vertcat(*ys))]),
-        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
-         [("q", q), ("qd", qd), ("drive", drive), ("p", p)], [("e", en)]),
-        ("maneuver", f"[theta, w, alpha] of manoeuvre '{der.maneuver.name}'",
-         [("t", x["t"]), ("mp", x["mp"])], [("drive3", maneuver_sx(tr, der.maneuver))]),
-    ])

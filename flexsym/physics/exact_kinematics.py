@@ -140,12 +140,14 @@ class ExactKinematics:
     fe_body = None  # fedata.BeamBody (a system body from finite-element data) or None: uniform
 
     def edges(self) -> tuple:
-        """The quadrature's piece edges in s: the runs of equal section, cut at point masses."""
+        """The quadrature's piece edges in s: a body from finite-element data's nodes (its
+        sections change there, its point masses sit there, and its modes, polynomials per
+        element, have a kink in curvature and a jump in axial strain there, which a Gauss
+        segment straddling them integrates to O(h) only)."""
         body = self.fe_body
         if body is None:
             return (0.0, 1.0)
-        x = np.cumsum([l for l, _ in body.segments()])[:-1] / body.length
-        return (0.0,) + tuple(float(v) for v in x) + (1.0,)
+        return tuple(float(v) for v in body.s_nodes)
 
     def point_masses(self) -> list[tuple[float, float]]:
         """(s, m / (rho A L) of the root section) of each point mass."""

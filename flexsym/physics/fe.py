@@ -20,16 +20,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import casadi as ca
 import sympy as sp
 
 from flexsym.physics.energy import A, E, I, alpha, rho, w
 from flexsym.physics.integrals import gauss_legendre
-from flexsym.emit.kernels import make_kernels, maneuver_sx, translator
 from flexsym.physics.lagrange import equations_of_motion
 from flexsym.model.maneuver import Maneuver, maneuver_of
-from flexsym.model.output_names import point_of
-from flexsym.model.variant import CLAMP_OUTPUTS, QUAD_POINTS, FESpec
+from flexsym.model.variant import QUAD_POINTS, FESpec
 
 xi = sp.Symbol("xi", real=True)
 le = sp.Symbol("l", positive=True)  # element length, p[L] / elements at run time
@@ -99,61 +96,3 @@ def elastic_element(rx, ry):
     return eps, kappa, sp.sqrt(r1.dot(r1)), V
 
 
-def build_element_kernels(der: ElementDerivation) -> list:
-    """Element kernels over absolute nodal coordinates e (8) and pe = [rho, E, A, I, l]."""
-    pe = der.params
-    tr, x = translator(der.e, der.ed, der.edd, pe, der.maneuver, (w, alpha))
-    e, ed, edd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
-    M = ca.vertcat(*[ca.horzcat(*[tr(der.M[i, j]) for j in range(8)]) for i in range(8)])
-    f_in = ca.vertcat(*[tr(v) for v in der.f_inertial])
-    V = tr(der.V)
-    f = f_in - ca.gradient(V, e)  # casadi AD of the sympy energy
-    r = ca.mtimes(M, edd) - f
-    T = tr(der.T)
-    T0 = ca.substitute(T, ed, ca.SX.zeros(8))
-    h = 0.5 * ca.mtimes(ed.T, ca.mtimes(M, ed)) - T0 + V  # Jacobi integral, this element's part
-    xi_sx = ca.SX.sym("xi")
-    tr.symbols[xi] = xi_sx
-    # N: the tension conjugate to the Green strain is EA eps |r_x| (force per unit deformed
-    # length); M = EI kappa.
-    stress = ca.vertcat(tr(E * A * der.strain * der.stretch), tr(E * I * der.curvature))
-    return make_kernels([
-        ("elem_mass", "element mass matrix (constant)", [("pe", p)], [("Me", M)]),
-        ("elem_force", "element right-hand side: inertial forces minus dV/de",
-         [("e", e), ("ed", ed), ("drive", drive), ("pe", p)], [("fe", f)]),
-        ("elem_residual_jac", "Jacobians of r = Me e'' - fe",
-         [("e", e), ("ed", ed), ("edd", edd), ("drive", drive), ("pe", p)],
-         [("dr_de", ca.jacobian(r, e)), ("dr_ded", ca.jacobian(r, ed))]),
-        ("elem_stress", "[N, M] = [EA eps |r_x|, EI kappa] at local coordinate xi in [0, 1]",
-         [("e", e), ("xi", xi_sx), ("pe", p)], [("nm", stress)]),
-        ("elem_energy", "[T, V, h] of the element", [("e", e), ("ed", ed), ("drive", drive), ("pe", p)],
-         [("en", ca.vertcat(T, V, h))]),
-        ("maneuver", f"[theta, w, alpha] of manoeuvre '{der.maneuver.name}'",
-         [("t", x["t"]), ("mp", x["mp"])], [("drive3", maneuver_sx(tr, der.maneuver))]),
-    ])
-
-
-def output_plan(spec: FESpec) -> list[dict]:
-    """How the assembly computes each output: tip dofs, element stresses, or the clamp."""
-    n = spec.elements
-    plan = []
-    for name in spec.outputs:
-        if name in ("v_tip", "u_tip"):
-            plan.append({"name": name, "kind": "tip", "dof": 1 + 4 * (n - 1) + (1 if name == "v_tip" else 0)})
-        elif name in CLAMP_OUTPUTS:
-            plan.append({"name": name, "kind": "clamp", "which": 0 if name.startswith("N") else 1})
-        else:
-            quantity, at = point_of(name, spec.points)
-            sn = spec.node_fractions()
-            side = -1 if name.endswith("_left") else 1 if name.endswith("_right") else 0
-            k = max(i for i in range(n + 1) if sn[i] <= at + sp.Rational(1, 10**12))
-            if abs(sn[k] - at) <= sp.Rational(1, 10**12) and 0 < k < n:  # an interior node
-                terms = {-1: [(k - 1, 1.0, 1.0)], 1: [(k, 0.0, 1.0)],
-                         0: [(k - 1, 1.0, 0.5), (k, 0.0, 0.5)]}[side]  # element ends: a side or the mean
-            elif k >= n:
-                terms = [(n - 1, 1.0, 1.0)]
-            else:
-                terms = [(k, float((at - sn[k]) / (sn[k + 1] - sn[k])), 1.0)]
-            plan.append({"name": name, "kind": "stress", "which": 0 if quantity == "N" else 1,
-                         "terms": [{"element": el, "xi": repr(x), "weight": repr(wt)} for el, x, wt in terms]})
-    return plan

@@ -17,13 +17,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from dataclasses import fields as dataclass_fields
 
-import casadi as ca
 import sympy as sp
 
 from flexsym.physics.assemble import derive_system
 from flexsym.physics.energy import BEAM_PARAMS, ENERGY_TERMS, alpha, w
 from flexsym.physics.integrals import IntegralTable
-from flexsym.emit.kernels import Kernel, make_kernels, maneuver_sx, matrix_sx, translator
 from flexsym.physics.lagrange import jacobi_integral
 from flexsym.model.maneuver import Maneuver, maneuver_of
 from flexsym.model.modes import Mode
@@ -166,35 +164,3 @@ def one_body_system(spec: VariantSpec):
     return replace(system, outputs=(Output("theta", "angle(hub)"),))
 
 
-def build_modal_kernels(der: Derivation) -> list[Kernel]:
-    """Kernels (row-major dense outputs, p = beam parameters, drive = [w, alpha]):
-      mass(q, p) -> M                               mass matrix, symmetric positive definite
-      force(q, qd, drive, p) -> f                   M q'' = f
-      residual_jac(q, qd, qdd, drive, p) -> (dr_dq, dr_dqd) of r = M(q) q'' - f (Newton)
-      outputs(q, qd, qdd, drive, p) -> y             v_tip, u_tip, N and M at points
-      energy(q, qd, drive, p) -> [T, V, h]           kinetic, potential, Jacobi integral
-      maneuver(t, mp) -> [theta, w, alpha]           guided root rotation
-    """
-    params = der.params
-    tr, x = translator(der.q, der.qd, der.qdd, params, der.maneuver, (w, alpha))
-    M = matrix_sx(tr, der.numeric(der.M), params)
-    f = matrix_sx(tr, der.numeric(der.f), params)
-    y = matrix_sx(tr, der.numeric(sp.Matrix(list(der.outputs.values()))), params)
-    T, V, h = der.energies()
-    en = matrix_sx(tr, der.numeric(sp.Matrix([T, V, h])), params)
-    r = ca.mtimes(M, x["qdd"]) - f
-    q, qd, qdd, drive, p = x["q"], x["qd"], x["qdd"], x["drive"], x["p"]
-    return make_kernels([
-        ("mass", "mass matrix M(q)", [("q", q), ("p", p)], [("M", M)]),
-        ("force", "right-hand side f of M q'' = f", [("q", q), ("qd", qd), ("drive", drive), ("p", p)],
-         [("f", f)]),
-        ("residual_jac", "Jacobians of r = M(q) q'' - f", [("q", q), ("qd", qd), ("qdd", qdd),
-                                                          ("drive", drive), ("p", p)],
-         [("dr_dq", ca.jacobian(r, q)), ("dr_dqd", ca.jacobian(r, qd))]),
-        ("outputs", "output quantities " + ", ".join(der.outputs),
-         [("q", q), ("qd", qd), ("qdd", qdd), ("drive", drive), ("p", p)], [("y", y)]),
-        ("energy", "[T, V, h]: kinetic, potential energy and Jacobi integral",
-         [("q", q), ("qd", qd), ("drive", drive), ("p", p)], [("e", en)]),
-        ("maneuver", f"[theta, w, alpha] of manoeuvre '{der.maneuver.name}'",
-         [("t", x["t"]), ("mp", x["mp"])], [("drive3", maneuver_sx(tr, der.maneuver))]),
-    ])

@@ -20,7 +20,7 @@ from xml.sax.saxutils import quoteattr
 
 from flexsym.toolchain.build import FMU_FLAGS, _run, find_cmake, find_compiler, runtime_objects
 from flexsym.core.errors import SpecError
-from flexsym.codegen.generate import read_manifest
+from flexsym.codegen.folder import read_manifest
 from flexsym.core.paths import runtime_dir
 from flexsym.model.integrators import BY_NAME as INTEGRATORS, names
 
@@ -126,12 +126,13 @@ def _starts(manifest: dict, opts: FmuOptions) -> tuple[list[float], list[float]]
     return p, mp
 
 
-def _system(manifest: dict) -> bool:
-    return manifest.get("kind") == "system"
-
-
 def _drive_params(manifest: dict) -> list:
-    return manifest["drive_params"] if _system(manifest) else manifest["maneuver"]["params"]
+    return manifest["drive_params"]
+
+
+def _maneuver(manifest: dict) -> str | None:
+    """A one-beam variant's manoeuvre (its folder's manifest names the variant), else None."""
+    return manifest.get("variant", {}).get("maneuver")
 
 
 def _outputs(manifest: dict) -> list[str]:
@@ -184,19 +185,19 @@ def model_description(manifest: dict, opts: FmuOptions) -> str:
         var.append(f"    <Float64 {a} description={quoteattr(description)}/>")
 
     f64("time", vr["TIME"], "independent", "continuous", "simulation time [s]")
-    system = _system(manifest)
+    maneuver = _maneuver(manifest)
     for i, (x, v) in enumerate(zip(manifest["params"], p)):
         what = "beam parameter" + (f" [{x['unit']}]" if "unit" in x else " (SI units)")
         f64(x["name"], vr["P"] + i, "parameter", "tunable", what, v, "exact")
     if not drive:
-        of = "a guided joint's manoeuvre" if system else manifest["maneuver"]["name"]
+        of = maneuver or "a guided joint's manoeuvre"
         for i, (x, v) in enumerate(zip(_drive_params(manifest), mp)):
             f64(x["name"], vr["MP"] + i, "parameter", "tunable",
                 f"manoeuvre parameter [{x['unit']}] of {of}", v, "exact")
     else:
         for i, (name, unit, what) in enumerate(DRIVE_INPUTS):
             f64(name, vr["IN"] + i, "input", "continuous", f"{what} [{unit}]", 0.0)
-    quantities = manifest["outputs"] if system else {}
+    quantities = manifest["outputs"] if maneuver is None else {}  # a variant's names say it
     outputs = [(name, vr["Y"] + i, quantities.get(name, "output quantity") if name != "violation" else
                 "max |Phi| / length scale (constraint violation)") for i, name in enumerate(_outputs(manifest))]
     outputs += [(c["name"], vr["Q"] + i, f"{c['group']} coordinate: {c.get('mode', c.get('body', ''))}")
@@ -205,8 +206,8 @@ def model_description(manifest: dict, opts: FmuOptions) -> str:
         f64(name, ref, "output", "continuous", what)
     structure = [f"    <Output valueReference=\"{ref}\"/>" for _, ref, _ in outputs]
     structure += [f"    <InitialUnknown valueReference=\"{ref}\"/>" for _, ref, _ in outputs]
-    what = ("theta_dot, theta_ddot from the importer" if drive else "drivers as in the scene" if system
-            else f"manoeuvre {manifest['maneuver']['name']}")
+    what = ("theta_dot, theta_ddot from the importer" if drive else f"manoeuvre {maneuver}" if maneuver
+            else "drivers as in the scene")
     desc = f"{manifest.get('description', spec['name'])}; {opts.integrator} at dt = {opts.dt:g} s; {what}"
     return "\n".join([
         '<?xml version="1.0" encoding="UTF-8"?>',

@@ -25,7 +25,7 @@ import numpy as np
 from flexsym.toolchain.build import Built
 from flexsym.core.errors import SpecError
 from flexsym.model.limits import is_real
-from flexsym.codegen.generate import read_manifest
+from flexsym.codegen.folder import read_manifest
 from flexsym.model.integrators import REGISTRY
 from flexsym.model.options import API, BY_NAME, RunOptions, validate
 from flexsym.toolchain.run import RunResult
@@ -151,9 +151,7 @@ class InProcessModel:
         violation = ["violation"] if self.manifest.get("constraints") else []
         self.columns = self.outputs + violation + self.coordinates
         self.params = {p["name"]: p["default"] for p in self.manifest["params"]}
-        drive = (self.manifest["drive_params"] if self.manifest.get("kind") == "system"
-                 else self.manifest["maneuver"]["params"])
-        self.maneuver_params = {p["name"]: p["default"] for p in drive}
+        self.maneuver_params = {p["name"]: p["default"] for p in self.manifest["drive_params"]}
         self.lib = ctypes.CDLL(str(built.library))
         # the model as the struct of system.h, from the accessor the manifest names; every
         # runtime call takes it

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flexsym.core.errors import ToolchainError
-from flexsym.codegen.generate import folder_hash, read_manifest
+from flexsym.codegen.folder import folder_hash, read_manifest
 from flexsym.core.paths import cache_dir, file_lock, runtime_dir
 
 COMPLETE = ".complete"

@@ -8,7 +8,7 @@ import numpy as np
 
 from flexsym.core.errors import SpecError
 from flexsym.toolchain.build import Built
-from flexsym.codegen.generate import c_prefix, read_manifest
+from flexsym.codegen.folder import c_prefix, read_manifest
 
 _dptr = ctypes.POINTER(ctypes.c_double)
 
@@ -17,10 +17,29 @@ def _ptr(a: np.ndarray):
     return a.ctypes.data_as(_dptr)
 
 
+class SystemStruct(ctypes.Structure):
+    """runtime_c/include/flexsym/system.h's fsm_system, field by field (the one mirror of it
+    in Python: keep in step); pointers as void*."""
+    _fields_ = ([(k, ctypes.c_char_p) for k in ("name", "fingerprint", "generator")]
+                + [(k, ctypes.c_int) for k in ("nq", "nd", "nc", "ny", "np", "nmp")]
+                + [("length_scale", ctypes.c_double)]
+                + [(k, ctypes.c_int) for k in ("length_param", "mass_constant", "bandwidth",
+                                               "outputs_use_acceleration", "outputs_use_drive")]
+                + [(k, ctypes.c_void_p) for k in (
+                    "coord_names", "constraint_names", "output_names", "param_names",
+                    "param_defaults", "drive_param_names", "drive_param_defaults",
+                    "drive", "mass", "force", "residual_jac", "constraints", "constraint_jac",
+                    "constraint_rate", "constraint_acc", "outputs", "energy", "initial_state",
+                    "constraint_hess", "coord_unbounded", "residual")]
+                + [("band_first", ctypes.c_int), ("band_end", ctypes.c_int),
+                   ("coord_held", ctypes.c_void_p)])
+
+
 class CompiledModel:
-    """A built variant's library: the one-beam model interface (fsm_<name>_mass, fsm_<name>_force,
-    ..., its generated header) for every kind of model, and any generated kernel by name
-    (manifest.json)."""
+    """A built variant's model (the struct of system.h its accessor returns: its S0's, with
+    the ef elements assembled), called in the one-beam variables: the hub's rate and
+    acceleration w, alpha as the drive d = [t, theta, w, alpha] (a guided root without
+    gravity: t and theta enter no equation); and any generated kernel by name (manifest.json)."""
 
     def __init__(self, built: Built, gen_dir: Path):
         self.built = built
@@ -28,24 +47,22 @@ class CompiledModel:
         self.lib = ctypes.CDLL(str(built.library))
         self.kernels = self.manifest["kernels"]
         self.prefix = c_prefix(self.manifest["spec"]["name"])
-        self.nq = len(self.manifest["coordinates"])
-        self.ny = len(self.manifest["outputs"])
+        accessor = getattr(self.lib, self.manifest["model"])
+        accessor.restype = ctypes.POINTER(SystemStruct)
+        self.model = accessor().contents
+        self.nq, self.ny = self.model.nq, self.model.ny
         self.param_defaults = np.array([p["default"] for p in self.manifest["params"]])
-        self.maneuver_defaults = np.array([p["default"] for p in self.manifest["maneuver"]["params"]])
+        self.maneuver_defaults = np.array([p["default"] for p in self.manifest["drive_params"]])
 
-    def _invoke(self, c_name: str, inputs, out_shapes, sizes=None) -> list[np.ndarray]:
-        """inputs: (name, value) pairs; each is checked against its size (sizes, or the model
-        interface's by name) before C reads it."""
-        if sizes is None:
-            known = {"q": self.nq, "qd": self.nq, "qdd": self.nq, "[w, alpha]": 2,
-                     "p": len(self.param_defaults), "t": 1, "mp": len(self.maneuver_defaults)}
-            sizes = [known[name] for name, _ in inputs]
-        keep = [_array(name, x, n, c_name) for (name, x), n in zip(inputs, sizes)]
+    def _run(self, fn: str, inputs, out_shapes) -> list[np.ndarray]:
+        """The model's function fn on inputs ((name, value, size) triples, each checked before
+        C reads it), into arrays of out_shapes."""
+        label = self.prefix + fn
+        keep = [_array(name, x, n, label) for name, x, n in inputs]
         outs = [np.zeros(shape) for shape in out_shapes]
-        fn = getattr(self.lib, c_name)
-        fn.restype = None
-        fn(*[_ptr(a) for a in keep], *[_ptr(o) for o in outs])
-        return [o if o.shape[1] > 1 else o[:, 0] for o in outs]
+        call = ctypes.CFUNCTYPE(None, *[_dptr] * (len(keep) + len(outs)))(getattr(self.model, fn))
+        call(*[_ptr(a) for a in keep], *[_ptr(o) for o in outs])
+        return [o if o.ndim > 1 and o.shape[1] > 1 else o.ravel() for o in outs]
 
     def call(self, kernel: str, *inputs) -> list[np.ndarray]:
         """A generated kernel by name, with the input sizes checked against the manifest."""
@@ -53,37 +70,48 @@ class CompiledModel:
         if len(inputs) != len(info["inputs"]):
             raise SpecError(f"{kernel}: {len(inputs)} inputs given, expected {len(info['inputs'])} "
                             f"({', '.join(info['inputs'])})")
-        return self._invoke(info["c_name"], list(zip(info["inputs"], inputs)),
-                            [tuple(s) for s in info["outputs"].values()], list(info["inputs"].values()))
+        keep = [_array(name, x, n, info["c_name"]) for (name, n), x in zip(info["inputs"].items(), inputs)]
+        outs = [np.zeros(shape) for shape in info["outputs"].values()]
+        fn = getattr(self.lib, info["c_name"])
+        fn.restype = None
+        fn(*[_ptr(a) for a in keep], *[_ptr(o) for o in outs])
+        return [o if o.shape[1] > 1 else o[:, 0] for o in outs]
+
+    def _state(self, **given) -> list:
+        sizes = {"q": self.nq, "qd": self.nq, "qdd": self.nq}
+        return [(name, x, sizes[name]) for name, x in given.items()]
+
+    def _d(self, w=0.0, alpha=0.0) -> tuple:
+        return "d", np.concatenate([[0.0, 0.0], _wa(w, alpha)]), self.model.nd
+
+    def _p(self, p) -> tuple:
+        return "p", self.param_defaults if p is None else p, self.model.np
 
     def mass(self, q, p=None):
-        return self._invoke(self.prefix + "mass", [("q", q), ("p", self._p(p))], [(self.nq, self.nq)])[0]
+        return self._run("mass", [*self._state(q=q), self._d(), self._p(p)], [(self.nq, self.nq)])[0]
 
     def force(self, q, qd, w, alpha=0.0, p=None):
-        return self._invoke(self.prefix + "force", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
-                            [(self.nq, 1)])[0]
+        return self._run("force", [*self._state(q=q, qd=qd), self._d(w, alpha), self._p(p)], [(self.nq,)])[0]
 
     def residual_jac(self, q, qd, qdd, w, alpha=0.0, p=None):
         n = self.nq
-        return self._invoke(self.prefix + "residual_jac", [("q", q), ("qd", qd), ("qdd", qdd), ("[w, alpha]", _wa(w, alpha)),
-                                                 ("p", self._p(p))], [(n, n), (n, n)])
+        return self._run("residual_jac", [*self._state(q=q, qd=qd, qdd=qdd), self._d(w, alpha), self._p(p)],
+                         [(n, n), (n, n)])
 
     def outputs(self, q, qd=None, qdd=None, w=0.0, alpha=0.0, p=None) -> dict:
         z = np.zeros(self.nq)
-        y = self._invoke(self.prefix + "outputs", [("q", q), ("qd", z if qd is None else qd), ("qdd", z if qdd is None else qdd),
-                                         ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))], [(self.ny, 1)])[0]
+        y = self._run("outputs", [*self._state(q=q, qd=z if qd is None else qd, qdd=z if qdd is None else qdd),
+                                  ("lambda", np.zeros(self.model.nc), self.model.nc), self._d(w, alpha),
+                                  self._p(p)], [(self.ny,)])[0]
         return dict(zip(self.manifest["outputs"], np.atleast_1d(y)))
 
     def energy(self, q, qd, w, alpha=0.0, p=None):
-        return self._invoke(self.prefix + "energy", [("q", q), ("qd", qd), ("[w, alpha]", _wa(w, alpha)), ("p", self._p(p))],
-                            [(3, 1)])[0]
+        return self._run("energy", [*self._state(q=q, qd=qd), self._d(w, alpha), self._p(p)], [(3,)])[0]
 
     def maneuver(self, t, mp=None):
-        return self._invoke(self.prefix + "maneuver", [("t", t), ("mp", self.maneuver_defaults if mp is None else mp)],
-                            [(3, 1)])[0]
-
-    def _p(self, p):
-        return self.param_defaults if p is None else p
+        """[theta, w, alpha] of the guided root at time t."""
+        mp = self.maneuver_defaults if mp is None else mp
+        return self._run("drive", [("t", t, 1), ("mp", mp, self.model.nmp)], [(self.model.nd,)])[0][1:]
 
 
 def _wa(w, alpha) -> np.ndarray:

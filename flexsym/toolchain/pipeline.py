@@ -8,7 +8,8 @@ import sys
 from pathlib import Path
 
 from flexsym.toolchain.build import Built, build
-from flexsym.codegen.generate import MANIFEST, check_folder, fingerprint, generate, write_folder
+from flexsym.codegen.folder import MANIFEST, write_folder
+from flexsym.codegen.generate import check_folder, fingerprint, generate
 from flexsym.codegen.sysgen import derivation_fingerprint, derive_folder, folder_files
 from flexsym.codegen.sysgen import fingerprint as system_fingerprint
 from flexsym.core.paths import cache_dir, file_lock, generated_dir

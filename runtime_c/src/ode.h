@@ -20,7 +20,7 @@
 enum { DW_ACCEL = 0, DW_ROW = 1, DW_STEP = 2, DW_COUNT = 2 + 3 };
 
 typedef struct sim {
-    const fsm_system* m;  /* the model (system.h; a one-beam model through its model.c) */
+    const fsm_system* m;  /* the model (system.h) */
     const fsr_options* o;
     fsr_result* r;
     int n;

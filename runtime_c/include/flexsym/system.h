@@ -6,8 +6,7 @@
  * several models link into one program. Who uses which model is said in one place: the
  * accessor given to flexsym_add_model (flexsym_runtime.cmake) compiles the driver with
  * -DFSM_MODEL=<accessor>; the manifest's "model" names it for the in-process library (Python,
- * ctypes) and an FMU (FSU_MODEL). A one-beam model's kernels (drive = [theta', theta'']) are
- * wrapped into this struct by its generated model.c, with nc = 0. Integrators without
+ * ctypes) and an FMU (FSU_MODEL). A one-beam variant is its spin-up system S0, with nc = 0. Integrators without
  * FSR_CAP_CONSTRAINED (flexsym/integrators.h) need nc = 0; the constrained ones take any nc.
  *
  * Equations, with the drive vector d (size nd) = [t, then theta_k, theta_k', theta_k'' for each
@@ -98,6 +97,6 @@ typedef struct fsm_system {
      * start that a run-time parameter or initial state opened closes by the joints, never by
      * straining a body; NULL: every coordinate may move (hand-written models). */
     const unsigned char* coord_held;
-} fsm_system;  /* mirrored field by field in tests/test_bordered_band.py (_System): keep in step */
+} fsm_system;  /* mirrored field by field in flexsym/toolchain/native.py (SystemStruct): keep in step */
 
 #endif
