@@ -7,7 +7,8 @@ import scipy.linalg as sl
 import sympy as sp
 
 from flexsym.physics.energy import alpha, w
-from flexsym.physics.fe import derive_element
+from flexsym.physics.fe import elastic_element, hermite, le, xi
+from flexsym.physics.lagrange import equations_of_motion
 from flexsym.toolchain.pipeline import compiled, prepare
 from flexsym.toolchain.run import run_built
 from flexsym.model.variant import builtin
@@ -21,18 +22,35 @@ def ef(n):
     return replace(builtin("ef"), name=f"ef_n{n}", elements=n, aliases=())
 
 
+def _hub_element():
+    """One ANCF element on the spinning hub derived here, apart from efbody.py (what the
+    one-beam `ef` generated until 2026-12): T^e with the hub's rate w in the moving frame, its
+    inertial forces by Lagrange's equations with the drive (w, alpha), V^e of fe.py's strain
+    measures. Returns (e, e', the parameter symbols, M^e, inertial f^e, V^e)."""
+    from flexsym.physics.energy import A as A_, E as E_, I as I_, rho
+
+    e = sp.Matrix(sp.symbols("x1 y1 dx1 dy1 x2 y2 dx2 dy2", real=True))
+    ed = sp.Matrix([sp.Symbol(str(c) + "_d", real=True) for c in e])
+    N = hermite(le)
+    rx, ry, vx, vy = (sum(Ni * v[j] for Ni, j in zip(N, idx)) for v, idx in
+                      ((e, (0, 2, 4, 6)), (e, (1, 3, 5, 7)), (ed, (0, 2, 4, 6)), (ed, (1, 3, 5, 7))))
+    T = sp.expand(le * sp.integrate(sp.expand(rho * A_ / 2 * ((vx - w * ry)**2 + (vy + w * rx)**2)), (xi, 0, 1)))
+    M, f_in = equations_of_motion(T, sp.zeros(8, 1), e, ed, [(None, w, alpha)])
+    return e, ed, [rho, E_, A_, I_, le], M, f_in, elastic_element(rx, ry)[3]
+
+
 def test_compiled_ef_matches_the_element_derivation(model):
     """The compiled ef variant (its S0's body: efbody's frame terms, the ef_elastic kernel by
     casadi AD, assembled by system.c) against fe.py's element derivation, assembled here: M^e
-    and the inertial forces of T^e with the hub's rate w and acceleration alpha, the elastic
-    forces -dV^e/de differentiated by sympy, at random deformed states."""
+    and the inertial forces of T^e with the hub's rate w and acceleration alpha (_hub_element),
+    the elastic forces -dV^e/de differentiated by sympy, at random deformed states."""
     spec = builtin("ef")
-    der = derive_element(spec)
+    e_, ed_, pe, M_sym, f_in, V = _hub_element()
     lib = model("ef")
     n, l = spec.elements, L / spec.elements
-    symbols = list(der.e) + list(der.ed) + [w, alpha] + der.params
-    f_e = sp.lambdify(symbols, der.f_inertial - sp.Matrix([sp.diff(der.V, x) for x in der.e]), "numpy")
-    M_e = sp.lambdify(symbols, der.M, "numpy")
+    symbols = list(e_) + list(ed_) + [w, alpha] + pe
+    f_e = sp.lambdify(symbols, f_in - sp.Matrix([sp.diff(V, x) for x in e_]), "numpy")
+    M_e = sp.lambdify(symbols, M_sym, "numpy")
     # the variant's coordinates q: dx0, then (ux, uy, dx, dy) of nodes 1..n, displacements
     # from the straight beam (node k at x = k l, slope (1, 0)); the root's x, y, dy are held
     free = [2] + list(range(4, 4 * (n + 1)))

@@ -78,9 +78,7 @@ class Report:
         self.latex = latex
         self.lines: list[str] = []
         if spec.kind == "fe":
-            from flexsym.physics.fe import derive_element
-
-            self.der = derive_element(spec)
+            self.der = None  # one element of efbody.py, the same for every ef beam
             self._names = {}
         else:
             self.der = derive(spec)
@@ -216,13 +214,16 @@ class Report:
 
     # ----- the finite-element reference ------------------------------------------------
     def _render_fe(self, sections) -> str:
+        from flexsym.physics.efbody import _ED, generic_element
         from flexsym.physics.fe import hermite, le
 
-        d, s = self.der, self.spec
+        s = self.spec
+        T, _, _, _, strain, curvature, _ = generic_element()
         self.add(f"variant {s.name}: {s.description}")
         self.add(f"  {s.elements} planar ANCF cable elements, 8 coordinates each "
                  "(r and r_x = dr/dx at both nodes, in the moving frame)")
-        self.add("  root clamp: r = 0, y_x = 0 (x_x, the root stretch, stays free)")
+        self.add("  root clamp: r = 0, y_x = 0 (x_x, the root stretch, stays free); the frame turns "
+                 "at Om_ with its origin at velocity (Vx_, Vy_) in frame axes (the hub: Om_ = w, V = 0)")
         self.add(f"  fingerprint {fingerprint(s)}")
         if "modes" in sections:
             self.title("Element interpolation: r(xi) = N1 r1 + N2 r1_x + N3 r2 + N4 r2_x, x = x1 + l xi")
@@ -231,18 +232,20 @@ class Report:
         if "energy" in sections:
             self.title("Element energies (geometrically exact: nothing truncated)")
             self.add("axial strain eps = (r_x . r_x - 1)/2:")
-            self.add(self.fmt(sp.simplify(d.strain)) if not self.latex else sp.latex(d.strain))
+            self.add(self.fmt(sp.simplify(strain)) if not self.latex else sp.latex(strain))
             self.add("curvature kappa = (r_x x r_xx)/|r_x|^2 (material, per reference length):")
-            self.add(self.fmt(d.curvature))
+            self.add(self.fmt(curvature))
             self.add(f"V^e = int_0^l (EA eps^2/2 + EI kappa^2/2) dx, Gauss-Legendre with {QUAD_POINTS} points")
             self.add("kinetic energy T^e (exact polynomial integration in xi):")
-            self.add(self.fmt(d.T))
+            self.add(self.fmt(T))
         if "mass" in sections:
-            self.title("Element mass matrix M^e (constant)")
-            self.add(self.fmt(d.M))
+            self.title("Element mass matrix M^e = d2T^e/de'2 (constant)")
+            self.add(self.fmt(sp.hessian(T, list(_ED))))
         if "equations" in sections:
-            self.title("Element inertial forces (the elastic forces are -dV^e/de by casadi AD)")
-            self.add(self.fmt(d.f_inertial))
+            self.title("Element equations")
+            self.add("the inertial forces are Lagrange's of T^e in the frame's actual motion, the elastic "
+                     "forces -dV^e/de: both by casadi AD per element in the generated code "
+                     "(flexsym/codegen/sysgen.py), assembled by its system.c")
         if "ops" in sections:
             self._ops()
         return "\n".join(self.lines) + "\n"
