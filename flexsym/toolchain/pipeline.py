@@ -2,13 +2,12 @@
 when needed."""
 from __future__ import annotations
 
-import hashlib
 import json
 import sys
 from pathlib import Path
 
 from flexsym.toolchain.build import Built, build
-from flexsym.codegen.folder import MANIFEST, write_folder
+from flexsym.codegen.folder import unchanged, write_folder
 from flexsym.codegen.generate import check_folder, fingerprint, generate
 from flexsym.codegen.sysgen import derivation_fingerprint, derive_folder, folder_files
 from flexsym.codegen.sysgen import fingerprint as system_fingerprint
@@ -118,22 +117,6 @@ def system_folder(system: System) -> Path:
     return cache_dir() / "systems" / f"{system.name}-{system_fingerprint(system)[:12]}"
 
 
-def _current(folder: Path, fp: str) -> bool:
-    try:
-        manifest = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    if manifest.get("fingerprint") != fp:
-        return False
-    for name, digest in manifest.get("files", {}).items():
-        try:
-            if hashlib.sha256((folder / name).read_bytes()).hexdigest() != digest:
-                return False
-        except OSError:
-            return False
-    return True
-
-
 def prepare_system(system: System, log=None) -> Built:
     """Generate (when not current) and build a system; returns the build (run with run_built).
     log(msg): a line per stage of work actually done (nothing when cached)."""
@@ -147,9 +130,9 @@ def generated_system_folder(system: System, say=None) -> Path:
     check_derivable(system)  # refused in one line before the first progress line
     folder = system_folder(system)
     fp = system_fingerprint(system)
-    if not _current(folder, fp):
+    if unchanged(folder, fp) is not None:
         with file_lock(folder.parent / f".{folder.name}.lock"):
-            if not _current(folder, fp):
+            if unchanged(folder, fp) is not None:
                 write_folder(_system_files(system, say), folder)
     return folder
 
