@@ -98,6 +98,30 @@ def exact_energies(bodies, tr, x) -> tuple:
     return T, Vg
 
 
+def exact_mass(bodies, tr, x) -> ca.SX:
+    """The exact beams' part of M, in the system's q': sum_i m_i J_i^T J_i over the quadrature
+    points and point masses, J_i = dv_i/dq' (v_i of exact_energies, linear in q'), one
+    triangle filled: d2T/dq'2 of exact_energies' T without differentiating it twice (the
+    exact variant's mass 9.3 k -> 6.2 k operations; sysgen takes f from exact_residual)."""
+    n = x["qd"].shape[0]
+    M = ca.SX.zeros(n, n)
+    for part in bodies:
+        q, qd, L, rhoA = _body_vectors(part, tr, x)
+        k = part.beam_kinematics(part.quad, q, qd, L)
+        om, Vx, Vy = (tr(e) for e in part.frame[:3])
+        W = ca.DM(part.mass_weights(part.quad))
+        r = k["r"]
+        v = k["rd"] + ca.horzcat(-om * r[:, 1] + Vx, om * r[:, 0] + Vy)
+        Jx, Jy = ca.jacobian(v[:, 0], x["qd"]), ca.jacobian(v[:, 1], x["qd"])
+        for i in range(n):
+            for j in range(i + 1):
+                e = rhoA * L * ca.dot(W, Jx[:, i] * Jx[:, j] + Jy[:, i] * Jy[:, j])
+                M[i, j] += e
+                if i != j:
+                    M[j, i] += e
+    return M
+
+
 def position_symbols(part, outputs: dict, x: float, args=None) -> tuple:
     """Placeholders for r(x) on the beam (frame components), registered in `outputs` (the
     derivation's casadi_outputs) with their casadi values. With args (the beam's coordinate
