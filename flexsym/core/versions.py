@@ -22,7 +22,7 @@ GENERATOR_MODULES = ("model.modes", "physics.integrals", "physics.energy", "mode
                      "model.maneuver", "model.output_names", "model.parameters", "model.system",
                      "model.library", "physics.assemble", "physics.efbody", "physics.outputs",
                      "model.variant", "physics.lagrange", "physics.modal", "codegen.derive",
-                     "emit.kernels", "emit.cemit", "codegen.generate", "physics.fe", "model.fedata",
+                     "emit.kernels", "emit.cemit", "codegen.generate", "codegen.folder", "physics.fe", "model.fedata",
                      "physics.exact", "physics.exact_kinematics", "physics.exact_body", "model.beam_element", "physics.spatial", "physics.spatial_ef",
                      "physics.rod3d", "scenes.assembly", "model.exact_numbers",  # assembly: a ball joint's start (shortest_turn)
                      *(f"model.joint_kinds.{f.stem}" for f in sorted(  # one module per joint kind

@@ -1,8 +1,9 @@
 """Derived sympy expressions -> casadi SX functions (the kernels), with CSE.
 
 Codegen only: it knows no physics. A derivation hands it sympy expressions and the symbols
-that stand for the kernel inputs (which kernels a model has is the model's: modal.py, exact.py,
-fe.py, sysgen.py); cemit.py prints the casadi functions as C.
+that stand for the kernel inputs (which kernels a model has is sysgen.py's; `translator`
+serves exact.py's one-beam derivation and its quadrature check); cemit.py prints the casadi
+functions as C.
 """
 from __future__ import annotations
 
