@@ -70,18 +70,15 @@ def test_a_failed_factorization_says_whether_the_newton_iterations_diverged(tmp_
     assert small_msg == none_msg == "genalpha3: iteration matrix singular at t = 0.25 s"
 
 
-_System = SystemStruct  # flexsym/system.h's fsm_system (its one mirror in Python)
-
-
 def _bordered_and_dense(data: dict, layout: tuple, runs: list) -> None:
     """The system of scene data `data` declares the band (bandwidth, band_first, band_end) =
     layout; each run (options of batch, params: its parameters) gives the same rows with it as
     with its dense copy, to round-off: the coordinates within 1e-13 m (L = 1 m), the outputs
     within 1e-6 of each one's peak (and 1e-14: an output at round-off, S6's violation)."""
     model = load_system(system_from_dict(data, name=data["system"]["name"]))
-    s = _System.from_address(model.model.value)
+    s = SystemStruct.from_address(model.model.value)
     assert (s.bandwidth, s.band_first, s.band_end) == layout and s.nq == len(model.coordinates)
-    dense = _System.from_buffer_copy(s)
+    dense = SystemStruct.from_buffer_copy(s)
     dense.bandwidth = -1
     for options in runs:
         params = {k: [v] for k, v in options.pop("params", {}).items()}

@@ -156,16 +156,15 @@ def build_system_kernels(der: SystemDerivation) -> list:
         V_x = ca.SX(0.0)
         if exact_bodies:  # M as sum m J^T J; f and the Newton Jacobians from d'Alembert's r
             T_x, V_x = exact_energies(exact_bodies, tr, x)
-            M_x, f_x = exact_mass(exact_bodies, tr, x), ca.SX.zeros(n)  # f: from r_exact below
+            M_x = exact_mass(exact_bodies, tr, x)  # f: from r_exact below
             r_exact = ca.mtimes(M + M_ef, qdd) - (f + f_ef) + exact_residual(exact_bodies, tr, x, ddot)
             if der.T_casadi != 0:  # a hanging body's T, reading positions on an exact beam
                 T_h = tr(der.T_casadi)
-                M_h, f_h = equations_of_motion_sx(T_h, 0, q, qd, guided)
-                T_x, M_x, f_x = T_x + T_h, M_x + M_h, f_x + f_h
+                T_x, M_x = T_x + T_h, M_x + equations_of_motion_sx(T_h, 0, q, qd, guided)[0]
                 # its part of r, d/dt dT_h/dq' - dT_h/dq, by one forward sweep along the motion
                 r_exact += ca.jtimes(ca.gradient(T_h, qd), ca.vertcat(q, qd, d), ca.vertcat(qd, qdd, ddot)) \
                     - ca.gradient(T_h, q)
-            T_ef, M_ef, f_ef = T_ef + T_x, M_ef + M_x, f_ef + f_x
+            T_ef, M_ef = T_ef + T_x, M_ef + M_x
             tr.symbols[EXACT_VG], tr.priority[EXACT_VG] = V_x, 2
         M += M_ef
         f += f_ef

@@ -79,17 +79,24 @@ def _body_vectors(part, tr, x):
     return q, qd, P["L"], P["rho"] * P["A"]
 
 
+def _point_motion(part, tr, x) -> tuple:
+    """(r, v, weights, rho A, L) of a beam's quadrature points and point masses: positions in
+    frame components and absolute velocities v = r' + omega z x r + V, linear in q'."""
+    q, qd, L, rhoA = _body_vectors(part, tr, x)
+    k = part.beam_kinematics(part.quad, q, qd, L)
+    om, Vx, Vy = (tr(e) for e in part.frame[:3])
+    r = k["r"]
+    v = k["rd"] + ca.horzcat(-om * r[:, 1] + Vx, om * r[:, 0] + Vy)
+    return r, v, part.mass_weights(part.quad), rhoA, L
+
+
 def exact_energies(bodies, tr, x) -> tuple:
     """(T, V_g) of the exact beams, casadi, in the system's q, q' (see the module doc)."""
     T, Vg = ca.SX(0.0), ca.SX(0.0)
     for part in bodies:
-        q, qd, L, rhoA = _body_vectors(part, tr, x)
-        k = part.beam_kinematics(part.quad, q, qd, L)
-        om, Vx, Vy, gx, gy, Rx, Ry = (tr(e) for e in part.frame)
-        w = part.mass_weights(part.quad)
+        r, v, w, rhoA, L = _point_motion(part, tr, x)
+        gx, gy, Rx, Ry = (tr(e) for e in part.frame[3:])
         W = ca.DM(w)
-        r = k["r"]
-        v = k["rd"] + ca.horzcat(-om * r[:, 1] + Vx, om * r[:, 0] + Vy)
         T += 0.5 * rhoA * L * ca.dot(W, ca.sum2(v * v))
         gR = gx * Rx + gy * Ry
         if part.fe_body is not None:  # its mass is not rho A L of the root section
@@ -106,12 +113,8 @@ def exact_mass(bodies, tr, x) -> ca.SX:
     n = x["qd"].shape[0]
     M = ca.SX.zeros(n, n)
     for part in bodies:
-        q, qd, L, rhoA = _body_vectors(part, tr, x)
-        k = part.beam_kinematics(part.quad, q, qd, L)
-        om, Vx, Vy = (tr(e) for e in part.frame[:3])
-        W = ca.DM(part.mass_weights(part.quad))
-        r = k["r"]
-        v = k["rd"] + ca.horzcat(-om * r[:, 1] + Vx, om * r[:, 0] + Vy)
+        _, v, w, rhoA, L = _point_motion(part, tr, x)
+        W = ca.DM(w)
         Jx, Jy = ca.jacobian(v[:, 0], x["qd"]), ca.jacobian(v[:, 1], x["qd"])
         for i in range(n):
             for j in range(i + 1):

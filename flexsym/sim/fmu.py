@@ -113,7 +113,7 @@ def _num(x: float) -> str:
 def _layout(manifest: dict) -> dict:
     """Value references: time 0, then each group in order (manoeuvre parameters and the drive
     inputs keep their numbers whether or not the FMU declares them)."""
-    np_, nmp = len(manifest["params"]), len(_drive_params(manifest))
+    np_, nmp = len(manifest["params"]), len(manifest["drive_params"])
     ny, nq = len(_outputs(manifest)), len(manifest["coordinates"])
     vr = {"TIME": 0, "P": 1, "MP": 1 + np_, "IN": 1 + np_ + nmp, "Y": 3 + np_ + nmp}
     vr["Q"] = vr["Y"] + ny
@@ -122,12 +122,8 @@ def _layout(manifest: dict) -> dict:
 
 def _starts(manifest: dict, opts: FmuOptions) -> tuple[list[float], list[float]]:
     p = [opts.params.get(x["name"], x["default"]) for x in manifest["params"]]
-    mp = [opts.params.get(x["name"], x["default"]) for x in _drive_params(manifest)]
+    mp = [opts.params.get(x["name"], x["default"]) for x in manifest["drive_params"]]
     return p, mp
-
-
-def _drive_params(manifest: dict) -> list:
-    return manifest["drive_params"]
 
 
 def _maneuver(manifest: dict) -> str | None:
@@ -191,7 +187,7 @@ def model_description(manifest: dict, opts: FmuOptions) -> str:
         f64(x["name"], vr["P"] + i, "parameter", "tunable", what, v, "exact")
     if not drive:
         of = maneuver or "a guided joint's manoeuvre"
-        for i, (x, v) in enumerate(zip(_drive_params(manifest), mp)):
+        for i, (x, v) in enumerate(zip(manifest["drive_params"], mp)):
             f64(x["name"], vr["MP"] + i, "parameter", "tunable",
                 f"manoeuvre parameter [{x['unit']}] of {of}", v, "exact")
     else:

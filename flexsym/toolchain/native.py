@@ -55,14 +55,9 @@ class CompiledModel:
         self.maneuver_defaults = np.array([p["default"] for p in self.manifest["drive_params"]])
 
     def _run(self, fn: str, inputs, out_shapes) -> list[np.ndarray]:
-        """The model's function fn on inputs ((name, value, size) triples, each checked before
-        C reads it), into arrays of out_shapes."""
-        label = self.prefix + fn
-        keep = [_array(name, x, n, label) for name, x, n in inputs]
-        outs = [np.zeros(shape) for shape in out_shapes]
-        call = ctypes.CFUNCTYPE(None, *[_dptr] * (len(keep) + len(outs)))(getattr(self.model, fn))
-        call(*[_ptr(a) for a in keep], *[_ptr(o) for o in outs])
-        return [o if o.ndim > 1 and o.shape[1] > 1 else o.ravel() for o in outs]
+        """The model's function fn (a field of its struct) on inputs: (name, value, size)."""
+        c_fn = ctypes.CFUNCTYPE(None, *[_dptr] * (len(inputs) + len(out_shapes)))(getattr(self.model, fn))
+        return _invoke(c_fn, self.prefix + fn, inputs, out_shapes)
 
     def call(self, kernel: str, *inputs) -> list[np.ndarray]:
         """A generated kernel by name, with the input sizes checked against the manifest."""
@@ -70,12 +65,11 @@ class CompiledModel:
         if len(inputs) != len(info["inputs"]):
             raise SpecError(f"{kernel}: {len(inputs)} inputs given, expected {len(info['inputs'])} "
                             f"({', '.join(info['inputs'])})")
-        keep = [_array(name, x, n, info["c_name"]) for (name, n), x in zip(info["inputs"].items(), inputs)]
-        outs = [np.zeros(shape) for shape in info["outputs"].values()]
         fn = getattr(self.lib, info["c_name"])
         fn.restype = None
-        fn(*[_ptr(a) for a in keep], *[_ptr(o) for o in outs])
-        return [o if o.shape[1] > 1 else o[:, 0] for o in outs]
+        return _invoke(fn, info["c_name"], [(name, x, n) for (name, n), x in
+                                                      zip(info["inputs"].items(), inputs)],
+                       [tuple(s) for s in info["outputs"].values()])
 
     def _state(self, **given) -> list:
         sizes = {"q": self.nq, "qd": self.nq, "qdd": self.nq}
@@ -112,6 +106,15 @@ class CompiledModel:
         """[theta, w, alpha] of the guided root at time t."""
         mp = self.maneuver_defaults if mp is None else mp
         return self._run("drive", [("t", t, 1), ("mp", mp, self.model.nmp)], [(self.model.nd,)])[0][1:]
+
+
+def _invoke(c_fn, label: str, inputs, out_shapes) -> list[np.ndarray]:
+    """A C function of double pointers on inputs ((name, value, size), each checked before C
+    reads it), then outputs of out_shapes; a column is returned as a vector."""
+    keep = [_array(name, x, n, label) for name, x, n in inputs]
+    outs = [np.zeros(shape) for shape in out_shapes]
+    c_fn(*[_ptr(a) for a in keep], *[_ptr(o) for o in outs])
+    return [o if o.ndim > 1 and o.shape[1] > 1 else o.ravel() for o in outs]
 
 
 def _wa(w, alpha) -> np.ndarray:
